@@ -1,0 +1,3 @@
+from wormgear_cli.cli import main
+
+main()

@@ -1,0 +1,254 @@
+"""Whole-drive analysis: the paper's stage models applied to a :class:`Spec`.
+
+No I/O.  :func:`analyze` returns an :class:`Analysis` holding every angle in
+radians; :meth:`Analysis.report` converts to a unit for output, and
+:meth:`Analysis.metrics` flattens it to the CSV/sweep columns.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wormgear_cli.models import deformation, gear, worm
+from wormgear_cli.models.effects import DriveGeometry
+from wormgear_cli.units import to_unit
+
+#: flat metric columns (CSV of analyze, columns of sweep --param); all angles
+METRIC_COLUMNS = (
+    "gear_transmission_error",
+    "gear_backlash",
+    "worm_transmission_error",
+    "worm_backlash",
+    "total_transmission_error",
+    "total_backlash",
+    "gear_te_eccentricity",
+    "gear_te_deformation",
+    "gear_backlash_eccentricity",
+    "gear_backlash_deformation",
+    "worm_te_deformation",
+    "worm_te_envelope",
+    "worm_backlash_deformation",
+    "worm_backlash_profile",
+    "worm_backlash_thickness",
+    "worm_backlash_envelope",
+)
+#: flat non-angle columns that follow the angle columns
+INFO_COLUMNS = ("gear_ratio", "gear_te_phi_deg", "gear_load_share_pct", "gear_deflection_um", "worm_deflection_um",
+                "gear_te_share_pct", "gear_backlash_share_pct")
+
+
+@dataclass(frozen=True)
+class Deflections:
+    """Tooth deflections [mm] and the model that produced them."""
+
+    gear: float
+    worm: float
+    model: str
+
+
+def geometry(spec) -> DriveGeometry:
+    """Derived geometry used by the effect catalogue and simulation."""
+    gp, wp = spec.gear_pair, spec.worm_pair
+    z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
+    z3, zw = wp.wheel.teeth, wp.worm.starts
+    i_c = z1 / z2
+    worm_pitch_diameter = zw * wp.module / math.tan(wp.lead_angle)
+    return DriveGeometry(
+        output_pitch_radius=gp.module * z1 / 2.0,
+        output_base_radius=gp.module * z1 * math.cos(gp.pressure_angle) / 2.0,
+        wheel_pitch_radius=wp.module * z3 / 2.0,
+        gear_ratio=i_c,
+        worm_order=i_c * z3 / zw,
+        output_teeth=z1,
+        axial_pressure_angle=wp.transverse_pressure_angle,
+        worm_centre_distance=(worm_pitch_diameter + wp.module * z3) / 2.0,
+    )
+
+
+def deflections(spec, gear_force=None, worm_force=None) -> Deflections:
+    """delta1 and delta2 [mm] from the spec's loads and its selected stiffness model.
+
+    ``gear_force``/``worm_force`` override the spec's normal forces [N]
+    (arrays allowed; used by sweeps that hold torque instead of force).
+    """
+    gp, wp, st, mat = spec.gear_pair, spec.worm_pair, spec.stiffness, spec.materials
+    f1 = spec.loads.gear_normal_force if gear_force is None else gear_force
+    f2 = spec.loads.worm_normal_force if worm_force is None else worm_force
+    e_gear = mat.gear_elastic_modulus  # both spur gears share one material
+    e_worm = deformation.combined_modulus(mat.worm_elastic_modulus, mat.wheel_elastic_modulus)
+    if st.model == "empirical":
+        const = (st.contact_ratio, st.empirical_lambda2, st.empirical_a1, st.empirical_b, st.empirical_c)
+        d1 = deformation.empirical_deflection(f1, e_gear, gp.face_width, *const)
+        d2 = deformation.empirical_deflection(f2, e_worm, wp.face_width, *const)
+    else:
+        z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
+        c_gear = deformation.iso6336_single_stiffness(
+            deformation.iso6336_theoretical_stiffness(z2, z1), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_gear)
+        d1 = deformation.iso6336_deflection(f1 * math.cos(gp.pressure_angle), gp.face_width, c_gear)
+        # worm mesh: wheel of virtual tooth number z3/cos^3(lambda) against a rack (the worm)
+        zn_wheel = wp.wheel.teeth / math.cos(wp.lead_angle) ** 3
+        c_worm = deformation.iso6336_single_stiffness(
+            deformation.iso6336_theoretical_stiffness(np.inf, zn_wheel), st.iso_cm, st.iso_cr, st.iso_cb, 0.0,
+            e_worm)
+        ft2 = f2 * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle)
+        d2 = deformation.iso6336_deflection(ft2, wp.face_width, c_worm)
+    return Deflections(float(d1) if np.ndim(d1) == 0 else d1, float(d2) if np.ndim(d2) == 0 else d2, st.model)
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Result of :func:`analyze`.  ``angles``: name -> value [rad];
+    ``info``: name -> dimensionless or labelled values."""
+
+    drive: str
+    angles: dict
+    info: dict
+
+    def metrics(self, unit: str) -> dict:
+        """Flat ``column -> value`` (angles in ``unit``) for CSV and sweeps."""
+        out = {c: float(to_unit(self.angles[c], unit)) for c in METRIC_COLUMNS}
+        out.update({c: float(self.info[c]) for c in INFO_COLUMNS})
+        return out
+
+    def report(self, unit: str) -> dict:
+        """The JSON document of ``wormgear analyze`` (angles in ``unit``)."""
+        a = {k: float(to_unit(v, unit)) for k, v in self.angles.items()}
+        i = self.info
+        return {
+            "drive": self.drive,
+            "unit": unit,
+            "ratios": {"gear": i["gear_ratio"], "worm": i["worm_ratio"], "total": i["total_ratio"]},
+            "deflection_model": i["deflection_model"],
+            "stages": {
+                "gear": {
+                    "transmission_error": a["gear_transmission_error"],
+                    "backlash": a["gear_backlash"],
+                    "transmission_error_parts": {
+                        "eccentricity": a["gear_te_eccentricity"],
+                        "deformation": a["gear_te_deformation"],
+                    },
+                    "backlash_parts": {
+                        "eccentricity": a["gear_backlash_eccentricity"],
+                        "deformation": a["gear_backlash_deformation"],
+                    },
+                    "phi_at_max_deg": i["gear_te_phi_deg"],
+                    "load_share_pct": i["gear_load_share_pct"],
+                    "deflection_um": i["gear_deflection_um"],
+                    "contribution": {
+                        "transmission_error": a["gear_transmission_error"],
+                        "backlash": a["gear_backlash"],
+                        "transmission_error_pct": i["gear_te_share_pct"],
+                        "backlash_pct": i["gear_backlash_share_pct"],
+                    },
+                },
+                "worm": {
+                    "transmission_error": a["worm_transmission_error"],
+                    "backlash": a["worm_backlash"],
+                    "transmission_error_parts": {
+                        "deformation": a["worm_te_deformation"],
+                        "envelope_halfwidth": a["worm_te_envelope"],
+                        "lower_bound": a["worm_te_deformation"] - a["worm_te_envelope"],
+                    },
+                    "backlash_parts": {
+                        "deformation": a["worm_backlash_deformation"],
+                        "profile": a["worm_backlash_profile"],
+                        "thickness": a["worm_backlash_thickness"],
+                        "envelope_halfwidth": a["worm_backlash_envelope"],
+                        "lower_bound": a["worm_backlash"] - 2.0 * a["worm_backlash_envelope"],
+                    },
+                    "deflection_um": i["worm_deflection_um"],
+                    "contribution": {
+                        "transmission_error": a["worm_transmission_error"] / i["gear_ratio"],
+                        "backlash": a["worm_backlash"] / i["gear_ratio"],
+                        "transmission_error_pct": 100.0 - i["gear_te_share_pct"],
+                        "backlash_pct": 100.0 - i["gear_backlash_share_pct"],
+                    },
+                },
+            },
+            "total": {
+                "transmission_error": a["total_transmission_error"],
+                "backlash": a["total_backlash"],
+            },
+        }
+
+
+def analyze(spec) -> Analysis:
+    """The paper's two-stage model for one drive.
+
+    Stage values are at each stage's own output shaft (as the paper reports
+    them); totals at the output: Delta phi_c = Delta phi_cc + Delta phi_wc / i_c
+    and Delta phi_h = Delta phi_ch + Delta phi_wh / i_c with i_c = z1/z2.
+    """
+    gp, wp, asm = spec.gear_pair, spec.worm_pair, spec.assembly
+    z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
+    r_gear, r_pinion = gp.module * z1 / 2.0, gp.module * z2 / 2.0
+    i_c = z1 / z2
+    de, alpha = asm.gear_eccentricity, gp.pressure_angle
+    defl = deflections(spec)
+
+    # --- gear stage -------------------------------------------------------------
+    te_max, phi_star = gear.gear_te_max(r_pinion, r_gear, de, alpha, defl.gear)
+    te_kin_only, _ = gear.gear_te_max(r_pinion, r_gear, de, alpha, 0.0)
+    te_kin_part = gear.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
+    te_def_part = te_max - te_kin_part
+    bl = gear.gear_backlash_max(gp.module, z1, de, alpha, defl.gear)
+    bl_def = gear.pitch_arc_to_angle(2.0 * defl.gear, gp.module, z1)
+
+    # --- worm stage -------------------------------------------------------------
+    lam, a2 = wp.lead_angle, wp.transverse_pressure_angle
+    m2, z3 = wp.module, wp.wheel.teeth
+    h_te = worm.worm_te_halfwidth(wp.lead_error, asm.worm_eccentricity, asm.worm_bearing_clearance,
+                                  wp.wheel.radial_composite_error, asm.wheel_eccentricity,
+                                  asm.wheel_bearing_clearance, lam, a2)
+    wte = worm.worm_te(defl.worm, h_te, m2, z3)
+    j_def, j_prof, j_thk = worm.worm_backlash_central(defl.worm, wp.worm.profile_error, wp.wheel.profile_error,
+                                                      wp.worm.thickness_deviation, wp.wheel.thickness_deviation, lam)
+    h_j = worm.worm_backlash_halfwidth(wp.worm.profile_error, wp.wheel.profile_error, wp.worm.thickness_deviation,
+                                       wp.wheel.thickness_deviation, sum(e * e for e in asm.worm_pair_errors),
+                                       wp.lead_error, asm.worm_centre_distance_error,
+                                       wp.wheel.radial_composite_error, lam, a2)
+    wbl = worm.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
+
+    def arc(x):
+        return float(gear.pitch_arc_to_angle(x, m2, z3))
+
+    total_te = te_max + wte / i_c
+    total_bl = bl + wbl / i_c
+    angles = {
+        "gear_transmission_error": float(te_max),
+        "gear_backlash": float(bl),
+        "worm_transmission_error": float(wte),
+        "worm_backlash": float(wbl),
+        "total_transmission_error": float(total_te),
+        "total_backlash": float(total_bl),
+        "gear_te_eccentricity": float(te_kin_part),
+        "gear_te_deformation": float(te_def_part),
+        "gear_backlash_eccentricity": float(bl - bl_def),
+        "gear_backlash_deformation": float(bl_def),
+        "worm_te_deformation": arc(defl.worm),
+        "worm_te_envelope": arc(h_te),
+        "worm_backlash_deformation": arc(j_def),
+        "worm_backlash_profile": arc(j_prof),
+        "worm_backlash_thickness": arc(j_thk),
+        "worm_backlash_envelope": arc(h_j),
+    }
+    info = {
+        "gear_ratio": i_c,
+        "worm_ratio": z3 / wp.worm.starts,
+        "total_ratio": i_c * z3 / wp.worm.starts,
+        "deflection_model": defl.model,
+        "gear_te_phi_deg": float(np.degrees(phi_star)),
+        "gear_load_share_pct": float(100.0 * (te_max - te_kin_only) / te_kin_only) if te_kin_only > 0 else 0.0,
+        "gear_deflection_um": float(defl.gear * 1e3),
+        "worm_deflection_um": float(defl.worm * 1e3),
+        "gear_te_share_pct": _pct(te_max, total_te),
+        "gear_backlash_share_pct": _pct(bl, total_bl),
+    }
+    return Analysis(spec.drive.name, angles, info)
+
+
+def _pct(part, whole) -> float:
+    return float(100.0 * part / whole) if whole > 0 else 0.0

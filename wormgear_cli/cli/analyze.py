@@ -1,0 +1,179 @@
+"""``wormgear analyze``, ``wormgear check`` and ``wormgear new``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from wormgear_cli.cli.app import app
+from wormgear_cli.cli.common import (
+    DriveArgument,
+    FormatOption,
+    OutputOption,
+    TextJsonFormat,
+    UnitOption,
+    csv_text,
+    emit,
+    fmt_angle,
+    json_text,
+    render,
+)
+
+
+@app.command()
+def analyze(
+    drive: DriveArgument,
+    format: FormatOption = "table",
+    unit: UnitOption = "arcsec",
+    output: OutputOption = None,
+):
+    """Transmission error and backlash of each stage and of the whole drive.
+
+    Stage values are at each stage's own output shaft, as the paper reports
+    them; totals are at the drive output (worm stage divided by i_c = z1/z2).
+
+    Example: wormgear analyze configs/mch50.toml --unit deg --format json
+    """
+    from wormgear_cli.analysis import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
+    from wormgear_cli.spec import load_spec
+
+    spec = load_spec(drive)
+    result = run(spec)
+    unit = getattr(unit, "value", unit)
+    fmt = getattr(format, "value", format)
+    if fmt == "json":
+        emit(json_text(result.report(unit)), output, [drive])
+    elif fmt == "csv":
+        m = result.metrics(unit)
+        cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
+        emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
+    else:
+        render(_tables(result.report(unit), unit), output, [drive])
+
+
+def _tables(r: dict, unit: str) -> list:
+    from rich.table import Table
+
+    g, w, t = r["stages"]["gear"], r["stages"]["worm"], r["total"]
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    out = []
+    gt = Table(title=f"{r['drive']}: gear stage (spur, i_c = {r['ratios']['gear']:g}), at the output [{unit}]",
+               title_justify="left")
+    for col in ("quantity", "eccentricity", "deformation", "value", "share of total"):
+        gt.add_column(col, justify="left" if col == "quantity" else "right")
+    gt.add_row("transmission error", a(g["transmission_error_parts"]["eccentricity"]),
+               a(g["transmission_error_parts"]["deformation"]), a(g["transmission_error"]),
+               f"{g['contribution']['transmission_error_pct']:.1f} %")
+    gt.add_row("backlash", a(g["backlash_parts"]["eccentricity"]), a(g["backlash_parts"]["deformation"]),
+               a(g["backlash"]), f"{g['contribution']['backlash_pct']:.1f} %")
+    gt.caption = (f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
+                  f"{g['load_share_pct']:.2f} % to it (delta1 = {g['deflection_um']:.3f} um, "
+                  f"{r['deflection_model']})")
+    gt.caption_justify = "left"
+    out.append(gt)
+    wt = Table(title=f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]", title_justify="left")
+    for col in ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"):
+        wt.add_column(col, justify="left" if col == "quantity" else "right")
+    wp = w["backlash_parts"]
+    wt.add_row("transmission error", a(w["transmission_error_parts"]["deformation"]),
+               a(w["transmission_error_parts"]["envelope_halfwidth"]), a(w["transmission_error"]),
+               a(w["contribution"]["transmission_error"]), f"{w['contribution']['transmission_error_pct']:.1f} %")
+    wt.add_row("backlash", a(wp["deformation"] + wp["profile"] + wp["thickness"]), a(wp["envelope_halfwidth"]),
+               a(w["backlash"]), a(w["contribution"]["backlash"]), f"{w['contribution']['backlash_pct']:.1f} %")
+    wt.caption = (f"central TE = deformation (delta2 = {w['deflection_um']:.3f} um); central backlash = "
+                  f"deformation {a(wp['deformation'])} + profile {a(wp['profile'])} + thickness "
+                  f"{a(wp['thickness'])}")
+    wt.caption_justify = "left"
+    out.append(wt)
+    tt = Table(title=f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]", title_justify="left")
+    tt.add_column("quantity")
+    tt.add_column("gear stage", justify="right")
+    tt.add_column("worm stage / i_c", justify="right")
+    tt.add_column("total", justify="right")
+    tt.add_row("transmission error", a(g["transmission_error"]), a(w["contribution"]["transmission_error"]),
+               a(t["transmission_error"]))
+    tt.add_row("backlash", a(g["backlash"]), a(w["contribution"]["backlash"]), a(t["backlash"]))
+    out.append(tt)
+    return out
+
+
+@app.command()
+def check(
+    drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False)],
+    format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = "text",
+    output: OutputOption = None,
+):
+    """Validate drive specs and check their [requirements].
+
+    Exit 0: every file valid and within its requirements; 1: a requirement
+    exceeded (one line each: file, key, limit, value); 2: a spec invalid.
+    Invalid files are reported on stderr, verdicts on stdout.
+
+    Example: wormgear check configs/*.toml --format json
+    """
+    from wormgear_cli.analysis import analyze as run
+    from wormgear_cli.errors import WormgearError
+    from wormgear_cli.requirements import evaluate
+    from wormgear_cli.spec import load_spec
+
+    fmt = getattr(format, "value", format)
+    results, lines = [], []
+    invalid = failed = False
+    for path in drives:
+        entry = {"file": str(path), "valid": True, "passed": True, "problems": [], "requirements": []}
+        try:
+            spec = load_spec(path)
+        except WormgearError as exc:
+            invalid = True
+            entry.update(valid=False, passed=False, problems=exc.problems)
+            for p in exc.problems:
+                typer.echo(f"error: {p}", err=True)
+            results.append(entry)
+            continue
+        verdicts = evaluate(spec, run(spec))
+        for v in verdicts:
+            entry["requirements"].append({"key": v.key, "limit_arcsec": v.limit_arcsec,
+                                          "value_arcsec": v.value_arcsec, "passed": v.passed})
+            if not v.passed:
+                entry["passed"] = False
+                failed = True
+                lines.append(f"{path}: FAIL {v.key}: limit {v.limit_arcsec:g} arcsec, value {v.value_arcsec:.2f} "
+                             "arcsec")
+        if entry["passed"]:
+            n = len(verdicts)
+            lines.append(f"{path}: ok ({n} requirement{'s' if n != 1 else ''} met)" if n else
+                         f"{path}: ok (valid; no requirements)")
+        results.append(entry)
+    if fmt == "json":
+        emit(json_text({"files": results, "passed": not (invalid or failed)}), output, drives)
+    elif lines:
+        emit("\n".join(lines) + "\n", output, drives)
+    if invalid:
+        raise typer.Exit(2)
+    if failed:
+        raise typer.Exit(1)
+
+
+@app.command()
+def new(
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
+                                         dir_okay=False)],
+    name: Annotated[Optional[str], typer.Option("--name", help="Drive name (default: file name).")] = None,
+):
+    """Write a complete, commented drive template to start from.
+
+    The template holds the paper's MCH50 values where Table 1 gives them and
+    the documented defaults elsewhere; it never overwrites an existing file.
+
+    Example: wormgear new my-table.toml && wormgear analyze my-table.toml
+    """
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.io import atomic_write
+    from wormgear_cli.template import template
+
+    if path.exists():
+        raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
+    atomic_write(path, template(name or path.stem))
+    typer.echo(f"wrote {path}; edit it, then run: wormgear check {path}", err=True)

@@ -1,0 +1,40 @@
+"""The typer application object and its error boundary.
+
+Core code raises :class:`~wormgear_cli.errors.WormgearError`; only here is
+it turned into one stderr line per problem and the exit code 2.
+"""
+
+from __future__ import annotations
+
+import click
+import typer
+from typer.core import TyperGroup
+
+from wormgear_cli.errors import WormgearError
+
+
+class WormgearGroup(TyperGroup):
+    """Runs a command; a user mistake becomes messages + exit code, never a traceback."""
+
+    def invoke(self, ctx: click.Context):
+        try:
+            return super().invoke(ctx)
+        except WormgearError as exc:
+            for line in exc.problems:
+                click.echo(f"error: {line}", err=True)
+            raise typer.Exit(exc.exit_code) from None
+        except KeyboardInterrupt:
+            click.echo("interrupted", err=True)
+            raise typer.Exit(130) from None
+
+
+app = typer.Typer(
+    name="wormgear",
+    cls=WormgearGroup,
+    help="Transmission error and backlash of two-stage worm + spur gear precision drives.\n\n"
+    "Example: wormgear analyze configs/mch50.toml --unit arcsec",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)

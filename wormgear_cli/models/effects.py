@@ -1,0 +1,224 @@
+"""The effect catalogue: physical terms the paper's model lacks.
+
+Each effect is data: a name, its parameters (TOML key, internal name, unit,
+conversion to internal units, physical range) and a signature function.
+``simulate``, the spec loader and ``diagnose`` all read :data:`EFFECTS`.
+
+Signature functions take the operating signals (output angle theta [rad],
+direction d = +1/-1, external load on the output [N*m], temperature
+[degC], time [s]), the drive geometry (:class:`DriveGeometry`) and the
+effect's parameters in internal units, and return the error at the output
+[rad] (actual - target).  All broadcast over numpy arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+UM = 1e-3  # mm per um
+ARCSEC = math.pi / 648000.0  # rad per arcsec
+DEG = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class DriveGeometry:
+    """Derived quantities of a drive that the effect signatures need.
+
+    Attributes (internal units): ``output_pitch_radius`` r_1 [mm],
+    ``output_base_radius`` r_b1 [mm], ``wheel_pitch_radius`` [mm],
+    ``gear_ratio`` i_c = z1/z2 [-], ``worm_order`` n_w = i_c z3 / z_worm [-]
+    (worm revolutions per output revolution), ``output_teeth`` z1,
+    ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm].
+    """
+
+    output_pitch_radius: float
+    output_base_radius: float
+    wheel_pitch_radius: float
+    gear_ratio: float
+    worm_order: float
+    output_teeth: int
+    axial_pressure_angle: float
+    worm_centre_distance: float
+
+
+@dataclass(frozen=True)
+class Param:
+    """One effect parameter: TOML ``key``, internal ``name``, ``unit`` of the
+    key, ``scale`` (internal = value * scale), physical range [lo, hi] in
+    the key's unit, ``default`` in the key's unit (None: required)."""
+
+    key: str
+    name: str
+    unit: str
+    scale: float
+    lo: float
+    hi: float
+    default: float | None = None
+    doc: str = ""
+
+
+@dataclass(frozen=True)
+class Signals:
+    """Operating conditions at each sample (arrays of one length)."""
+
+    theta: np.ndarray
+    direction: np.ndarray
+    load: np.ndarray
+    temperature: np.ndarray
+    time: np.ndarray
+
+    @classmethod
+    def make(cls, theta, direction=1.0, load=0.0, temperature=20.0, time=0.0) -> "Signals":
+        theta = np.asarray(theta, dtype=float)
+        full = lambda v: np.broadcast_to(np.asarray(v, dtype=float), theta.shape)  # noqa: E731
+        return cls(theta, full(direction), full(load), full(temperature), full(time))
+
+
+@dataclass(frozen=True)
+class Effect:
+    """A catalogue entry.
+
+    ``order``: the harmonic order (cycles per output revolution) of a
+    periodic effect as a function of the geometry, or None.  ``needs``:
+    the signal that must vary for the effect to be observable
+    ("temperature", "load", "direction") or None.  ``amplitude``: the
+    parameter the signature is linear in (diagnosis fits it linearly).
+    """
+
+    name: str
+    function: Callable
+    params: tuple[Param, ...]
+    amplitude: str
+    doc: str
+    order: Callable[[DriveGeometry], float] | None = None
+    needs: str | None = None
+    phase: str | None = None
+    extra: dict = field(default_factory=dict)
+
+    def param(self, key: str) -> Param:
+        return next(p for p in self.params if p.key == key)
+
+
+def output_gear_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
+    """(e / r_b1) sin(theta + psi)  [rad]: eccentricity e [mm] of the output gear,
+    r_b1 its base radius [mm]; once per output revolution."""
+    return eccentricity / g.output_base_radius * np.sin(s.theta + phase)
+
+
+def intermediate_shaft_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
+    """(e / r_b1) sin(i_c theta + psi)  [rad]: eccentricity e [mm] of the pinion
+    (or wheel: same shaft, same order i_c)."""
+    return eccentricity / g.output_base_radius * np.sin(g.gear_ratio * s.theta + phase)
+
+
+def worm_runout(s: Signals, g: DriveGeometry, amplitude, phase):
+    """(a / r_wheel) / i_c sin(n_w theta + psi)  [rad]: worm once-per-turn error
+    a [mm] at the wheel pitch circle, reduced by the spur stage."""
+    return amplitude / g.wheel_pitch_radius / g.gear_ratio * np.sin(g.worm_order * s.theta + phase)
+
+
+def gear_mesh_error(s: Signals, g: DriveGeometry, amplitude, phase):
+    """(a / r_1) sin(z1 theta + psi)  [rad]: tooth-mesh error a [mm] of the output
+    gear at its pitch radius r_1."""
+    return amplitude / g.output_pitch_radius * np.sin(g.output_teeth * s.theta + phase)
+
+
+def thermal_backlash(s: Signals, g: DriveGeometry, coefficient, reference_temperature):
+    """-d Delta B / 2, Delta B = 2 k (T - T_ref) tan(alpha_x) / r_wheel / i_c  [rad].
+
+    k [mm/K] is the growth of the worm centre distance per kelvin; a growing
+    centre distance opens the backlash (lost motion grows)."""
+    db = 2.0 * coefficient * (s.temperature - reference_temperature) * np.tan(g.axial_pressure_angle)
+    db = db / g.wheel_pitch_radius / g.gear_ratio
+    return -s.direction * db / 2.0
+
+
+def thermal_drift(s: Signals, g: DriveGeometry, coefficient, reference_temperature):
+    """k (T - T_ref)  [rad], both directions; k [rad/K]."""
+    return coefficient * (s.temperature - reference_temperature)
+
+
+def torsional_compliance(s: Signals, g: DriveGeometry, stiffness):
+    """load / k  [rad], both directions; load [N m], k [N m / rad]."""
+    return s.load / stiffness
+
+
+def bearing_clearance(s: Signals, g: DriveGeometry, clearance):
+    """-d c / 2  [rad]: extra lost motion c [rad]."""
+    return -s.direction * clearance / 2.0
+
+
+def _phase(doc="phase of the error at theta = 0"):
+    return Param("phase_deg", "phase", "deg", DEG, -360.0, 360.0, 0.0, doc)
+
+
+def _tref():
+    return Param("reference_temperature_C", "reference_temperature", "degC", 1.0, -50.0, 150.0, 20.0,
+                 "temperature at which the effect is zero")
+
+
+EFFECTS: dict[str, Effect] = {
+    e.name: e
+    for e in (
+        Effect("output_gear_runout", output_gear_runout,
+               (Param("eccentricity_um", "eccentricity", "um", UM, 0.0, 500.0, None, "output gear eccentricity"),
+                _phase()),
+               "eccentricity", "once-per-revolution runout of the output gear",
+               order=lambda g: 1.0, phase="phase"),
+        Effect("intermediate_shaft_runout", intermediate_shaft_runout,
+               (Param("eccentricity_um", "eccentricity", "um", UM, 0.0, 500.0, None,
+                      "pinion/wheel shaft eccentricity"), _phase()),
+               "eccentricity", "runout of the intermediate (pinion + wheel) shaft, order i_c",
+               order=lambda g: g.gear_ratio, phase="phase"),
+        Effect("worm_runout", worm_runout,
+               (Param("amplitude_um", "amplitude", "um", UM, 0.0, 500.0, None,
+                      "once-per-worm-turn error at the wheel pitch circle"), _phase()),
+               "amplitude", "worm shaft runout / lead error, order n_w",
+               order=lambda g: g.worm_order, phase="phase"),
+        Effect("gear_mesh_error", gear_mesh_error,
+               (Param("amplitude_um", "amplitude", "um", UM, 0.0, 100.0, None,
+                      "tooth-mesh error at the output gear pitch radius"), _phase()),
+               "amplitude", "tooth-mesh frequency error of the spur stage, order z1",
+               order=lambda g: float(g.output_teeth), phase="phase"),
+        Effect("thermal_backlash", thermal_backlash,
+               (Param("centre_distance_um_per_K", "coefficient", "um/K", UM, -20.0, 20.0, None,
+                      "growth of the worm centre distance per kelvin"), _tref()),
+               "coefficient", "worm-mesh backlash changing with temperature (differential mode)",
+               needs="temperature"),
+        Effect("thermal_drift", thermal_drift,
+               (Param("arcsec_per_K", "coefficient", "arcsec/K", ARCSEC, -100.0, 100.0, None,
+                      "output angle drift per kelvin"), _tref()),
+               "coefficient", "zero drift with temperature (common mode)", needs="temperature"),
+        Effect("torsional_compliance", torsional_compliance,
+               (Param("stiffness_Nm_per_arcsec", "stiffness", "N m/arcsec", 1.0 / ARCSEC, 1e-3, 1e9, None,
+                      "torsional stiffness of the drive at the output"),),
+               "stiffness", "wind-up under external torque (common mode)", needs="load"),
+        Effect("bearing_clearance", bearing_clearance,
+               (Param("clearance_arcsec", "clearance", "arcsec", ARCSEC, 0.0, 3600.0, None,
+                      "extra lost motion"),),
+               "clearance", "extra lost motion (differential mode)", needs="direction"),
+    )
+}
+
+
+def effect_error(name: str, signals: Signals, geometry: DriveGeometry, params: dict) -> np.ndarray:
+    """Contribution [rad] of catalogue effect ``name`` with internal-unit ``params``."""
+    return EFFECTS[name].function(signals, geometry, **params)
+
+
+def params_from_keys(name: str, values: dict) -> dict:
+    """TOML-keyed values (catalogue units) -> internal parameters, defaults filled."""
+    out = {}
+    for p in EFFECTS[name].params:
+        v = values.get(p.key, p.default)
+        out[p.name] = float(v) * p.scale
+    return out
+
+
+def params_to_keys(name: str, params: dict) -> dict:
+    """Internal parameters -> TOML-keyed values in catalogue units."""
+    return {p.key: float(params[p.name]) / p.scale for p in EFFECTS[name].params if p.name in params}

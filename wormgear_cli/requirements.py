@@ -1,0 +1,42 @@
+"""Requirement checks (the ``[requirements]`` table) against an analysis."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from wormgear_cli.units import to_unit
+
+#: requirement attribute -> analysis metric it limits
+REQUIREMENT_METRICS = {
+    "max_transmission_error": "total_transmission_error",
+    "max_backlash": "total_backlash",
+    "max_gear_transmission_error": "gear_transmission_error",
+    "max_gear_backlash": "gear_backlash",
+    "max_worm_transmission_error": "worm_transmission_error",
+    "max_worm_backlash": "worm_backlash",
+}
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One requirement: TOML key, limit and computed value [arcsec]."""
+
+    key: str
+    limit_arcsec: float
+    value_arcsec: float
+
+    @property
+    def passed(self) -> bool:
+        return self.value_arcsec <= self.limit_arcsec
+
+
+def evaluate(spec, analysis) -> list[Verdict]:
+    """Every requirement present in ``spec`` with its verdict (in TOML order of the schema)."""
+    out = []
+    for attr, metric in REQUIREMENT_METRICS.items():
+        limit = getattr(spec.requirements, attr)
+        if limit is None:
+            continue
+        out.append(Verdict(f"requirements.{attr}_arcsec", float(to_unit(limit, "arcsec")),
+                           float(to_unit(analysis.angles[metric], "arcsec"))))
+    return out

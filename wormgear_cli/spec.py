@@ -1,0 +1,599 @@
+"""Drive specs: load and validate a TOML drive file into immutable dataclasses.
+
+The schema is data (:data:`FIELDS`): every key with its section, unit,
+default, physical range, whether the paper's Table 1 gives it, and a
+description.  The loader, ``wormgear new`` (the commented template), the
+README's key reference and ``sweep --param`` all read it.
+
+Units live in key names (``module_mm``, ``pressure_angle_deg``) and are
+converted once, here, to the internal system: lengths [mm], forces [N],
+moduli [N/mm^2], angles [rad], expansion [1/K], temperatures [degC].
+
+Every problem is collected and reported at once as a :class:`SpecError`,
+one line each: ``FILE: KEY: what is expected``.
+"""
+
+from __future__ import annotations
+
+import copy
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field, make_dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from wormgear_cli.errors import SpecError
+
+DEG = math.pi / 180.0
+
+#: unit suffix -> factor to the internal unit
+UNIT_SCALE = {
+    "mm": 1.0,
+    "um": 1e-3,
+    "deg": DEG,
+    "N": 1.0,
+    "GPa": 1000.0,
+    "ppm/K": 1e-6,
+    "arcsec": math.pi / 648000.0,
+    "-": 1.0,
+    "": 1.0,
+}
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key of the drive spec.
+
+    ``path``: dotted TOML path.  ``attr``: attribute name on the section
+    dataclass.  ``kind``: "float", "int", "str", "floats" (array).
+    ``unit``: unit of the key (see :data:`UNIT_SCALE`).  ``default``: in the
+    key's unit; ``None`` means required; ``"derived"`` is computed from
+    other keys (described in ``doc``).  ``lo``/``hi``: allowed range in the
+    key's unit with ``lo_open``/``hi_open`` for strict bounds.  ``table1``:
+    the value the paper's Table 1 (or its text) gives for the MCH50, or "".
+    """
+
+    path: str
+    attr: str
+    kind: str
+    unit: str
+    default: Any
+    doc: str
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    table1: str = ""
+    choices: tuple = ()
+    length: int | None = None
+
+    @property
+    def section(self) -> str:
+        return self.path.rsplit(".", 1)[0]
+
+    @property
+    def key(self) -> str:
+        return self.path.rsplit(".", 1)[1]
+
+    def expected(self) -> str:
+        """Human description of what the key takes."""
+        if self.kind == "str":
+            if self.choices:
+                return "one of " + ", ".join(f'"{c}"' for c in self.choices)
+            return "a string"
+        if self.kind == "int":
+            what = "an integer"
+        elif self.kind == "floats":
+            what = f"an array of {self.length} numbers" if self.length else "an array of numbers"
+        else:
+            what = "a number"
+        rng = ""
+        if self.lo is not None and self.hi is not None:
+            rng = f" in {'(' if self.lo_open else '['}{_fmt(self.lo)}, {_fmt(self.hi)}{')' if self.hi_open else ']'}"
+        elif self.lo is not None:
+            rng = f" {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
+        unit = f" [{self.unit}]" if self.unit not in ("", "-") else ""
+        return what + rng + unit
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def _f(path, attr, unit, default, doc, lo=None, hi=None, lo_open=False, hi_open=False, table1="", kind="float"):
+    return Field(path, attr, kind, unit, default, doc, lo, hi, lo_open, hi_open, table1)
+
+
+def _teeth(path, attr, doc, table1, lo=1):
+    return Field(path, attr, "int", "-", None, doc, lo, None, False, False, table1)
+
+
+def _tol(path, attr, doc, table1="", default=0.0):
+    return _f(path, attr, "mm", default, doc, lo=0.0, table1=table1)
+
+
+def _phase(path, attr, doc):
+    return _f(path, attr, "deg", 0.0, doc, lo=-360.0, hi=360.0)
+
+
+#: The drive-spec schema.  Order = order in the template and the README.
+FIELDS: tuple[Field, ...] = (
+    Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
+    Field("drive.description", "description", "str", "", "", "free text"),
+    # --- stage 2: spur gear pair -------------------------------------------------
+    _f("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", lo=0.0, lo_open=True, table1="2.5"),
+    _f("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", lo=0.0, hi=45.0,
+       lo_open=True, hi_open=True, table1="20"),
+    _f("gear_pair.face_width_mm", "face_width", "mm", "derived",
+       "face width b of the spur mesh (default: 10 x module)", lo=0.0, lo_open=True),
+    _teeth("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
+    _tol("gear_pair.output_gear.profile_error_mm", "profile_error",
+         "profile error of gear 1 (not used by the paper's gear-stage equations)", "0.007"),
+    _tol("gear_pair.output_gear.thickness_deviation_mm", "thickness_deviation",
+         "tooth thickness deviation of gear 1 (not used by the paper's gear-stage equations)", "0.055"),
+    _teeth("gear_pair.pinion.teeth", "teeth", "teeth z2 of the pinion (gear 2)", "18"),
+    _tol("gear_pair.pinion.profile_error_mm", "profile_error", "profile error of gear 2 (not used by the paper's "
+         "gear-stage equations)", "0.008"),
+    _tol("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
+         "tooth thickness deviation of gear 2 (not used by the paper's gear-stage equations)", "0.045"),
+    # --- stage 1: worm pair ------------------------------------------------------
+    _f("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", lo=0.0,
+       lo_open=True, table1="2.5"),
+    _f("worm_pair.normal_pressure_angle_deg", "normal_pressure_angle", "deg", None, "normal pressure angle alpha_n",
+       lo=0.0, hi=45.0, lo_open=True, hi_open=True, table1="20"),
+    _f("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.0, hi=45.0,
+       lo_open=True, hi_open=True, table1="3.178"),
+    _f("worm_pair.transverse_pressure_angle_deg", "transverse_pressure_angle", "deg", "derived",
+       "wheel transverse pressure angle alpha_2 (default: atan(tan alpha_n / cos lambda), DIN 3975)",
+       lo=0.0, hi=45.0, lo_open=True, hi_open=True),
+    _f("worm_pair.face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
+       lo=0.0, lo_open=True),
+    _tol("worm_pair.lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
+    _phase("worm_pair.lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
+    Field("worm_pair.worm.starts", "starts", "int", "-", None, "number of worm starts (threads)", 1, None,
+          table1="1"),
+    _tol("worm_pair.worm.profile_error_mm", "profile_error", "worm profile error f_t1", "0.036"),
+    _tol("worm_pair.worm.thickness_deviation_mm", "thickness_deviation", "worm thickness deviation T_s1", "0.045"),
+    _teeth("worm_pair.wheel.teeth", "teeth", "teeth z3 of the worm wheel", "30"),
+    _tol("worm_pair.wheel.profile_error_mm", "profile_error", "wheel profile error f_t2", "0.011"),
+    _tol("worm_pair.wheel.thickness_deviation_mm", "thickness_deviation", "wheel thickness deviation T_s2",
+         "0.090"),
+    _tol("worm_pair.wheel.radial_composite_error_mm", "radial_composite_error", "wheel radial composite error F_i",
+         "0.036"),
+    _phase("worm_pair.wheel.radial_composite_phase_deg", "radial_composite_phase",
+           "phase of the radial composite error (once per wheel turn)"),
+    # --- assembly ----------------------------------------------------------------
+    _tol("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
+         "centre-distance error of the spur pair", "0.030"),
+    _f("assembly.gear_eccentricity_mm", "gear_eccentricity", "mm", "derived",
+       "the paper's Delta e (default: gear_centre_distance_error_mm)", lo=0.0),
+    _phase("assembly.gear_eccentricity_phase_deg", "gear_eccentricity_phase",
+           "phase of Delta e (once per pinion turn)"),
+    _tol("assembly.worm_centre_distance_error_mm", "worm_centre_distance_error",
+         "centre-distance error f_a of the worm pair", "0.035"),
+    _tol("assembly.worm_eccentricity_mm", "worm_eccentricity", "worm shaft eccentricity S1"),
+    _phase("assembly.worm_eccentricity_phase_deg", "worm_eccentricity_phase", "phase of S1 (once per worm turn)"),
+    _tol("assembly.worm_bearing_clearance_mm", "worm_bearing_clearance", "worm bearing clearance C1"),
+    _tol("assembly.wheel_eccentricity_mm", "wheel_eccentricity", "wheel eccentricity S2"),
+    _phase("assembly.wheel_eccentricity_phase_deg", "wheel_eccentricity_phase", "phase of S2 (once per wheel turn)"),
+    _tol("assembly.wheel_bearing_clearance_mm", "wheel_bearing_clearance", "wheel bearing clearance C2"),
+    Field("assembly.worm_pair_errors_mm", "worm_pair_errors", "floats", "mm", (0.0,) * 6,
+          "the paper's six e_i of the worm pair (shaft-position and alignment errors entering Delta j)",
+          0.0, None, length=6),
+    # --- loads -------------------------------------------------------------------
+    _f("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", lo=0.0,
+       table1="666 (text)"),
+    _f("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", lo=0.0,
+       table1="85 (text)"),
+    # --- stiffness (deformation model) -------------------------------------------
+    Field("stiffness.model", "model", "str", "", "iso6336",
+          "deflection model: iso6336 (ISO 6336-1 c') or empirical (the paper's form)",
+          choices=("iso6336", "empirical")),
+    _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", lo=0.0, lo_open=True),
+    _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", lo=0.0, lo_open=True),
+    _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", lo=0.0, lo_open=True),
+    _f("stiffness.empirical_a1", "empirical_a1", "-", 3.6, "the paper's A1 (see README for the calibration)",
+       lo=0.0),
+    _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
+    _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
+    _f("stiffness.contact_ratio", "contact_ratio", "-", "derived",
+       "contact ratio eps of the empirical form (default: standard spur eps_alpha)", lo=1.0, hi=3.0),
+    _f("stiffness.empirical_lambda2", "empirical_lambda2", "-", 0.0, "the paper's lambda2 (undefined there)",
+       lo=0.0),
+    # --- materials ---------------------------------------------------------------
+    _f("materials.gear_elastic_modulus_GPa", "gear_elastic_modulus", "GPa", 206.0,
+       "Young's modulus E of the spur gears (steel)", lo=1.0, hi=1000.0),
+    _f("materials.worm_elastic_modulus_GPa", "worm_elastic_modulus", "GPa", 206.0,
+       "Young's modulus of the worm (steel)", lo=1.0, hi=1000.0),
+    _f("materials.wheel_elastic_modulus_GPa", "wheel_elastic_modulus", "GPa", 98.0,
+       "Young's modulus of the wheel (CuSn12 bronze ~ 98)", lo=1.0, hi=1000.0),
+    _f("materials.worm_expansion_ppm_per_K", "worm_expansion", "ppm/K", 11.5,
+       "thermal expansion of the worm (steel 11.5)", lo=-5.0, hi=50.0),
+    _f("materials.wheel_expansion_ppm_per_K", "wheel_expansion", "ppm/K", 18.5,
+       "thermal expansion of the wheel (CuSn12 bronze 18.5)", lo=-5.0, hi=50.0),
+    _f("materials.housing_expansion_ppm_per_K", "housing_expansion", "ppm/K", 10.5,
+       "thermal expansion of the housing (grey cast iron 10.5)", lo=-5.0, hi=50.0),
+    # --- requirements (all optional) ---------------------------------------------
+    *(
+        _f(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, lo_open=True)
+        for name, what in (
+            ("transmission_error", "the total transmission error at the output"),
+            ("backlash", "the total backlash at the output"),
+            ("gear_transmission_error", "the gear-stage TE at its output"),
+            ("gear_backlash", "the gear-stage backlash"),
+            ("worm_transmission_error", "the worm-stage TE at the wheel"),
+            ("worm_backlash", "the worm-stage backlash at the wheel"),
+        )
+    ),
+)
+
+FIELD_BY_PATH: dict[str, Field] = {f.path: f for f in FIELDS}
+SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(f.section for f in FIELDS))
+REQUIRED_SECTIONS = ("gear_pair", "gear_pair.output_gear", "gear_pair.pinion", "worm_pair", "worm_pair.worm",
+                     "worm_pair.wheel")
+
+# --- immutable dataclasses, one per section, generated from the schema -------------
+
+
+def _class_name(section: str) -> str:
+    return "".join(part.capitalize() for part in section.replace(".", "_").split("_"))
+
+
+_SECTION_CLASSES: dict[str, type] = {}
+for _sec in SECTIONS:
+    _children = [s for s in SECTIONS if s.rsplit(".", 1)[0] == _sec and "." in s]
+    _fields = [(f.attr, Any) for f in FIELDS if f.section == _sec]
+    _fields += [(c.rsplit(".", 1)[1], Any) for c in _children]
+    _SECTION_CLASSES[_sec] = make_dataclass(_class_name(_sec), _fields, frozen=True)
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A validated drive, every value in internal units.
+
+    Sections are attributes (``spec.gear_pair.output_gear.teeth``).
+    ``effects`` maps an effect name to its internal parameters; ``source``
+    is the file it came from; ``raw`` the TOML document as read (a
+    read-only mapping; use :func:`raw_copy` to derive a changed spec).
+    """
+
+    drive: Any
+    gear_pair: Any
+    worm_pair: Any
+    assembly: Any
+    loads: Any
+    stiffness: Any
+    materials: Any
+    requirements: Any
+    effects: Any = field(default_factory=lambda: MappingProxyType({}))
+    source: str = "<spec>"
+    raw: Any = field(default_factory=lambda: MappingProxyType({}), repr=False)
+
+
+def raw_copy(spec: Spec) -> dict:
+    """A mutable deep copy of the TOML document behind ``spec``."""
+    return copy.deepcopy(_thaw(spec.raw))
+
+
+def _thaw(obj):
+    if isinstance(obj, MappingProxyType) or isinstance(obj, dict):
+        return {k: _thaw(v) for k, v in obj.items()}
+    return obj
+
+
+def _freeze(obj):
+    if isinstance(obj, dict):
+        return MappingProxyType({k: _freeze(v) for k, v in obj.items()})
+    if isinstance(obj, list):
+        return tuple(_freeze(v) for v in obj)
+    return obj
+
+
+# --- loading ------------------------------------------------------------------------
+
+
+def load_spec(path: str | Path) -> Spec:
+    """Read and validate a drive file.  Raises :class:`SpecError` listing every problem."""
+    path = Path(path)
+    name = str(path)
+    if not path.exists():
+        raise SpecError(f"{name}: file not found")
+    if path.is_dir():
+        raise SpecError(f"{name}: is a directory, expected a TOML drive file")
+    try:
+        blob = path.read_bytes()
+    except OSError as exc:
+        raise SpecError(f"{name}: cannot read ({exc.strerror})") from None
+    if not blob.strip():
+        raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
+    if b"\x00" in blob:
+        raise SpecError(f"{name}: binary file, expected a TOML drive file")
+    try:
+        text = blob.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise SpecError(f"{name}: not UTF-8 text (byte {exc.start}), expected a TOML drive file") from None
+    return loads_spec(text, name, default_name=path.stem)
+
+
+def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:
+    """Parse TOML text and validate it (see :func:`load_spec`)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        msg = str(exc)
+        line = getattr(exc, "lineno", None)
+        col = getattr(exc, "colno", None)
+        if line is not None:
+            head = msg.split(" (at line")[0]
+            raise SpecError(f"{source}:{line}:{col}: TOML syntax error: {head}") from None
+        raise SpecError(f"{source}: TOML syntax error: {msg}") from None
+    return spec_from_dict(data, source, default_name)
+
+
+def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "drive") -> Spec:
+    """Validate a TOML document (as a dict) into a :class:`Spec`."""
+    problems: list[str] = []
+    values: dict[str, Any] = {}
+
+    def bad(path: str, message: str) -> None:
+        problems.append(f"{source}: {path}: {message}")
+
+    _walk_unknown(data, "", problems, source)
+
+    for sec in REQUIRED_SECTIONS:
+        parent = sec.rsplit(".", 1)[0] if "." in sec else ""
+        if _get(data, sec) is None and (not parent or isinstance(_get(data, parent), dict)):
+            bad(sec, f"missing section [{sec}]")
+
+    for f in FIELDS:
+        parent = _get(data, f.section)
+        if not isinstance(parent, dict) or f.key not in parent:
+            if f.default is None and isinstance(parent, dict):
+                bad(f.path, f"missing required key, expected {f.expected()}")
+            values[f.path] = _MISSING
+            continue
+        raw = parent[f.key]
+        err, val = _check_value(f, raw)
+        if err:
+            bad(f.path, err)
+            values[f.path] = _MISSING
+        else:
+            values[f.path] = val
+
+    effects = _load_effects(data.get("effects"), problems, source)
+
+    if problems:
+        raise SpecError(problems)
+    return _build(values, effects, source, default_name, data)
+
+
+class _Missing:
+    def __repr__(self):
+        return "<missing>"
+
+
+_MISSING = _Missing()
+
+
+def _get(data: dict, dotted: str):
+    node: Any = data
+    for part in dotted.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return None
+        node = node[part]
+    return node
+
+
+def _type_name(v) -> str:
+    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "an array",
+            dict: "a table"}.get(type(v), type(v).__name__)
+
+
+def _check_value(f: Field, raw) -> tuple[str | None, Any]:
+    """Return (problem, converted value)."""
+    if f.kind == "str":
+        if not isinstance(raw, str):
+            return f"expected {f.expected()}, got {_type_name(raw)}", None
+        if f.choices and raw not in f.choices:
+            near = difflib.get_close_matches(raw, f.choices, n=1)
+            hint = f' (did you mean "{near[0]}"?)' if near else ""
+            return f'expected {f.expected()}, got "{raw}"{hint}', None
+        return None, raw
+    if f.kind == "floats":
+        if not isinstance(raw, list):
+            return f"expected {f.expected()}, got {_type_name(raw)}", None
+        if f.length is not None and len(raw) != f.length:
+            return f"expected {f.expected()}, got {len(raw)} values", None
+        out = []
+        for i, item in enumerate(raw):
+            err = _number_problem(f, item)
+            if err:
+                return f"element {i}: {err}", None
+            out.append(float(item) * UNIT_SCALE[f.unit])
+        return None, tuple(out)
+    err = _number_problem(f, raw)
+    if err:
+        return err, None
+    if f.kind == "int":
+        return None, int(raw)
+    return None, float(raw) * UNIT_SCALE[f.unit]
+
+
+def _number_problem(f: Field, raw) -> str | None:
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        shown = f'"{raw}"' if isinstance(raw, str) else _type_name(raw)
+        return f"expected {f.expected()}, got {shown}"
+    if f.kind == "int" and not isinstance(raw, int):
+        if isinstance(raw, float) and math.isfinite(raw) and raw.is_integer():
+            pass
+        else:
+            return f"expected {f.expected()}, got {raw!r} (not a whole number)"
+    if isinstance(raw, float) and not math.isfinite(raw):
+        return f"expected {f.expected()}, got {raw!r}"
+    v = float(raw)
+    if f.lo is not None and (v < f.lo or (f.lo_open and v == f.lo)):
+        return f"expected {f.expected()}, got {raw!r}"
+    if f.hi is not None and (v > f.hi or (f.hi_open and v == f.hi)):
+        return f"expected {f.expected()}, got {raw!r}"
+    return None
+
+
+def _known_children(prefix: str) -> set[str]:
+    """Keys and sub-tables valid directly under ``prefix`` ("" = top level)."""
+    out: set[str] = set()
+    depth = 0 if not prefix else prefix.count(".") + 1
+    for f in FIELDS:
+        if prefix and not f.path.startswith(prefix + "."):
+            continue
+        parts = f.path.split(".")
+        if len(parts) > depth:
+            out.add(parts[depth])
+    if not prefix:
+        out.add("effects")
+    return out
+
+
+def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> None:
+    if prefix == "effects":
+        return
+    known = _known_children(prefix)
+    for key, value in data.items():
+        path = f"{prefix}.{key}" if prefix else key
+        if key not in known:
+            candidates = sorted(known)
+            near = difflib.get_close_matches(key, candidates, n=1, cutoff=0.6)
+            if not near:
+                # try the full path against every valid path (misplaced key)
+                near_full = difflib.get_close_matches(path, [f.path for f in FIELDS], n=1, cutoff=0.75)
+                hint = f" (did you mean {near_full[0]}?)" if near_full else ""
+            else:
+                hint = f" (did you mean {(prefix + '.' if prefix else '') + near[0]}?)"
+            what = "table" if isinstance(value, dict) else "key"
+            problems.append(f"{source}: {path}: unknown {what}{hint}")
+            continue
+        is_section = any(s == path for s in SECTIONS) or path == "effects"
+        if is_section and not isinstance(value, dict):
+            problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(value)}")
+        elif not is_section and isinstance(value, dict):
+            problems.append(f"{source}: {path}: expected a value, got a table")
+        elif isinstance(value, dict):
+            _walk_unknown(value, path, problems, source)
+
+
+def _load_effects(table, problems: list[str], source: str) -> dict:
+    if table is None:
+        return {}
+    if not isinstance(table, dict):
+        return {}
+    from wormgear_cli.models.effects import EFFECTS, params_from_keys
+
+    out = {}
+    for name, params in table.items():
+        path = f"effects.{name}"
+        if name not in EFFECTS:
+            near = difflib.get_close_matches(name, list(EFFECTS), n=1)
+            hint = f" (did you mean effects.{near[0]}?)" if near else f" (known: {', '.join(EFFECTS)})"
+            problems.append(f"{source}: {path}: unknown effect{hint}")
+            continue
+        if not isinstance(params, dict):
+            problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(params)}")
+            continue
+        eff = EFFECTS[name]
+        keys = [p.key for p in eff.params]
+        ok = True
+        for key in params:
+            if key not in keys:
+                near = difflib.get_close_matches(key, keys, n=1)
+                hint = f" (did you mean {path}.{near[0]}?)" if near else f" (valid: {', '.join(keys)})"
+                problems.append(f"{source}: {path}.{key}: unknown key{hint}")
+                ok = False
+        for p in eff.params:
+            if p.key not in params:
+                if p.default is None:
+                    problems.append(f"{source}: {path}.{p.key}: missing required key, expected a number "
+                                    f"in [{_fmt(p.lo)}, {_fmt(p.hi)}] [{p.unit}]")
+                    ok = False
+                continue
+            raw = params[p.key]
+            pf = Field(f"{path}.{p.key}", p.name, "float", p.unit, p.default, p.doc, p.lo, p.hi)
+            err = _number_problem(pf, raw)
+            if err:
+                problems.append(f"{source}: {path}.{p.key}: {err}")
+                ok = False
+        if ok:
+            out[name] = MappingProxyType(params_from_keys(name, params))
+    return out
+
+
+def _build(values: dict, effects: dict, source: str, default_name: str, data: dict) -> Spec:
+    v = dict(values)
+
+    def take(path, fallback):
+        return fallback if v[path] is _MISSING else v[path]
+
+    # defaults, including the derived ones (documented in FIELDS)
+    for f in FIELDS:
+        if v[f.path] is _MISSING and f.default not in ("derived", None):
+            d = f.default
+            if d == "":
+                v[f.path] = None
+            elif f.kind == "floats":
+                v[f.path] = tuple(x * UNIT_SCALE[f.unit] for x in d)
+            elif f.kind == "str":
+                v[f.path] = d
+            else:
+                v[f.path] = float(d) * UNIT_SCALE[f.unit]
+    v["drive.name"] = take("drive.name", default_name)
+    v["gear_pair.face_width_mm"] = take("gear_pair.face_width_mm", 10.0 * v["gear_pair.module_mm"])
+    v["worm_pair.face_width_mm"] = take("worm_pair.face_width_mm", 10.0 * v["worm_pair.module_mm"])
+    if v["worm_pair.transverse_pressure_angle_deg"] is _MISSING:
+        an, lam = v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"]
+        v["worm_pair.transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
+    if v["assembly.gear_eccentricity_mm"] is _MISSING:
+        v["assembly.gear_eccentricity_mm"] = v["assembly.gear_centre_distance_error_mm"]
+    if v["stiffness.contact_ratio"] is _MISSING:
+        from wormgear_cli.models.deformation import spur_contact_ratio
+
+        v["stiffness.contact_ratio"] = float(spur_contact_ratio(
+            v["gear_pair.output_gear.teeth"], v["gear_pair.pinion.teeth"], v["gear_pair.pressure_angle_deg"]))
+
+    built: dict[str, Any] = {}
+    for sec in sorted(SECTIONS, key=lambda s: -s.count(".")):
+        cls = _SECTION_CLASSES[sec]
+        kwargs = {f.attr: v[f.path] for f in FIELDS if f.section == sec}
+        for child in SECTIONS:
+            if child.rsplit(".", 1)[0] == sec and "." in child:
+                kwargs[child.rsplit(".", 1)[1]] = built[child]
+        built[sec] = cls(**kwargs)
+    top = {s: built[s] for s in SECTIONS if "." not in s}
+    return Spec(**top, effects=MappingProxyType(effects), source=source, raw=_freeze(data))
+
+
+def field_value_in_key_unit(spec: Spec, path: str):
+    """The value of ``path`` in ``spec``, converted back to the key's unit."""
+    f = FIELD_BY_PATH[path]
+    node: Any = spec
+    for part in f.section.split("."):
+        node = getattr(node, part)
+    val = getattr(node, f.attr)
+    if val is None or f.kind in ("str", "int"):
+        return val
+    if f.kind == "floats":
+        return tuple(x / UNIT_SCALE[f.unit] for x in val)
+    return val / UNIT_SCALE[f.unit]
+
+
+def with_values(spec: Spec, changes: dict[str, Any]) -> Spec:
+    """A new spec with TOML ``path -> value`` changes applied (key units), re-validated."""
+    data = raw_copy(spec)
+    for path, value in changes.items():
+        parts = path.split(".")
+        node = data
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise SpecError(f"{spec.source}: {path}: cannot set, {part} is not a table")
+        node[parts[-1]] = value
+    return spec_from_dict(data, spec.source, spec.drive.name)
