@@ -8,7 +8,11 @@ command functions so start-up stays fast.
 from __future__ import annotations
 
 from wormgear_cli.cli.app import app
-from wormgear_cli.cli import analyze  # noqa: F401  (registers analyze, check, new)
+from wormgear_cli.cli import analyze  # noqa: F401  (analyze, check, new)
+from wormgear_cli.cli import sweep  # noqa: F401
+from wormgear_cli.cli import simulate  # noqa: F401  (simulate, synth)
+from wormgear_cli.cli import measure  # noqa: F401
+from wormgear_cli.cli import diagnose  # noqa: F401
 
 
 def main() -> None:

@@ -1,0 +1,1 @@
+"""``wormgear diagnose``: (being built)."""

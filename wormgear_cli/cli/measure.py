@@ -1,0 +1,1 @@
+"""``wormgear measure``: (being built)."""

@@ -1,0 +1,1 @@
+"""``wormgear simulate``: (being built)."""

@@ -1,0 +1,1 @@
+"""``wormgear sweep``: (being built)."""

@@ -1,0 +1,185 @@
+"""Measured (or planned) rotary-table data: read and validate a CSV file.
+
+Format: CSV with a header; lines starting with ``#`` before the header are
+comments.  Required columns ``angle_deg`` (target output angle) and
+``error_arcsec`` (actual - target); optional ``direction`` (+1/-1),
+``run`` (integer), ``load_Nm`` (external torque on the output, positive
+pushes the table forward), ``temperature_C``, ``time_s``.  Unknown columns
+are kept (for writing rows back) and otherwise ignored.
+
+Every problem raises :class:`DataError` naming the file, the line and the
+column.  Internally angles are radians and errors radians.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wormgear_cli.errors import DataError
+from wormgear_cli.models.effects import Signals
+
+ARCSEC = math.pi / 648000.0
+REQUIRED = ("angle_deg", "error_arcsec")
+OPTIONAL = ("direction", "run", "load_Nm", "temperature_C", "time_s")
+
+#: default value of an optional column that is absent
+DEFAULTS = {"direction": 1.0, "run": 0.0, "load_Nm": 0.0, "temperature_C": 20.0, "time_s": 0.0}
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """A validated measurement.
+
+    Arrays (one entry per row): ``angle`` [rad], ``error`` [rad] (NaN when the
+    file had no ``error_arcsec`` and it was not required), ``direction``
+    (+1/-1), ``run`` (int), ``load`` [N m], ``temperature`` [degC], ``time``
+    [s].  ``present``: the optional columns the file had.  ``header`` and
+    ``rows``: the original text cells (to write rows back), ``comments``:
+    the leading ``#`` lines.
+    """
+
+    source: str
+    angle: np.ndarray
+    error: np.ndarray
+    direction: np.ndarray
+    run: np.ndarray
+    load: np.ndarray
+    temperature: np.ndarray
+    time: np.ndarray
+    present: frozenset
+    header: tuple
+    rows: tuple
+    comments: tuple
+
+    def __len__(self) -> int:
+        return len(self.angle)
+
+    def signals(self) -> Signals:
+        """The operating conditions of every row for the simulation."""
+        return Signals(self.angle, self.direction, self.load, self.temperature, self.time)
+
+    @property
+    def angle_deg(self) -> np.ndarray:
+        return np.degrees(self.angle)
+
+    @property
+    def error_arcsec(self) -> np.ndarray:
+        return self.error / ARCSEC
+
+
+def read_measurement(path: str | Path, require_error: bool = True) -> Measurement:
+    """Read and validate a measurement CSV (see module doc).  Raises DataError."""
+    path = Path(path)
+    name = str(path)
+    if not path.exists():
+        raise DataError(f"{name}: file not found")
+    if path.is_dir():
+        raise DataError(f"{name}: is a directory, expected a CSV file")
+    blob = path.read_bytes()
+    if b"\x00" in blob:
+        raise DataError(f"{name}: binary file, expected a CSV file")
+    try:
+        text = blob.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DataError(f"{name}: not UTF-8 text (byte {exc.start}), expected a CSV file") from None
+    return parse_measurement(text, name, require_error)
+
+
+def parse_measurement(text: str, name: str = "<data>", require_error: bool = True) -> Measurement:
+    """Parse CSV text (see :func:`read_measurement`)."""
+    lines = text.splitlines()
+    comments = []
+    start = 0
+    while start < len(lines) and (lines[start].lstrip().startswith("#") or not lines[start].strip()):
+        if lines[start].strip():
+            comments.append(lines[start])
+        start += 1
+    if start >= len(lines):
+        raise DataError(f"{name}: empty file, expected a CSV header with {', '.join(REQUIRED)}")
+    reader = csv.reader(io.StringIO("\n".join(lines[start:])))
+    header = [h.strip() for h in next(reader)]
+    header_line = start + 1
+    required = REQUIRED if require_error else REQUIRED[:1]
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise DataError(f"{name}:{header_line}: missing required column{'s' if len(missing) > 1 else ''} "
+                        f"{', '.join(missing)} (header has: {', '.join(header) or 'nothing'})")
+    dupes = sorted({h for h in header if header.count(h) > 1 and h in REQUIRED + OPTIONAL})
+    if dupes:
+        raise DataError(f"{name}:{header_line}: column {dupes[0]} appears twice")
+    rows = []
+    line_numbers = []
+    for offset, row in enumerate(reader):
+        line_no = header_line + 1 + offset
+        if not row or all(not c.strip() for c in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            continue
+        if len(row) != len(header):
+            raise DataError(f"{name}:{line_no}: expected {len(header)} cells as in the header, got {len(row)}")
+        rows.append(tuple(row))
+        line_numbers.append(line_no)
+    if not rows:
+        raise DataError(f"{name}: no data rows after the header")
+    if len(rows) < 2:
+        raise DataError(f"{name}:{line_numbers[0]}: only one data row; at least two are needed")
+    index = {h: i for i, h in enumerate(header)}
+    values = {}
+    for col in REQUIRED + OPTIONAL:
+        if col not in index:
+            continue
+        j = index[col]
+        arr = np.empty(len(rows))
+        for k, row in enumerate(rows):
+            cell = row[j].strip()
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
+                                f"{cell!r}") from None
+            if not math.isfinite(v):
+                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a finite number, got {cell!r}")
+            arr[k] = v
+        values[col] = arr
+    if "direction" in values:
+        bad = np.flatnonzero((values["direction"] != 1.0) & (values["direction"] != -1.0))
+        if bad.size:
+            k = bad[0]
+            raise DataError(f"{name}:{line_numbers[k]}: column direction: expected +1 or -1, got "
+                            f"{rows[k][index['direction']].strip()!r}")
+    if "run" in values:
+        bad = np.flatnonzero(values["run"] != np.round(values["run"]))
+        if bad.size:
+            k = bad[0]
+            raise DataError(f"{name}:{line_numbers[k]}: column run: expected an integer, got "
+                            f"{rows[k][index['run']].strip()!r}")
+    angle = values["angle_deg"]
+    if np.all(angle == angle[0]):
+        raise DataError(f"{name}:{line_numbers[0]}: column angle_deg: all {len(rows)} rows have the same "
+                        f"angle ({angle[0]:g}); a measurement needs several targets")
+    n = len(rows)
+
+    def col(c):
+        return values[c] if c in values else np.full(n, DEFAULTS[c])
+
+    error = values["error_arcsec"] * ARCSEC if "error_arcsec" in values else np.full(n, np.nan)
+    return Measurement(
+        source=name,
+        angle=np.radians(angle),
+        error=error,
+        direction=col("direction"),
+        run=col("run").astype(int),
+        load=col("load_Nm"),
+        temperature=col("temperature_C"),
+        time=col("time_s"),
+        present=frozenset(c for c in OPTIONAL if c in values),
+        header=tuple(header),
+        rows=tuple(rows),
+        comments=tuple(comments),
+    )
