@@ -194,7 +194,7 @@ FIELDS: tuple[Field, ...] = (
     _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", lo=0.0, lo_open=True),
     _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", lo=0.0, lo_open=True),
     _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", lo=0.0, lo_open=True),
-    _f("stiffness.empirical_a1", "empirical_a1", "-", 3.6, "the paper's A1 (see README for the calibration)",
+    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (see README for the calibration)",
        lo=0.0),
     _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
     _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
@@ -280,6 +280,8 @@ def raw_copy(spec: Spec) -> dict:
 def _thaw(obj):
     if isinstance(obj, MappingProxyType) or isinstance(obj, dict):
         return {k: _thaw(v) for k, v in obj.items()}
+    if isinstance(obj, (tuple, list)):
+        return [_thaw(v) for v in obj]
     return obj
 
 
