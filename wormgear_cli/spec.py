@@ -324,14 +324,23 @@ def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        msg = str(exc)
-        line = getattr(exc, "lineno", None)
-        col = getattr(exc, "colno", None)
-        if line is not None:
-            head = msg.split(" (at line")[0]
-            raise SpecError(f"{source}:{line}:{col}: TOML syntax error: {head}") from None
-        raise SpecError(f"{source}: TOML syntax error: {msg}") from None
+        raise SpecError(_syntax_message(str(exc), text, source)) from None
     return spec_from_dict(data, source, default_name)
+
+
+def _syntax_message(msg: str, text: str, source: str) -> str:
+    """``FILE:LINE:COL: TOML syntax error: WHAT`` from tomllib's message."""
+    import re
+
+    m = re.search(r"\s*\(at line (\d+), column (\d+)\)\s*$", msg)
+    if m:
+        return f"{source}:{m.group(1)}:{m.group(2)}: TOML syntax error: {msg[:m.start()]}"
+    m = re.search(r"\s*\(at end of document\)\s*$", msg)
+    if m:
+        lines = text.splitlines() or [""]
+        return (f"{source}:{len(lines)}:{len(lines[-1]) + 1}: TOML syntax error: "
+                f"{msg[:m.start()]} (at end of file)")
+    return f"{source}: TOML syntax error: {msg}"
 
 
 def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "drive") -> Spec:
