@@ -6,7 +6,6 @@ it turned into one stderr line per problem and the exit code 2.
 
 from __future__ import annotations
 
-import click
 import typer
 from typer.core import TyperGroup
 
@@ -16,15 +15,15 @@ from wormgear_cli.errors import WormgearError
 class WormgearGroup(TyperGroup):
     """Runs a command; a user mistake becomes messages + exit code, never a traceback."""
 
-    def invoke(self, ctx: click.Context):
+    def invoke(self, ctx):
         try:
             return super().invoke(ctx)
         except WormgearError as exc:
             for line in exc.problems:
-                click.echo(f"error: {line}", err=True)
+                typer.echo(f"error: {line}", err=True)
             raise typer.Exit(exc.exit_code) from None
         except KeyboardInterrupt:
-            click.echo("interrupted", err=True)
+            typer.echo("interrupted", err=True)
             raise typer.Exit(130) from None
 
 

@@ -1,0 +1,216 @@
+"""CLI: analyze, check, new — exit codes, JSON contract, CSV, files, messages."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+from wormgear_cli.cli import app
+
+from conftest import CONFIGS, MCH50
+
+CONTRACT = [
+    ("stages", "gear", "transmission_error"),
+    ("stages", "gear", "backlash"),
+    ("stages", "worm", "transmission_error"),
+    ("stages", "worm", "backlash"),
+    ("total", "transmission_error"),
+    ("total", "backlash"),
+]
+
+
+def dig(doc, path):
+    for p in path:
+        doc = doc[p]
+    return doc
+
+
+def run_json(runner, *args):
+    result = runner.invoke(app, list(args))
+    assert result.exit_code == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+def test_analyze_json_contract(runner):
+    doc = run_json(runner, "analyze", str(MCH50), "--format", "json", "--unit", "arcsec")
+    assert doc["drive"] == "MCH50 rotary table"
+    assert doc["unit"] == "arcsec"
+    for path in CONTRACT:
+        assert isinstance(dig(doc, path), float) and dig(doc, path) > 0
+
+
+@pytest.mark.parametrize("unit, per_deg", [("deg", 1.0), ("arcmin", 60.0), ("arcsec", 3600.0),
+                                           ("urad", 1e6 * math.pi / 180)])
+def test_units_are_consistent_across_the_output(runner, unit, per_deg):
+    base = run_json(runner, "analyze", str(MCH50), "-f", "json", "-u", "deg")
+    other = run_json(runner, "analyze", str(MCH50), "-f", "json", "-u", unit)
+    for path in CONTRACT:
+        assert dig(other, path) == pytest.approx(dig(base, path) * per_deg, rel=1e-12)
+
+
+def test_stage_shares_and_parts_add_up(runner):
+    doc = run_json(runner, "analyze", str(MCH50), "-f", "json")
+    g, w = doc["stages"]["gear"], doc["stages"]["worm"]
+    assert g["contribution"]["transmission_error_pct"] + w["contribution"]["transmission_error_pct"] == \
+        pytest.approx(100.0)
+    assert g["transmission_error_parts"]["eccentricity"] + g["transmission_error_parts"]["deformation"] == \
+        pytest.approx(g["transmission_error"])
+    wp = w["backlash_parts"]
+    assert wp["deformation"] + wp["profile"] + wp["thickness"] + wp["envelope_halfwidth"] == \
+        pytest.approx(w["backlash"])
+    assert doc["total"]["backlash"] == pytest.approx(g["backlash"] + w["contribution"]["backlash"])
+
+
+def test_analyze_csv_is_one_row_with_named_columns(runner):
+    result = runner.invoke(app, ["analyze", str(MCH50), "-f", "csv", "-u", "arcsec"])
+    rows = list(csv.DictReader(io.StringIO(result.stdout)))
+    assert len(rows) == 1
+    doc = run_json(runner, "analyze", str(MCH50), "-f", "json", "-u", "arcsec")
+    assert float(rows[0]["total_backlash"]) == doc["total"]["backlash"]
+    assert float(rows[0]["gear_transmission_error"]) == doc["stages"]["gear"]["transmission_error"]
+    assert rows[0]["unit"] == "arcsec"
+
+
+def test_analyze_table_shows_stages_and_totals(runner):
+    result = runner.invoke(app, ["analyze", str(MCH50), "-u", "deg"])
+    assert result.exit_code == 0
+    out = result.stdout
+    assert "gear stage" in out and "worm stage" in out and "total" in out
+    doc = run_json(runner, "analyze", str(MCH50), "-f", "json", "-u", "deg")
+    assert f"{doc['total']['transmission_error']:.5f}" in out
+    assert "\x1b[" not in out  # no colour codes when not a terminal
+
+
+def test_output_is_deterministic(runner):
+    for fmt in ("json", "csv", "table"):
+        a = runner.invoke(app, ["analyze", str(MCH50), "-f", fmt]).stdout
+        b = runner.invoke(app, ["analyze", str(MCH50), "-f", fmt]).stdout
+        assert a == b and a
+
+
+def test_output_file_is_written_and_input_never_overwritten(runner, tmp_path):
+    out = tmp_path / "r.json"
+    result = runner.invoke(app, ["analyze", str(MCH50), "-f", "json", "-o", str(out)])
+    assert result.exit_code == 0 and result.stdout == ""
+    assert json.loads(out.read_text())["unit"] == "arcsec"
+    drive = tmp_path / "d.toml"
+    drive.write_bytes(MCH50.read_bytes())
+    result = runner.invoke(app, ["analyze", str(drive), "-f", "json", "-o", str(drive)])
+    assert result.exit_code == 2
+    assert result.stderr == f"error: {drive}: refusing to overwrite the input file; choose another -o\n"
+    assert drive.read_bytes() == MCH50.read_bytes()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temp files left
+
+
+def test_bad_input_exits_2_without_traceback(runner, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[gear_pair]\nmodule_mm = -2\n")
+    result = runner.invoke(app, ["analyze", str(bad)])
+    assert result.exit_code == 2
+    assert "Traceback" not in result.stderr and result.stdout == ""
+    assert f"error: {bad}: gear_pair.module_mm: expected a number > 0 [mm], got -2" in result.stderr.splitlines()
+    result = runner.invoke(app, ["analyze", str(tmp_path / "missing.toml")])
+    assert (result.exit_code, result.stderr) == (2, f"error: {tmp_path / 'missing.toml'}: file not found\n")
+
+
+def test_bad_option_values_exit_2(runner):
+    assert runner.invoke(app, ["analyze", str(MCH50), "--unit", "furlong"]).exit_code == 2
+    assert runner.invoke(app, ["analyze", str(MCH50), "--format", "xml"]).exit_code == 2
+
+
+# --- check -----------------------------------------------------------------------------------------
+
+
+def write_with_requirements(tmp_path, name, limits: str):
+    text = MCH50.read_text().split("[requirements]")[0] + "[requirements]\n" + limits
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_check_passes_fails_and_rejects(runner, tmp_path):
+    ok = write_with_requirements(tmp_path, "ok.toml", "max_transmission_error_arcsec = 1000.0\n")
+    tight = write_with_requirements(tmp_path, "tight.toml", "max_backlash_arcsec = 10.0\n"
+                                    "max_transmission_error_arcsec = 1000.0\n")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[gear_pair]\n")
+    r = runner.invoke(app, ["check", str(ok)])
+    assert (r.exit_code, r.stdout) == (0, f"{ok}: ok (1 requirement met)\n")
+    r = runner.invoke(app, ["check", str(ok), str(tight)])
+    assert r.exit_code == 1
+    doc = run_json(runner, "analyze", str(tight), "-f", "json", "-u", "arcsec")
+    line = (f"{tight}: FAIL requirements.max_backlash_arcsec: limit 10 arcsec, value "
+            f"{doc['total']['backlash']:.2f} arcsec")
+    assert r.stdout.splitlines() == [f"{ok}: ok (1 requirement met)", line]
+    r = runner.invoke(app, ["check", str(ok), str(tight), str(bad)])
+    assert r.exit_code == 2
+    assert f"error: {bad}: gear_pair.module_mm: missing required key, expected a number > 0 [mm]" in r.stderr
+
+
+def test_check_json(runner, tmp_path):
+    tight = write_with_requirements(tmp_path, "tight.toml", "max_backlash_arcsec = 10.0\n")
+    r = runner.invoke(app, ["check", str(tight), str(MCH50), "--format", "json"])
+    assert r.exit_code == 1
+    doc = json.loads(r.stdout)
+    assert doc["passed"] is False
+    first, second = doc["files"]
+    assert first["passed"] is False and first["requirements"][0]["key"] == "requirements.max_backlash_arcsec"
+    assert first["requirements"][0]["value_arcsec"] > first["requirements"][0]["limit_arcsec"]
+    assert second["passed"] is True and second["valid"] is True
+
+
+def test_shipped_configs_pass_check(runner):
+    files = sorted(str(p) for p in CONFIGS.glob("*.toml"))
+    assert len(files) >= 3
+    r = runner.invoke(app, ["check", *files])
+    assert r.exit_code == 0, r.stdout + r.stderr
+
+
+# --- new ---------------------------------------------------------------------------------------------
+
+
+def test_new_writes_a_valid_template_and_never_overwrites(runner, tmp_path):
+    path = tmp_path / "my.toml"
+    r = runner.invoke(app, ["new", str(path)])
+    assert r.exit_code == 0 and path.exists()
+    doc = run_json(runner, "analyze", str(path), "-f", "json")
+    assert doc["drive"] == "my"
+    before = path.read_bytes()
+    r = runner.invoke(app, ["new", str(path)])
+    assert r.exit_code == 2
+    assert r.stderr == f"error: {path}: already exists; wormgear new never overwrites a file\n"
+    assert path.read_bytes() == before
+
+
+# --- help and entry points ------------------------------------------------------------------------------
+
+
+def test_every_command_has_help_with_an_example(runner):
+    from typer.main import get_command
+
+    commands = get_command(app).commands
+    assert {"analyze", "check", "new"} <= set(commands)
+    for name in commands:
+        r = runner.invoke(app, [name, "--help"])
+        assert r.exit_code == 0, name
+        assert "Example:" in r.stdout, name
+
+
+def test_python_dash_m_works():
+    r = subprocess.run([sys.executable, "-m", "wormgear_cli", "analyze", str(MCH50), "-f", "json"],
+                       capture_output=True, text=True, check=False)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["unit"] == "arcsec"
+
+
+def test_no_colour_in_a_pipe_even_with_a_terminal_type():
+    env = {"TERM": "xterm-256color", "NO_COLOR": "1", "PATH": ""}
+    r = subprocess.run([sys.executable, "-m", "wormgear_cli", "analyze", str(MCH50)], capture_output=True,
+                       text=True, env=env, check=False)
+    assert r.returncode == 0 and "\x1b[" not in r.stdout
