@@ -74,28 +74,41 @@ def deflections(spec, gear_force=None, worm_force=None) -> Deflections:
     ``gear_force``/``worm_force`` override the spec's normal forces [N]
     (arrays allowed; used by sweeps that hold torque instead of force).
     """
-    gp, wp, st, mat = spec.gear_pair, spec.worm_pair, spec.stiffness, spec.materials
+    st, mat = spec.stiffness, spec.materials
     f1 = spec.loads.gear_normal_force if gear_force is None else gear_force
     f2 = spec.loads.worm_normal_force if worm_force is None else worm_force
     e_gear = mat.gear_elastic_modulus  # both spur gears share one material
     e_worm = deformation.combined_modulus(mat.worm_elastic_modulus, mat.wheel_elastic_modulus)
-    if st.model == "empirical":
-        const = (st.contact_ratio, st.empirical_lambda2, st.empirical_a1, st.empirical_b, st.empirical_c)
-        d1 = deformation.empirical_deflection(f1, e_gear, gp.face_width, *const)
-        d2 = deformation.empirical_deflection(f2, e_worm, wp.face_width, *const)
-    else:
-        z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
-        c_gear = deformation.iso6336_single_stiffness(
-            deformation.iso6336_theoretical_stiffness(z2, z1), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_gear)
-        d1 = deformation.iso6336_deflection(f1 * math.cos(gp.pressure_angle), gp.face_width, c_gear)
-        # worm mesh: wheel of virtual tooth number z3/cos^3(lambda) against a rack (the worm)
-        zn_wheel = wp.wheel.teeth / math.cos(wp.lead_angle) ** 3
-        c_worm = deformation.iso6336_single_stiffness(
-            deformation.iso6336_theoretical_stiffness(np.inf, zn_wheel), st.iso_cm, st.iso_cr, st.iso_cb, 0.0,
-            e_worm)
-        ft2 = f2 * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle)
-        d2 = deformation.iso6336_deflection(ft2, wp.face_width, c_worm)
+    d1, d2 = _DEFLECTION_ADAPTERS[st.model](spec, f1, f2, e_gear, e_worm)
     return Deflections(float(d1) if np.ndim(d1) == 0 else d1, float(d2) if np.ndim(d2) == 0 else d2, st.model)
+
+
+def _empirical(spec, f1, f2, e_gear, e_worm):
+    """The paper's empirical form for both meshes, with the spec's constants."""
+    st = spec.stiffness
+    const = (st.contact_ratio, st.empirical_lambda2, st.empirical_a1, st.empirical_b, st.empirical_c)
+    return (deformation.empirical_deflection(f1, e_gear, spec.gear_pair.face_width, *const),
+            deformation.empirical_deflection(f2, e_worm, spec.worm_pair.face_width, *const))
+
+
+def _iso6336(spec, f1, f2, e_gear, e_worm):
+    """ISO 6336-1 single stiffness for the spur mesh; for the worm mesh the wheel
+    (z3 / cos^3 lambda virtual teeth) against a rack, scaled by the pair's modulus."""
+    gp, wp, st = spec.gear_pair, spec.worm_pair, spec.stiffness
+    z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
+    c_gear = deformation.iso6336_single_stiffness(
+        deformation.iso6336_theoretical_stiffness(z2, z1), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_gear)
+    d1 = deformation.iso6336_deflection(f1 * math.cos(gp.pressure_angle), gp.face_width, c_gear)
+    zn_wheel = wp.wheel.teeth / math.cos(wp.lead_angle) ** 3
+    c_worm = deformation.iso6336_single_stiffness(
+        deformation.iso6336_theoretical_stiffness(np.inf, zn_wheel), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_worm)
+    ft2 = f2 * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle)
+    return d1, deformation.iso6336_deflection(ft2, wp.face_width, c_worm)
+
+
+#: deflection model name (``[stiffness] model``, see models.deformation.DEFORMATION_MODELS) -> spec adapter
+_DEFLECTION_ADAPTERS = {"iso6336": _iso6336, "empirical": _empirical}
+assert set(_DEFLECTION_ADAPTERS) == set(deformation.DEFORMATION_MODELS)
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,7 @@ from types import MappingProxyType
 from typing import Any
 
 from wormgear_cli.errors import SpecError
+from wormgear_cli.models.deformation import DEFORMATION_MODELS
 
 DEG = math.pi / 180.0
 
@@ -190,7 +191,7 @@ FIELDS: tuple[Field, ...] = (
     # --- stiffness (deformation model) -------------------------------------------
     Field("stiffness.model", "model", "str", "", "iso6336",
           "deflection model: iso6336 (ISO 6336-1 c') or empirical (the paper's form)",
-          choices=("iso6336", "empirical")),
+          choices=tuple(DEFORMATION_MODELS)),
     _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", lo=0.0, lo_open=True),
     _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", lo=0.0, lo_open=True),
     _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", lo=0.0, lo_open=True),
