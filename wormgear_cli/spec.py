@@ -398,6 +398,13 @@ def _get(data: dict, dotted: str):
     return node
 
 
+def _quote(text: str) -> str:
+    """A string value as shown in a message: double-quoted, escapes visible, one line."""
+    import json
+
+    return json.dumps(text, ensure_ascii=False)
+
+
 def _type_name(v) -> str:
     return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "an array",
             dict: "a table"}.get(type(v), type(v).__name__)
@@ -411,7 +418,7 @@ def _check_value(f: Field, raw) -> tuple[str | None, Any]:
         if f.choices and raw not in f.choices:
             near = difflib.get_close_matches(raw, f.choices, n=1)
             hint = f' (did you mean "{near[0]}"?)' if near else ""
-            return f'expected {f.expected()}, got "{raw}"{hint}', None
+            return f"expected {f.expected()}, got {_quote(raw)}{hint}", None
         return None, raw
     if f.kind == "floats":
         if not isinstance(raw, list):
@@ -435,7 +442,7 @@ def _check_value(f: Field, raw) -> tuple[str | None, Any]:
 
 def _number_problem(f: Field, raw) -> str | None:
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-        shown = f'"{raw}"' if isinstance(raw, str) else _type_name(raw)
+        shown = _quote(raw) if isinstance(raw, str) else _type_name(raw)
         return f"expected {f.expected()}, got {shown}"
     if f.kind == "int" and not isinstance(raw, int):
         if isinstance(raw, float) and math.isfinite(raw) and raw.is_integer():
