@@ -479,7 +479,8 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
         return
     known = _known_children(prefix)
     for key, value in data.items():
-        path = f"{prefix}.{key}" if prefix else key
+        shown_key = key if key.isprintable() and key.strip() == key and key else _quote(key)
+        path = f"{prefix}.{shown_key}" if prefix else shown_key
         if key not in known:
             candidates = sorted(known)
             near = difflib.get_close_matches(key, candidates, n=1, cutoff=0.6)
