@@ -19,7 +19,7 @@ The simulated error is
     eccentricity/clearance sqrt(S2^2+C2^2)/cos(alpha_2) at the wheel order
     i_c.  Each is a sinusoid of amplitude (value / 2) on the wheel pitch
     circle, i.e. the paper's +/- 1/2 envelope term by term, reduced by i_c.
-* lost motion (reversal), never negative:
+* lost motion (reversal), never negative (each part is clipped at 0):
   - gear: Delta e tan(alpha) (1 + sin phi) / R2, between 0 and the paper's
     eccentric Delta phi_ch part;
   - worm: (Delta j_central + h_j sin(i_c theta + psi_Fi)) / r_wheel / i_c, the
@@ -30,13 +30,31 @@ The simulated error is
 * an external torque T_ext on the output (measured ``load_Nm``) winds the
   teeth up through the same tooth stiffness (C_teeth [rad/(N m)]).
 
-Relation to ``analyze``: the paper combines the worm-stage sources by
-root-sum-square, h = 1/2 sqrt(sum x_k^2).  On a whole number of turns the
-simulated worm-stage common mode has RMS exactly h / sqrt(2) / (r_wheel i_c)
-(independent of the phases), and with all phases aligned its peak is the
-linear sum 1/2 sum x_k / (r_wheel i_c) >= h.  The simulated reversal never
-exceeds analyze's total backlash and reaches it when the gear eccentricity
-(phi = 90 deg) and the wheel-order backlash variation peak together.
+Relation to ``analyze`` (tested in tests/test_simulate.py):
+
+* The paper combines the worm-stage sources by root-sum-square,
+  h = 1/2 sqrt(sum x_k^2), and quotes h as the +/- half-width.  The
+  simulated worm-stage common mode is sum_k (x_k / 2) sin(o_k theta + psi_k)
+  / (r_wheel i_c).  Over a whole number of output turns its mean square is
+  h^2 / 2 / (r_wheel i_c)^2 plus a cross term
+  sum_{j<k, o_j = o_k} (x_j x_k / 4) cos(psi_j - psi_k) / (r_wheel i_c)^2
+  for every pair of sources on the same shaft (same order).  So its RMS is
+  exactly h / sqrt(2) / (r_wheel i_c) when the sources on one shaft are in
+  quadrature (or alone on their shaft), and h / sqrt(2) on average over
+  independent, uniformly random phases: the root-sum-square is the
+  statistical size, not a bound.
+* With all phases aligned (:func:`aligned_phases`: every worm-stage source
+  peaks at theta = 0) the worm-stage common-mode peak is the linear sum
+  1/2 sum_k x_k / (r_wheel i_c) >= h / (r_wheel i_c).
+* The common mode excludes tooth deflection: the paper's deformation parts
+  of both TE equations (delta1 sin(alpha + lambda1)/R2 and delta2/r_wheel)
+  appear here as the direction-dependent lag (key ``deformation``), i.e. in
+  the reversal, not as a common-mode offset.
+* The simulated reversal (reverse - forward) never exceeds analyze's total
+  backlash and equals it when the gear eccentricity's lost-motion peak
+  (phi = 90 deg) and the wheel-order backlash variation peak together,
+  i.e. when ``gear_eccentricity_phase_deg`` = ``radial_composite_phase_deg``
+  (true for the default phases 0).
 """
 
 from __future__ import annotations
@@ -92,8 +110,7 @@ def periodic_sources(spec) -> list[Source]:
     def gear_lost(theta, phase):
         return de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase)) / r2
 
-    # first-harmonic size of the kinematic curve ~ (l / 2R2) * sqrt(1 + tan^2 alpha) * de / l
-    gear_amp = (r1 + r2) / (2.0 * r2) * math.hypot(1.0, math.tan(alpha)) * de / (r1 + r2 + de)
+    gear_amp = _first_harmonic(lambda phi: gear_model.gear_kinematic_te(phi, r1, r2, de, alpha))
 
     worm_ecc = math.hypot(asm.worm_eccentricity, asm.worm_bearing_clearance) / math.cos(wp.lead_angle)
     wheel_ecc = math.hypot(asm.wheel_eccentricity, asm.wheel_bearing_clearance) / math.cos(
@@ -113,8 +130,23 @@ def periodic_sources(spec) -> list[Source]:
     ]
 
 
+def _first_harmonic(curve, samples: int = 256) -> float:
+    """Size of the once-per-turn Fourier component of a 2 pi-periodic ``curve(phi)``.
+
+    Exact for the gear curve (which is smooth, so 256 samples resolve its
+    harmonics far beyond the first).  For small Delta e it approaches
+    Delta e sqrt(1 + 4 tan^2 alpha) / (2 R2), with mean Delta e tan(alpha) / R2.
+    """
+    phi = np.arange(samples) * (2.0 * np.pi / samples)
+    c = 2.0 / samples * np.sum(curve(phi) * np.exp(-1j * phi))
+    return float(abs(c))
+
+
 def _worm_lost_motion(spec, g: DriveGeometry):
-    """(Delta j_central(no load) + h_j sin(i_c theta + psi)) / r_wheel / i_c  [rad]."""
+    """max(Delta j_central(no load) + h_j sin(i_c theta + psi), 0) / r_wheel / i_c  [rad].
+
+    Clipped at zero: a clearance cannot be negative (only matters for
+    specs whose envelope half-width exceeds the central backlash)."""
     wp, asm = spec.worm_pair, spec.assembly
     _, prof, thk = worm_model.worm_backlash_central(0.0, wp.worm.profile_error, wp.wheel.profile_error,
                                                     wp.worm.thickness_deviation, wp.wheel.thickness_deviation,
@@ -126,7 +158,29 @@ def _worm_lost_motion(spec, g: DriveGeometry):
                                              wp.lead_angle, wp.transverse_pressure_angle)
     to_out = 1.0 / (g.wheel_pitch_radius * g.gear_ratio)
     central = float(prof + thk)
-    return lambda theta, phase: (central + h_j * np.sin(g.gear_ratio * theta + phase)) * to_out
+    return lambda theta, phase: np.maximum(central + h_j * np.sin(g.gear_ratio * theta + phase), 0.0) * to_out
+
+
+def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
+    """Source phases [rad] that make the sources peak together at theta = 0.
+
+    ``quantity="error"``: every sinusoidal source at phase 90 deg and the
+    gear eccentricity at the pinion angle of its kinematic maximum, so the
+    common mode reaches the linear sum of the peaks at theta = 0.
+    ``quantity="reversal"``: the gear eccentricity and the radial composite
+    error (the two sources with lost motion) at 90 deg, so the reversal
+    reaches analyze's total backlash at theta = 0 (the other sources at
+    90 deg too).
+    """
+    if quantity not in ("error", "reversal"):
+        raise ValueError(f"quantity must be 'error' or 'reversal', got {quantity!r}")
+    out = {src.name: 0.5 * math.pi for src in periodic_sources(spec)}
+    if quantity == "error":
+        gp = spec.gear_pair
+        r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
+        _, phi_star = gear_model.gear_te_max(r1, r2, spec.assembly.gear_eccentricity, gp.pressure_angle, 0.0)
+        out["gear_eccentricity"] = float(phi_star)
+    return out
 
 
 @dataclass(frozen=True)
@@ -156,13 +210,15 @@ def compliance(spec) -> Compliance:
     return Compliance(float(lag), float(per_nm))
 
 
-def components(spec, signals: Signals, phases: dict | None = None) -> dict[str, np.ndarray]:
+def components(spec, signals: Signals, phases: dict | None = None,
+               effects: dict | None = None) -> dict[str, np.ndarray]:
     """Every contribution to the simulated error [rad], keyed by name.
 
     Keys: each periodic source's name (common mode), ``lost_motion``
     (the -d L/2 term), ``deformation`` (process-load lag and external
     wind-up), and ``effect:NAME`` for every enabled effect.  ``phases``
-    overrides source phases by source name [rad].
+    overrides source phases by source name [rad].  ``effects`` (name ->
+    internal parameters) replaces the spec's ``[effects.*]`` when given.
     """
     phases = phases or {}
     out: dict[str, np.ndarray] = {}
@@ -177,15 +233,16 @@ def components(spec, signals: Signals, phases: dict | None = None) -> dict[str, 
     out["lost_motion"] = -d * lost / 2.0
     out["deformation"] = -d * comp.process_lag + comp.per_Nm * signals.load
     g = geometry(spec)
-    for name, params in spec.effects.items():
+    for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
     return out
 
 
-def simulate(spec, signals: Signals, phases: dict | None = None, offset: float = 0.0) -> np.ndarray:
+def simulate(spec, signals: Signals, phases: dict | None = None, offset: float = 0.0,
+             effects: dict | None = None) -> np.ndarray:
     """The simulated error [rad] at each sample: the sum of :func:`components` plus ``offset``."""
     total = np.full(signals.theta.shape, float(offset))
-    for v in components(spec, signals, phases).values():
+    for v in components(spec, signals, phases, effects).values():
         total = total + v
     return total
 

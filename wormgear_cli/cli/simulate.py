@@ -1,1 +1,369 @@
-"""``wormgear simulate``: (being built)."""
+"""``wormgear simulate`` (the model's error curve) and ``wormgear synth`` (synthetic measurements)."""
+
+from __future__ import annotations
+
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from wormgear_cli.cli.app import app
+from wormgear_cli.cli.common import (
+    CsvJsonFormat,
+    DriveArgument,
+    OutputOption,
+    UnitOption,
+    emit,
+    json_text,
+)
+
+
+class Phases(str, Enum):
+    spec = "spec"
+    aligned_error = "aligned-error"
+    aligned_reversal = "aligned-reversal"
+
+
+class PlanKind(str, Enum):
+    iso = "iso"
+    dense = "dense"
+
+
+class RunNoiseKind(str, Enum):
+    offset = "offset"
+    drift = "drift"
+
+
+PlotOption = Annotated[Optional[Path], typer.Option(
+    "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
+    dir_okay=False, show_default=False)]
+
+
+@app.command()
+def simulate(
+    drive: DriveArgument,
+    points: Annotated[int, typer.Option("--points", "-n", help="Dense scan: number of output angles.",
+                                        min=2, max=10_000_000)] = 3600,
+    revs: Annotated[float, typer.Option("--revs", help="Dense scan: output turns covered (angles from 0, "
+                                        "end excluded; 0 < R <= 1000).")] = 1.0,
+    at: Annotated[Optional[Path], typer.Option(
+        "--at", help="Evaluate at every row of this CSV (angle_deg; optional direction, load_Nm, "
+        "temperature_C, time_s) and write the rows back with a simulated_error_<unit> column.",
+        dir_okay=False, show_default=False)] = None,
+    temperature_c: Annotated[float, typer.Option(
+        "--temperature-C", help="Drive temperature [degC] for the dense scan, and for --at rows when the "
+        "file has no temperature_C column.")] = 20.0,
+    load_nm: Annotated[float, typer.Option(
+        "--load-Nm", help="External torque on the output [N m] (positive pushes the table forward) for the "
+        "dense scan, and for --at rows when the file has no load_Nm column.")] = 0.0,
+    phases: Annotated[Phases, typer.Option(
+        "--phases", help="Source phases: as in the spec, or aligned so every source peaks at 0 deg "
+        "(aligned-error: common-mode peaks; aligned-reversal: lost-motion peaks).",
+        case_sensitive=False)] = Phases.spec,
+    effect: Annotated[Optional[list[str]], typer.Option(
+        "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
+        "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
+    format: Annotated[CsvJsonFormat, typer.Option("--format", "-f", help="Output format.",
+                                                  case_sensitive=False)] = CsvJsonFormat.csv,
+    unit: UnitOption = "arcsec",
+    output: OutputOption = None,
+    plot: PlotOption = None,
+):
+    """The drive's predicted error over the output angle, forward and reverse.
+
+    Every error source of the spec at its own order and phase (gear
+    eccentricity at the pinion order, worm-stage sources at the wheel or
+    worm order), lost motion as the direction-dependent part, tooth
+    deflection under load, plus every [effects.*] table of the spec.
+    Dense scan CSV columns: angle_deg, forward_<unit>, reverse_<unit>,
+    common_<unit> (mean of both), lost_motion_<unit> (reverse - forward).
+
+    Example: wormgear simulate configs/mch50.toml --points 720 -o curve.csv
+    """
+    import math
+
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec import load_spec
+
+    unit = getattr(unit, "value", unit)
+    fmt = getattr(format, "value", format)
+    phases = getattr(phases, "value", phases)
+    for name, value in (("--temperature-C", temperature_c), ("--load-Nm", load_nm)):
+        if not math.isfinite(value):
+            raise UsageError(f"{name}: expected a finite number, got {value}")
+    if not (math.isfinite(revs) and 0.0 < revs <= 1000.0):
+        raise UsageError(f"--revs: expected a number in (0, 1000], got {revs:g}")
+    if not -100.0 <= temperature_c <= 300.0:
+        raise UsageError(f"--temperature-C: expected a number in [-100, 300] [degC], got {temperature_c:g}")
+    if plot is not None:
+        from wormgear_cli.plots import check_plot_path
+
+        check_plot_path(plot)
+    from wormgear_cli.synth import parse_effect
+
+    requested: dict = {}
+    for text in effect or []:
+        name, values = parse_effect(text)
+        requested.setdefault(name, {}).update(values)
+    spec = load_spec(drive)
+    effects = None
+    if requested:
+        from wormgear_cli.models.effects import params_from_keys
+        from wormgear_cli.synth import resolve_effects
+
+        effects = {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
+    inputs = [drive] + ([at] if at is not None else [])
+    if plot is not None and output is not None and Path(plot).resolve() == Path(output).resolve():
+        raise UsageError(f"{plot}: --plot and -o name the same file")
+    if at is not None:
+        text, curves = _simulate_at(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
+    else:
+        text, curves = _simulate_dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
+    if plot is not None:
+        from wormgear_cli.plots.simulate import plot_simulation
+
+        for p in inputs:
+            if Path(plot).resolve() == Path(p).resolve():
+                raise UsageError(f"{plot}: refusing to overwrite the input file; choose another --plot")
+        plot_simulation(curves, plot)
+    emit(text, output, inputs)
+
+
+def _phases(spec, which: str):
+    from wormgear_cli.simulation import aligned_phases
+
+    if which == "spec":
+        return None
+    return aligned_phases(spec, "error" if which == "aligned-error" else "reversal")
+
+
+def _summary(values, to):
+    import numpy as np
+
+    v = to(values)
+    return {"min": float(np.min(v)), "max": float(np.max(v)), "peak_to_peak": float(np.ptp(v)),
+            "rms": float(np.sqrt(np.mean(v * v)))}
+
+
+def _context(spec, unit, phase_map, effects):
+    """Spec-level facts shared by both JSON documents."""
+    import math
+
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.models.effects import params_to_keys
+    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.simulation import periodic_sources
+    from wormgear_cli.units import to_unit
+
+    a = analyze(spec)
+    sources = {}
+    for src in periodic_sources(spec):
+        ph = src.phase if phase_map is None else phase_map.get(src.name, src.phase)
+        sources[src.name] = {"order": src.order, "amplitude": float(to_unit(src.amplitude, unit)),
+                             "phase_deg": math.degrees(ph), "phase_key": src.phase_path}
+    return {
+        "sources": sources,
+        "effects": {name: params_to_keys(name, p)
+                    for name, p in (spec.effects if effects is None else effects).items()},
+        "analyze": {"total_transmission_error": float(to_unit(a.angles["total_transmission_error"], unit)),
+                    "total_backlash": float(to_unit(a.angles["total_backlash"], unit))},
+        "predicted": {"centre_distance_um_per_K": predicted_centre_distance_um_per_K(spec)},
+    }
+
+
+def _simulate_dense(spec, points, revs, unit, fmt, temperature_c, load_nm, which, effects):
+    import numpy as np
+
+    from wormgear_cli.cli.common import csv_text
+    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.simulation import simulate as run
+    from wormgear_cli.units import to_unit
+
+    phase_map = _phases(spec, which)
+    angle_deg = np.arange(points) * (360.0 * revs / points)
+    theta = np.radians(angle_deg)
+    fwd = run(spec, Signals.make(theta, 1.0, load_nm, temperature_c, 0.0), phase_map, effects=effects)
+    rev = run(spec, Signals.make(theta, -1.0, load_nm, temperature_c, 0.0), phase_map, effects=effects)
+    f_u, r_u = to_unit(fwd, unit), to_unit(rev, unit)
+    common, lost = 0.5 * (f_u + r_u), r_u - f_u
+    curves = {"kind": "dense", "drive": spec.drive.name, "unit": unit, "angle_deg": angle_deg,
+              "forward": f_u, "reverse": r_u}
+    if fmt == "json":
+        doc = {
+            "drive": spec.drive.name,
+            "unit": unit,
+            "points": int(points),
+            "revolutions": float(revs),
+            "conditions": {"temperature_C": float(temperature_c), "load_Nm": float(load_nm), "time_s": 0.0},
+            "phases": which,
+            **_context(spec, unit, phase_map, effects),
+            "summary": {
+                "forward": _summary(f_u, lambda v: v),
+                "reverse": _summary(r_u, lambda v: v),
+                "common": _summary(common, lambda v: v),
+                "lost_motion": {"min": float(lost.min()), "max": float(lost.max()), "mean": float(lost.mean())},
+            },
+            "curve": {"angle_deg": angle_deg.tolist(), "forward": f_u.tolist(), "reverse": r_u.tolist()},
+        }
+        return json_text(doc), curves
+    cols = ["angle_deg", f"forward_{unit}", f"reverse_{unit}", f"common_{unit}", f"lost_motion_{unit}"]
+    rows = zip(angle_deg.tolist(), f_u.tolist(), r_u.tolist(), common.tolist(), lost.tolist())
+    return csv_text(cols, rows), curves
+
+
+def _simulate_at(spec, at, unit, fmt, temperature_c, load_nm, which, effects):
+    import csv
+    import io
+
+    import numpy as np
+
+    from wormgear_cli.cli.common import fmt_number
+    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.simulation import simulate as run
+    from wormgear_cli.units import to_unit
+
+    data = read_measurement(at, require_error=False)
+    phase_map = _phases(spec, which)
+    load = data.load if "load_Nm" in data.present else np.full(len(data), float(load_nm))
+    temp = data.temperature if "temperature_C" in data.present else np.full(len(data), float(temperature_c))
+    signals = Signals(data.angle, data.direction, load, temp, data.time)
+    sim = to_unit(run(spec, signals, phase_map, effects=effects), unit)
+    column = f"simulated_error_{unit}"
+    has_error = not np.all(np.isnan(data.error))
+    curves = {"kind": "at", "drive": spec.drive.name, "unit": unit, "angle_deg": data.angle_deg,
+              "direction": data.direction, "simulated": sim,
+              "measured": to_unit(data.error, unit) if has_error else None, "source": str(at)}
+    if fmt == "json":
+        doc = {"drive": spec.drive.name, "data": str(at), "unit": unit, "rows": len(data), "phases": which,
+               **_context(spec, unit, phase_map, effects), "simulated_error": sim.tolist()}
+        if has_error:
+            resid = to_unit(data.error, unit) - sim
+            doc["measured_minus_simulated"] = {"mean": float(resid.mean()),
+                                               "rms": float(np.sqrt(np.mean(resid * resid)))}
+        return json_text(doc), curves
+    header = list(data.header)
+    values = [fmt_number(v) for v in sim.tolist()]
+    buf = io.StringIO()
+    for line in data.comments:
+        buf.write(line + "\n")
+    w = csv.writer(buf, lineterminator="\n")
+    if column in header:  # re-simulating a file that already has the column: replace it
+        j = header.index(column)
+        w.writerow(header)
+        for row, v in zip(data.rows, values):
+            w.writerow([*row[:j], v, *row[j + 1:]])
+    else:
+        w.writerow(header + [column])
+        for row, v in zip(data.rows, values):
+            w.writerow([*row, v])
+    return buf.getvalue(), curves
+
+
+@app.command()
+def synth(
+    drive: DriveArgument,
+    output: OutputOption = None,
+    truth: Annotated[Optional[Path], typer.Option(
+        "--truth", help="Write the truth (phases, effects with parameters, noise, seed, plan) to this JSON "
+        "file; it never goes into the data.", dir_okay=False, show_default=False)] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same bytes).",
+                                      min=0)] = 0,
+    plan: Annotated[PlanKind, typer.Option("--plan", help="iso: irregularly spaced targets; dense: an even "
+                                           "scan.", case_sensitive=False)] = PlanKind.iso,
+    targets: Annotated[int, typer.Option("--targets", help="iso plan: target positions.", min=2,
+                                         max=100_000)] = 24,
+    points: Annotated[int, typer.Option("--points", help="dense plan: angles per pass.", min=2,
+                                        max=10_000_000)] = 3600,
+    runs: Annotated[int, typer.Option("--runs", help="Runs; each is one forward then one reverse pass.",
+                                      min=1, max=10_000)] = 5,
+    revs: Annotated[float, typer.Option("--revs", help="Output turns spanned by the targets (0 < R <= 1000).")
+                    ] = 1.0,
+    dwell_s: Annotated[Optional[float], typer.Option(
+        "--dwell-s", help="Time per point [s] (default 10 for iso, 0.5 for dense).", min=0.0,
+        show_default=False)] = None,
+    jitter: Annotated[float, typer.Option("--jitter", help="iso plan: target jitter, +/- this fraction of the "
+                                          "mean spacing (0 <= J < 0.5).")] = 0.25,
+    effect: Annotated[Optional[list[str]], typer.Option(
+        "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
+        "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
+    spec_effects: Annotated[bool, typer.Option("--spec-effects/--no-spec-effects",
+                                               help="Include the spec's [effects.*] tables.")] = True,
+    noise_arcsec: Annotated[float, typer.Option("--noise-arcsec", help="White noise per point, standard "
+                                                "deviation [arcsec].", min=0.0)] = 0.0,
+    run_noise_arcsec: Annotated[float, typer.Option("--run-noise-arcsec", help="Run-correlated noise, "
+                                                    "standard deviation per run [arcsec].", min=0.0)] = 0.0,
+    run_noise: Annotated[RunNoiseKind, typer.Option("--run-noise", help="Kind of run-correlated noise: offset "
+                                                    "(constant per run) or drift (linear within each run).",
+                                                    case_sensitive=False)] = RunNoiseKind.offset,
+    temperature: Annotated[str, typer.Option(
+        "--temperature", help="Temperature programme [degC]: constant:T | warmup:START:END:TAU_s | "
+        "cycle:START:PEAK:TAU_s[:SWITCH_s].")] = "constant:20",
+    load: Annotated[str, typer.Option("--load", help="Load programme [N m]: constant:L | steps:L1:L2:... "
+                                      "(one level per run, cycling).")] = "constant:0",
+    random_phases: Annotated[bool, typer.Option("--random-phases", help="Draw every source phase from the "
+                                                "seed instead of using the spec's.")] = False,
+    offset_arcsec: Annotated[float, typer.Option("--offset-arcsec", help="Constant zero offset added to "
+                                                 "every error [arcsec].")] = 0.0,
+    plot: PlotOption = None,
+):
+    """Measured-like data from the model: try a measurement plan before measuring.
+
+    Writes CSV with angle_deg, error_arcsec, direction, run, load_Nm,
+    temperature_C, time_s (and '#' lines saying how it was made, not the
+    truth).  Each run goes forward through the targets, then back.
+
+    Example: wormgear synth configs/mch50.toml -o data.csv --truth truth.json --seed 1 --temperature warmup:20:30:1800
+    """
+    import math
+
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec import load_spec
+    from wormgear_cli.synth import Noise, Plan, format_csv, parse_effect, parse_load, parse_temperature, synthesize
+
+    for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
+                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s)):
+        if value is not None and not math.isfinite(value):
+            raise UsageError(f"{name}: expected a finite number, got {value}")
+    temp_prog = parse_temperature(temperature)
+    load_prog = parse_load(load)
+    effects: dict = {}
+    for text in effect or []:
+        name, values = parse_effect(text)
+        effects.setdefault(name, {}).update(values)
+    if plot is not None:
+        from wormgear_cli.plots import check_plot_path
+
+        check_plot_path(plot)
+    outs = [p for p in (output, truth, plot) if p is not None]
+    if len({Path(p).resolve() for p in outs}) < len(outs):
+        raise UsageError("-o, --truth and --plot must name different files")
+    for p in outs:
+        if Path(p).resolve() == Path(drive).resolve():
+            raise UsageError(f"{p}: refusing to overwrite the input file; choose another name")
+    spec = load_spec(drive)
+    result = synthesize(
+        spec,
+        plan=Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
+                  dwell_s=dwell_s, jitter=jitter),
+        effects=effects,
+        noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
+        seed=seed,
+        temperature=temp_prog,
+        load=load_prog,
+        random_phases=random_phases,
+        include_spec_effects=spec_effects,
+        offset_arcsec=offset_arcsec,
+    )
+    text = format_csv(result)
+    if plot is not None:
+        from wormgear_cli.plots.simulate import plot_synthesis
+
+        plot_synthesis(result, spec.drive.name, plot)
+    emit(text, output, [drive])
+    if truth is not None:
+        emit(json_text(result.truth), truth, [drive] + ([output] if output is not None else []))
+    if output is not None:
+        n = len(result.columns["angle_deg"])
+        typer.echo(f"wrote {n} rows to {output}" + (f", truth to {truth}" if truth else ""), err=True)

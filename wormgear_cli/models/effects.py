@@ -86,7 +86,11 @@ class Effect:
     periodic effect as a function of the geometry, or None.  ``needs``:
     the signal that must vary for the effect to be observable
     ("temperature", "load", "direction") or None.  ``amplitude``: the
-    parameter the signature is linear in (diagnosis fits it linearly).
+    parameter the signature is linear in (diagnosis fits it linearly);
+    when ``extra.get("inverse")`` is True the signature is linear in the
+    reciprocal of that parameter instead (``torsional_compliance``: load / k).
+    ``phase``: the internal name of the phase parameter of a periodic
+    effect, or None.
     """
 
     name: str
@@ -196,7 +200,8 @@ EFFECTS: dict[str, Effect] = {
         Effect("torsional_compliance", torsional_compliance,
                (Param("stiffness_Nm_per_arcsec", "stiffness", "N m/arcsec", 1.0 / ARCSEC, 1e-3, 1e9, None,
                       "torsional stiffness of the drive at the output"),),
-               "stiffness", "wind-up under external torque (common mode)", needs="load"),
+               "stiffness", "wind-up under external torque (common mode)", needs="load",
+               extra={"inverse": True}),
         Effect("bearing_clearance", bearing_clearance,
                (Param("clearance_arcsec", "clearance", "arcsec", ARCSEC, 0.0, 3600.0, None,
                       "extra lost motion"),),
