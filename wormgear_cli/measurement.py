@@ -14,7 +14,6 @@ column.  Internally angles are radians and errors radians.
 from __future__ import annotations
 
 import csv
-import io
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -91,9 +90,36 @@ def read_measurement(path: str | Path, require_error: bool = True) -> Measuremen
     return parse_measurement(text, name, require_error)
 
 
+def _split_lines(text: str) -> list[str]:
+    r"""Lines as an editor counts them (split at \n, \r\n or \r only), so line numbers match."""
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def _column(name: str, col: str, cells: list[str], line_numbers: list[int]) -> np.ndarray:
+    """Cells of one column as floats; DataError naming the first bad cell."""
+    try:
+        arr = np.asarray(cells, dtype=float)
+    except ValueError:
+        arr = np.empty(len(cells))
+        for k, cell in enumerate(cells):
+            try:
+                arr[k] = float(cell)
+            except ValueError:
+                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
+                                f"{cell.strip()!r}") from None
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        k = int(bad[0])
+        raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a finite number, got "
+                        f"{cells[k].strip()!r}")
+    return arr
+
+
 def parse_measurement(text: str, name: str = "<data>", require_error: bool = True) -> Measurement:
     """Parse CSV text (see :func:`read_measurement`)."""
-    lines = text.splitlines()
+    lines = _split_lines(text)
+    if lines and lines[-1] == "":
+        lines.pop()
     comments = []
     start = 0
     while start < len(lines) and (lines[start].lstrip().startswith("#") or not lines[start].strip()):
@@ -101,10 +127,16 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
             comments.append(lines[start])
         start += 1
     if start >= len(lines):
-        raise DataError(f"{name}: empty file, expected a CSV header with {', '.join(REQUIRED)}")
-    reader = csv.reader(io.StringIO("\n".join(lines[start:])))
-    header = [h.strip() for h in next(reader)]
+        if comments:
+            raise DataError(f"{name}:{len(lines) + 1}: no CSV header after the comment lines, expected one "
+                            f"with {', '.join(REQUIRED)}")
+        raise DataError(f"{name}:1: empty file, expected a CSV header with {', '.join(REQUIRED)}")
+    reader = csv.reader(lines[start:], strict=True)
     header_line = start + 1
+    try:
+        header = [h.strip() for h in next(reader)]
+    except csv.Error as exc:
+        raise DataError(f"{name}:{header_line}: unreadable CSV header ({exc})") from None
     required = REQUIRED if require_error else REQUIRED[:1]
     missing = [c for c in required if c not in header]
     if missing:
@@ -115,18 +147,25 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
         raise DataError(f"{name}:{header_line}: column {dupes[0]} appears twice")
     rows = []
     line_numbers = []
-    for offset, row in enumerate(reader):
-        line_no = header_line + 1 + offset
+    ncols = len(header)
+    while True:
+        try:
+            row = next(reader)
+        except StopIteration:
+            break
+        except csv.Error as exc:
+            raise DataError(f"{name}:{start + reader.line_num}: unreadable CSV line ({exc})") from None
+        line_no = start + reader.line_num
         if not row or all(not c.strip() for c in row):
             continue
         if row[0].lstrip().startswith("#"):
             continue
-        if len(row) != len(header):
-            raise DataError(f"{name}:{line_no}: expected {len(header)} cells as in the header, got {len(row)}")
+        if len(row) != ncols:
+            raise DataError(f"{name}:{line_no}: expected {ncols} cells as in the header, got {len(row)}")
         rows.append(tuple(row))
         line_numbers.append(line_no)
     if not rows:
-        raise DataError(f"{name}: no data rows after the header")
+        raise DataError(f"{name}:{header_line}: no data rows after the header")
     if len(rows) < 2:
         raise DataError(f"{name}:{line_numbers[0]}: only one data row; at least two are needed")
     index = {h: i for i, h in enumerate(header)}
@@ -135,18 +174,7 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
         if col not in index:
             continue
         j = index[col]
-        arr = np.empty(len(rows))
-        for k, row in enumerate(rows):
-            cell = row[j].strip()
-            try:
-                v = float(cell)
-            except ValueError:
-                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
-                                f"{cell!r}") from None
-            if not math.isfinite(v):
-                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a finite number, got {cell!r}")
-            arr[k] = v
-        values[col] = arr
+        values[col] = _column(name, col, [row[j] for row in rows], line_numbers)
     if "direction" in values:
         bad = np.flatnonzero((values["direction"] != 1.0) & (values["direction"] != -1.0))
         if bad.size:
