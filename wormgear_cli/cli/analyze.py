@@ -54,12 +54,13 @@ def analyze(
 
 
 def _tables(r: dict, unit: str) -> list:
+    from rich.markup import escape
     from rich.table import Table
 
     g, w, t = r["stages"]["gear"], r["stages"]["worm"], r["total"]
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     out = []
-    gt = Table(title=f"{r['drive']}: gear stage (spur, i_c = {r['ratios']['gear']:g}), at the output [{unit}]",
+    gt = Table(title=escape(f"{r['drive']}: gear stage (spur, i_c = {r['ratios']['gear']:g}), at the output [{unit}]"),
                title_justify="left")
     for col in ("quantity", "eccentricity", "deformation", "value", "share of total"):
         gt.add_column(col, justify="left" if col == "quantity" else "right")
@@ -68,12 +69,12 @@ def _tables(r: dict, unit: str) -> list:
                f"{g['contribution']['transmission_error_pct']:.1f} %")
     gt.add_row("backlash", a(g["backlash_parts"]["eccentricity"]), a(g["backlash_parts"]["deformation"]),
                a(g["backlash"]), f"{g['contribution']['backlash_pct']:.1f} %")
-    gt.caption = (f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
+    gear_note = escape(f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
                   f"{g['load_share_pct']:.2f} % to it (delta1 = {g['deflection_um']:.3f} um, "
                   f"{r['deflection_model']})")
-    gt.caption_justify = "left"
-    out.append(gt)
-    wt = Table(title=f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]", title_justify="left")
+    out += [gt, gear_note]
+    wt = Table(title=escape(f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]"),
+               title_justify="left")
     for col in ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"):
         wt.add_column(col, justify="left" if col == "quantity" else "right")
     wp = w["backlash_parts"]
@@ -82,12 +83,11 @@ def _tables(r: dict, unit: str) -> list:
                a(w["contribution"]["transmission_error"]), f"{w['contribution']['transmission_error_pct']:.1f} %")
     wt.add_row("backlash", a(wp["deformation"] + wp["profile"] + wp["thickness"]), a(wp["envelope_halfwidth"]),
                a(w["backlash"]), a(w["contribution"]["backlash"]), f"{w['contribution']['backlash_pct']:.1f} %")
-    wt.caption = (f"central TE = deformation (delta2 = {w['deflection_um']:.3f} um); central backlash = "
+    worm_note = escape(f"central TE = deformation (delta2 = {w['deflection_um']:.3f} um); central backlash = "
                   f"deformation {a(wp['deformation'])} + profile {a(wp['profile'])} + thickness "
                   f"{a(wp['thickness'])}")
-    wt.caption_justify = "left"
-    out.append(wt)
-    tt = Table(title=f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]", title_justify="left")
+    out += [wt, worm_note]
+    tt = Table(title=escape(f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]"), title_justify="left")
     tt.add_column("quantity")
     tt.add_column("gear stage", justify="right")
     tt.add_column("worm stage / i_c", justify="right")
