@@ -9,6 +9,31 @@ from pathlib import Path
 from wormgear_cli.errors import UsageError
 
 
+def read_text_file(path: str | Path, expected: str, error: type = UsageError, encoding: str = "utf-8") -> str:
+    """The text of a user-named input file, or ``error`` with one line saying why not.
+
+    ``expected`` names what the file should be ("a TOML drive file", "a CSV
+    file").  Refuses a missing file, a directory, an unreadable, binary (NUL
+    bytes) or non-UTF-8 file.
+    """
+    path = Path(path)
+    name = str(path)
+    if not path.exists():
+        raise error(f"{name}: file not found")
+    if path.is_dir():
+        raise error(f"{name}: is a directory, expected {expected}")
+    try:
+        blob = path.read_bytes()
+    except OSError as exc:
+        raise error(f"{name}: cannot read ({exc.strerror})") from None
+    if b"\x00" in blob:
+        raise error(f"{name}: binary file, expected {expected}")
+    try:
+        return blob.decode(encoding)
+    except UnicodeDecodeError as exc:
+        raise error(f"{name}: not UTF-8 text (byte {exc.start}), expected {expected}") from None
+
+
 def _same_file(a: Path, b: Path) -> bool:
     try:
         return a.exists() and b.exists() and os.path.samefile(a, b)

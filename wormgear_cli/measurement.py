@@ -74,19 +74,10 @@ class Measurement:
 
 def read_measurement(path: str | Path, require_error: bool = True) -> Measurement:
     """Read and validate a measurement CSV (see module doc).  Raises DataError."""
-    path = Path(path)
+    from wormgear_cli.io import read_text_file
+
+    text = read_text_file(path, "a CSV file", DataError, encoding="utf-8-sig")
     name = str(path)
-    if not path.exists():
-        raise DataError(f"{name}: file not found")
-    if path.is_dir():
-        raise DataError(f"{name}: is a directory, expected a CSV file")
-    blob = path.read_bytes()
-    if b"\x00" in blob:
-        raise DataError(f"{name}: binary file, expected a CSV file")
-    try:
-        text = blob.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DataError(f"{name}: not UTF-8 text (byte {exc.start}), expected a CSV file") from None
     return parse_measurement(text, name, require_error)
 
 

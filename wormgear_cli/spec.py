@@ -299,24 +299,13 @@ def _freeze(obj):
 
 def load_spec(path: str | Path) -> Spec:
     """Read and validate a drive file.  Raises :class:`SpecError` listing every problem."""
+    from wormgear_cli.io import read_text_file
+
     path = Path(path)
     name = str(path)
-    if not path.exists():
-        raise SpecError(f"{name}: file not found")
-    if path.is_dir():
-        raise SpecError(f"{name}: is a directory, expected a TOML drive file")
-    try:
-        blob = path.read_bytes()
-    except OSError as exc:
-        raise SpecError(f"{name}: cannot read ({exc.strerror})") from None
-    if not blob.strip():
+    text = read_text_file(path, "a TOML drive file", SpecError)
+    if not text.strip():
         raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
-    if b"\x00" in blob:
-        raise SpecError(f"{name}: binary file, expected a TOML drive file")
-    try:
-        text = blob.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise SpecError(f"{name}: not UTF-8 text (byte {exc.start}), expected a TOML drive file") from None
     return loads_spec(text, name, default_name=path.stem)
 
 
