@@ -1,0 +1,428 @@
+"""Tests of ``wormgear sweep`` and its core (:mod:`wormgear_cli.sweep`, the fast maximiser).
+
+References are independent of the implementation: the gear-stage TE is written here straight
+from the paper's equation (arctan-of-tangent form) and maximised by dense sampling refined with
+scipy's bounded scalar optimiser; whole-drive values come from ``analyze`` on re-validated specs.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy.optimize import minimize_scalar
+
+from wormgear_cli.cli import app
+
+ARCSEC = math.pi / 648000.0
+
+
+# --- an independent reference for max over phi of the paper's Delta phi_cc --------------------
+
+
+def paper_gear_te(phi, r1, r2, de, alpha, d1):
+    """The paper's Delta phi_cc(phi), transcribed literally (valid for -pi < phi < pi)."""
+    l = r1 + r2
+    a = (l + de) / de
+    lam1 = np.arctan(de * np.sin(phi) / (l + de * (1.0 - np.cos(phi))))
+    bracket = 2.0 * np.arctan(np.sqrt((a + 1.0) / (a - 1.0)) * np.tan(phi / 2.0)) - (
+        phi - np.tan(alpha) * np.log(1.0 + 2.0 * a * (1.0 - np.cos(phi)) / (a - 1.0) ** 2))
+    return (r1 + r2) / (2.0 * r2) * bracket + d1 * np.sin(alpha + lam1) / r2
+
+
+def reference_max(r1, r2, de, alpha, d1):
+    """Dense sampling (3601 angles) refined by scipy's bounded optimiser."""
+    phi = np.linspace(-math.pi + 1e-9, math.pi - 1e-9, 3601)
+    values = paper_gear_te(phi, r1, r2, de, alpha, d1)
+    j = int(np.argmax(values))
+    lo, hi = phi[max(j - 1, 0)], phi[min(j + 1, phi.size - 1)]
+    res = minimize_scalar(lambda p: -paper_gear_te(p, r1, r2, de, alpha, d1), bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-12})
+    return max(-res.fun, float(values.max()))
+
+
+def run(runner, *args):
+    return runner.invoke(app, ["sweep", *map(str, args)])
+
+
+def parse_csv(text):
+    rows = list(csv.reader(io.StringIO(text)))
+    return rows[0], [[float(v) for v in r] for r in rows[1:]]
+
+
+# --- the fast maximiser against the reference -------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    l=st.floats(20.0, 2000.0),
+    i=st.floats(0.3, 30.0),
+    ecc_ratio_exp=st.floats(-5.0, -2.0),
+    alpha_deg=st.floats(5.0, 40.0),
+    load=st.one_of(st.just(0.0), st.floats(1e-6, 5.0)),
+)
+def test_fast_maximum_matches_reference(l, i, ecc_ratio_exp, alpha_deg, load):
+    from wormgear_cli.models.gear import gear_te_max_fast
+
+    r1, r2 = l / (1 + i), l * i / (1 + i)
+    de, alpha = l * 10.0 ** ecc_ratio_exp, math.radians(alpha_deg)
+    value, phi = gear_te_max_fast(r1, r2, de, alpha, load)
+    ref = reference_max(r1, r2, de, alpha, load)
+    assert value == pytest.approx(ref, rel=1e-9)
+    # and phi is where the paper's curve takes that value
+    p = phi if phi <= math.pi else phi - 2 * math.pi
+    assert paper_gear_te(p, r1, r2, de, alpha, load) == pytest.approx(ref, rel=1e-9)
+
+
+def test_fast_maximum_without_eccentricity_is_the_load_term():
+    from wormgear_cli.models.gear import gear_te_max_fast
+
+    value, _ = gear_te_max_fast(22.5, 180.0, 0.0, math.radians(20), 0.002)
+    assert value == pytest.approx(0.002 * math.sin(math.radians(20)) / 180.0, rel=1e-15)
+
+
+def test_big_grid_sample_matches_reference(mch50_spec):
+    """A 1000 x 1000 grid: a random sample of its points against the reference maximiser."""
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    sw = RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 1000), np.linspace(100, 300, 1000))
+    data = sw.collect()
+    assert data["i"].size == 10**6
+    de, alpha = mch50_spec.assembly.gear_eccentricity, mch50_spec.gear_pair.pressure_angle
+    rng = np.random.default_rng(7)
+    for k in rng.choice(10**6, size=25, replace=False):
+        i, l = data["i"][k], data["l_mm"][k]
+        d1 = data["gear_deflection_um"][k] * 1e-3  # the load is an input of the maximisation
+        ref = reference_max(l / (1 + i), l * i / (1 + i), de, alpha, d1)
+        assert data["gear_transmission_error"][k] == pytest.approx(ref, rel=1e-9)
+
+
+# --- agreement with analyze ----------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("hold", ["force", "torque"])
+def test_spec_point_reproduces_analyze(mch50_spec, hold):
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    gp = mch50_spec.gear_pair
+    i0 = gp.output_gear.teeth / gp.pinion.teeth
+    l0 = gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2
+    data = RatioDistanceSweep(mch50_spec, [i0], [l0], hold=hold).collect()
+    a = analyze(mch50_spec).angles
+    for key in ("gear_transmission_error", "total_transmission_error", "total_backlash", "gear_backlash"):
+        assert data[key][0] == pytest.approx(a[key], rel=1e-12), key
+
+
+def test_module_snapping_reproduces_analyze_with_those_teeth(mch50_spec):
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import with_values
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    m = 2.0
+    sw = RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 5), np.linspace(60, 300, 7), module=m)
+    data = sw.collect()
+    assert data["z1"].size > 0
+    for k in range(data["z1"].size):
+        z1, z2 = int(data["z1"][k]), int(data["z2"][k])
+        spec = with_values(mch50_spec, {"gear_pair.module_mm": m, "gear_pair.output_gear.teeth": z1,
+                                        "gear_pair.pinion.teeth": z2})
+        a = analyze(spec).angles
+        for key in ("gear_transmission_error", "total_transmission_error", "total_backlash", "gear_backlash"):
+            assert data[key][k] == pytest.approx(a[key], rel=1e-9), (key, z1, z2)
+
+
+def test_torque_hold_scales_the_gear_force_with_the_output_radius(mch50_spec):
+    """At constant output torque F_N R2 = const, so delta1 (linear in F_N) carries R2_spec / R2
+    on top of the stiffness change that the force-held sweep already shows."""
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    i, l = np.linspace(2, 10, 5), np.linspace(100, 300, 5)
+    f = RatioDistanceSweep(mch50_spec, i, l, hold="force").collect()
+    t = RatioDistanceSweep(mch50_spec, i, l, hold="torque").collect()
+    r2 = f["l_mm"] * f["i"] / (1 + f["i"])
+    r2_spec = 2.5 * 144 / 2
+    np.testing.assert_allclose(t["gear_deflection_um"] / f["gear_deflection_um"], r2_spec / r2, rtol=1e-12)
+
+
+# --- the paper's findings on the MCH50 ----------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def mch50_grid():
+    from wormgear_cli.spec import load_spec
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    from conftest import MCH50
+
+    i, l = np.linspace(2, 10, 9), np.linspace(100, 300, 21)
+    data = RatioDistanceSweep(load_spec(MCH50), i, l).collect()
+    return i, l, data["gear_transmission_error"].reshape(i.size, l.size)
+
+
+def test_finding_te_more_sensitive_to_l_than_to_i(mch50_grid):
+    i, l, te = mch50_grid
+    change_over_l = 1 - te[:, -1] / te[:, 0]  # every row: l from 100 to 300 mm
+    change_over_i = 1 - te[-1, :] / te[0, :]  # every column: i from 2 to 10
+    assert change_over_l.min() > 2 * change_over_i.max()
+
+
+def test_finding_gain_from_l_fades_beyond_200_mm(mch50_grid):
+    i, l, te = mch50_grid
+    a, b, c = (int(np.argmin(abs(l - x))) for x in (100, 200, 300))
+    fall_below = 1 - te[:, b] / te[:, a]
+    fall_above = 1 - te[:, c] / te[:, b]
+    assert np.all(fall_below > 0.45) and np.all(fall_above < 0.36)
+    assert np.all((te[:, b] - te[:, c]) < 0.5 * (te[:, a] - te[:, b]))  # absolute gain well under half
+
+
+def test_finding_ratio_matters_only_below_6(mch50_grid):
+    i, l, te = mch50_grid
+    a, b, c = (int(np.argmin(abs(i - x))) for x in (2, 6, 10))
+    fall_below = 1 - te[b] / te[a]
+    fall_above = 1 - te[c] / te[b]
+    assert np.all(fall_below > 0.2) and np.all(fall_above < 0.07)
+
+
+def test_gear_te_decreases_monotonically_with_l(mch50_spec):
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    for hold in ("force", "torque"):
+        i, l = np.linspace(1.5, 12, 8), np.linspace(40, 600, 60)
+        te = RatioDistanceSweep(mch50_spec, i, l, hold=hold).collect()["gear_transmission_error"]
+        assert np.all(np.diff(te.reshape(i.size, l.size), axis=1) < 0), hold
+
+
+def test_findings_report(mch50_spec):
+    from wormgear_cli.sweep import RatioDistanceSweep, findings
+
+    out = {f["id"]: f for f in findings(RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 9),
+                                                            np.linspace(100, 300, 11)))}
+    assert all(f["holds"] is True for f in out.values())
+    fade = out["l_gain_fades_beyond_200mm"]
+    assert fade["window"] == [100.0, 200.0, 300.0]
+    assert fade["fall_below_pct"] > fade["fall_above_pct"]
+    narrow = findings(RatioDistanceSweep(mch50_spec, np.linspace(7, 10, 4), np.linspace(210, 300, 4)))
+    assert [f["holds"] for f in narrow[1:]] == [None, None]
+    assert "does not straddle 200 mm" in narrow[1]["statement"]
+
+
+# --- CLI: formats, parsing, sharding --------------------------------------------------------------
+
+
+def test_csv_columns_and_values_match_json(runner, mch50_path):
+    args = (mch50_path, "--i", "2:10:5", "--l-mm", "100:300:4", "--unit", "deg")
+    r_csv = run(runner, *args, "--format", "csv")
+    r_json = run(runner, *args, "--format", "json")
+    assert r_csv.exit_code == 0 and r_json.exit_code == 0
+    assert r_csv.stderr == "" and r_json.stderr == ""
+    header, rows = parse_csv(r_csv.stdout)
+    assert header[:5] == ["i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash"]
+    doc = json.loads(r_json.stdout)
+    assert doc["unit"] == "deg" and doc["columns"] == header and len(doc["points"]) == 20 == len(rows)
+    for row, point in zip(rows, doc["points"]):
+        for name, v in zip(header, row):
+            assert v == pytest.approx(point[name], rel=1e-11)
+    assert [p["i"] for p in doc["points"][:5]] == [2.0, 2.0, 2.0, 2.0, 4.0]  # row-major, i outermost
+    assert {f["id"] for f in doc["summary"]["findings"]} == {"l_more_sensitive_than_i", "l_gain_fades_beyond_200mm",
+                                                            "i_matters_below_6"}
+
+
+def test_units_scale(runner, mch50_path):
+    a = json.loads(run(runner, mch50_path, "--i", "8:8:1", "--l-mm", "202.5:202.5:1", "--format", "json",
+                       "--unit", "deg").stdout)["points"][0]
+    b = json.loads(run(runner, mch50_path, "--i", "8:8:1", "--l-mm", "202.5:202.5:1", "--format", "json",
+                       "--unit", "arcsec").stdout)["points"][0]
+    assert b["total_backlash"] == pytest.approx(3600 * a["total_backlash"], rel=1e-13)
+    assert b["gear_te_phi_deg"] == a["gear_te_phi_deg"]
+
+
+def test_table_is_deterministic_and_summarises(runner, mch50_path):
+    args = (mch50_path, "--i", "2:10:30", "--l-mm", "100:300:40")
+    r1, r2 = run(runner, *args), run(runner, *args)
+    assert r1.exit_code == 0 and r1.stdout_bytes == r2.stdout_bytes and r1.stderr == ""
+    out = r1.stdout
+    assert "showing 12 of 30 i values and 8 of 40 l values" in out
+    assert out.count("holds") == 3
+    assert "gear TE falls 50.1 % from l = 100 to 200 mm and" in out and "33.4 % from 200 to 300 mm" in out
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:0"), '--i "2:10:0": N must be at least 1, got 0'),
+    (("--i", "2:10:-3"), '--i "2:10:-3": N must be at least 1, got -3'),
+    (("--i", "2:10:2.5"), '--i "2:10:2.5": N "2.5" is not a whole number'),
+    (("--l-mm", "300:100:5"), '--l-mm "300:100:5": STOP (100) is less than START (300)'),
+    (("--i", "two:10:5"), '--i "two:10:5": START "two" is not a number'),
+    (("--l-mm", "100:x:5"), '--l-mm "100:x:5": STOP "x" is not a number'),
+    (("--i", "0:10:5"), '--i "0:10:5": values must be > 0 (START is 0)'),
+    (("--l-mm", "-50:100:3"), '--l-mm "-50:100:3": values must be > 0 (START is -50)'),
+    (("--i", "2:10:1"), '--i "2:10:1": N = 1 needs START = STOP (got 2 and 10)'),
+    (("--i", "2:10"), '--i "2:10": expected START:STOP:N (N values from START to STOP inclusive), e.g. 2:10:9'),
+    (("--i", "inf:10:3"), '--i "inf:10:3": START "inf" is not a finite number'),
+    ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
+    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected 1 <= K <= N'),
+    (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8'),
+    (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module > 0 [mm]"),
+    (("--i", "2:4:3", "--min-pinion-teeth", "12"), "--min-pinion-teeth applies only with --module-mm"),
+    (("--i", "2:4:3", "--l-mm", "10:20:3", "--module-mm", "2.5"),
+     "no design left: at --module-mm 2.5 every point of the grid has a gear with fewer than 17 teeth; raise l, "
+     "or lower --min-pinion-teeth"),
+    (("--param", "worm_pair.lead_eror_mm=0:0.05:3"),
+     "--param worm_pair.lead_eror_mm: unknown spec key (did you mean worm_pair.lead_error_mm?)"),
+    (("--param", "stiffness.model=0:1:2"),
+     '--param stiffness.model: not a numeric key (it takes one of "iso6336", "empirical"); only single numbers '
+     "can be swept"),
+    (("--param", "gear_pair.pressure_angle_deg=10:45:3"),
+     "--param gear_pair.pressure_angle_deg: value 45 is out of range, expected a number in (0, 45) [deg]"),
+    (("--param", "gear_pair.pinion.teeth=16:17:3"),
+     '--param gear_pair.pinion.teeth "16:17:3": the key takes whole numbers, but the range gives 16.5; choose N '
+     "so that (STOP - START)/(N - 1) is whole"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--param", "worm_pair.lead_error_mm=0:0.01:2"),
+     "--param worm_pair.lead_error_mm: given twice; give each key once"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--i", "2:3:2"),
+     "--param cannot be combined with --i, --l-mm, --module-mm, --hold or --min-pinion-teeth; run two sweeps"),
+])
+def test_bad_input_exits_2_with_one_message(runner, mch50_path, args, message):
+    r = run(runner, mch50_path, *args, "--format", "csv")
+    assert r.exit_code == 2
+    assert r.stderr == f"error: {message}\n"
+    assert r.stdout == ""
+
+
+def test_missing_drive_file(runner, tmp_path):
+    r = run(runner, tmp_path / "nope.toml", "--i", "2:3:2")
+    assert r.exit_code == 2 and r.stderr == f"error: {tmp_path / 'nope.toml'}: file not found\n"
+
+
+@pytest.mark.parametrize("extra", [(), ("--module-mm", "2.5"), ("--hold", "torque")])
+def test_shards_concatenate_to_the_full_csv(runner, mch50_path, extra):
+    args = (mch50_path, "--i", "2:10:7", "--l-mm", "60:300:13", "--format", "csv", *extra)
+    full = run(runner, *args)
+    assert full.exit_code == 0
+    parts = [run(runner, *args, "--shard", f"{k}/5") for k in range(1, 6)]
+    assert all(p.exit_code == 0 for p in parts)
+    header = parts[0].stdout_bytes.split(b"\n", 1)[0] + b"\n"
+    assert all(p.stdout_bytes.startswith(header) for p in parts)
+    joined = header + b"".join(p.stdout_bytes[len(header):] for p in parts)
+    assert joined == full.stdout_bytes
+    assert len(full.stdout.splitlines()) > 2
+
+
+def test_param_shards_concatenate(runner, mch50_path):
+    args = (mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3", "--param", "gear_pair.pinion.teeth=16:20:3",
+            "--format", "csv")
+    full = run(runner, *args).stdout_bytes
+    parts = [run(runner, *args, "--shard", f"{k}/4").stdout_bytes for k in range(1, 5)]
+    header = full.split(b"\n", 1)[0] + b"\n"
+    assert header + b"".join(p[len(header):] for p in parts) == full
+
+
+def test_json_shard_carries_its_points_only(runner, mch50_path):
+    doc = json.loads(run(runner, mch50_path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "json",
+                         "--shard", "2/2").stdout)
+    assert doc["shard"] == {"k": 2, "n": 2, "first_point": 4, "stop_point": 9, "total_points": 9}
+    assert len(doc["points"]) == 5 and "summary" not in doc
+    assert run(runner, mch50_path, "--i", "2:10:3", "--shard", "1/2").exit_code == 2  # table needs the grid
+
+
+def test_module_mode_reports_whole_teeth(runner, mch50_path):
+    r = run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "40:300:14", "--module-mm", "2.5", "--format", "json")
+    doc = json.loads(r.stdout)
+    assert doc["columns"][-4:] == ["z1", "z2", "i_used", "l_used_mm"] and doc["min_pinion_teeth"] == 17
+    pts = doc["points"]
+    assert len(pts) + doc["skipped"] == 9 * 14 and doc["skipped"] > 0
+    for p in pts:
+        assert isinstance(p["z1"], int) and isinstance(p["z2"], int)
+        assert min(p["z1"], p["z2"]) >= 17
+        assert p["i_used"] == pytest.approx(p["z1"] / p["z2"], rel=1e-15)
+        assert p["l_used_mm"] == pytest.approx(2.5 * (p["z1"] + p["z2"]) / 2, rel=1e-15)
+        assert abs(p["l_used_mm"] - p["l_mm"]) <= 2.5 / 4 + 1e-9  # nearest reachable centre distance
+    low = json.loads(run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "40:300:14", "--module-mm", "2.5",
+                         "--min-pinion-teeth", "12", "--format", "json").stdout)
+    assert len(low["points"]) > len(pts)
+
+
+def test_param_sweep_reproduces_analyze(runner, mch50_path, mch50_spec):
+    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze
+    from wormgear_cli.spec import with_values
+
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3",
+            "--param", "gear_pair.pinion.teeth=16:20:3", "--format", "csv", "--unit", "arcsec")
+    assert r.exit_code == 0 and r.stderr == ""
+    header, rows = parse_csv(r.stdout)
+    keys = ["worm_pair.lead_error_mm", "gear_pair.pinion.teeth"]
+    assert header == keys + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
+    assert [(row[0], row[1]) for row in rows] == [(e, z) for e in (0.0, 0.025, 0.05) for z in (16, 18, 20)]
+    for row in rows:
+        spec = with_values(mch50_spec, {keys[0]: row[0], keys[1]: int(row[1])})
+        expected = analyze(spec).metrics("arcsec")
+        assert row[2:] == [expected[c] for c in header[2:]]  # exact: same floats, repr round-trip
+
+
+def test_param_json(runner, mch50_path):
+    doc = json.loads(run(runner, mch50_path, "--param", "loads.gear_normal_force_N=0:2000:5", "--format",
+                         "json").stdout)
+    te = [p["gear_transmission_error"] for p in doc["points"]]
+    assert len(te) == 5 and all(b > a for a, b in zip(te, te[1:]))  # more load, more TE
+    assert doc["summary"]["best"]["total_transmission_error"]["loads.gear_normal_force_N"] == 0.0
+
+
+def test_output_file_and_input_protection(runner, mch50_path, tmp_path):
+    out = tmp_path / "grid.csv"
+    r = run(runner, mch50_path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "csv", "-o", out)
+    assert r.exit_code == 0 and r.stdout == "" and out.read_text().startswith("i,l_mm,")
+    r = run(runner, mch50_path, "--i", "2:10:3", "--format", "csv", "-o", mch50_path)
+    assert r.exit_code == 2 and "refusing to overwrite the input file" in r.stderr
+
+
+# --- plots ---------------------------------------------------------------------------------------
+
+
+def test_plot_writes_png(runner, mch50_path, tmp_path):
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "surface.png"
+    r = run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "100:300:11", "--plot", png, "--format", "csv")
+    assert r.exit_code == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    one = tmp_path / "param.png"
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:4", "--plot", one)
+    assert r.exit_code == 0 and one.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plot_without_matplotlib_gives_the_install_hint(runner, mch50_path, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError
+    r = run(runner, mch50_path, "--i", "2:10:3", "--plot", tmp_path / "x.png")
+    assert r.exit_code == 2
+    assert r.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert not (tmp_path / "x.png").exists()
+
+
+# --- the CSV number formatter ----------------------------------------------------------------------
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=1, max_size=40))
+def test_fast_formatter_equals_percent_g(values):
+    from wormgear_cli.cli.sweep import format_g
+
+    fields = format_g(np.array(values))
+    got = [bytes(f[f != 0]).decode() for f in fields]
+    assert got == ["" if v != v else "%.12g" % v for v in values]
+
+
+def test_fast_formatter_on_hard_cases():
+    from wormgear_cli.cli.sweep import csv_block
+
+    values = [0.0, -0.0, 8.0, 202.5, 100.0, 1e-5, 0.0001, 99999999999.95, 999999999999.5, 1e12, 123456789012.5,
+              2.5e-300, -7.0, 1 / 3]
+    assert csv_block([np.array(values)]).decode().splitlines() == ["%.12g" % v for v in values]
+    rng = np.random.default_rng(3)
+    x = rng.random(5000) * 10.0 ** rng.integers(-8, 14, 5000)
+    assert csv_block([x]).decode().splitlines() == ["%.12g" % v for v in x]

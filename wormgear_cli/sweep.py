@@ -1,0 +1,530 @@
+"""Design sweeps: the paper's gear-ratio / centre-distance study and any-parameter grids.
+
+No I/O, no typer, no rich.  Two kinds of sweep:
+
+* :class:`RatioDistanceSweep` -- the paper's Figure 1 study.  For every (i, l) of a grid the
+  spur stage gets R1 = l/(1+i), R2 = l i/(1+i); everything else comes from the drive spec.
+  Evaluated in chunks, fully vectorised, with the exact maximum over phi from
+  :func:`wormgear_cli.models.gear.gear_te_max_fast` (the kinematic peak is found once per
+  centre distance).  ``module`` snaps each point to whole tooth counts.
+* :func:`param_rows` -- a grid over any numeric spec keys (TOML paths); each point is
+  :func:`wormgear_cli.spec.with_values` + :func:`wormgear_cli.analysis.analyze`, so every row
+  reproduces ``wormgear analyze`` exactly.
+
+What is held fixed as i and l change (``hold``):
+
+* ``"force"`` (default): the normal forces on the spur teeth and on the worm mesh stay at the
+  spec's values (the paper's "holding other error sources constant").
+* ``"torque"``: the output torque F_N cos(alpha) R2 stays at the spec's value, so the spur
+  normal force scales as R2_spec / R2, and the worm-mesh force follows the intermediate-shaft
+  torque T_out / i, i.e. scales as i_spec / i.
+
+Tooth deflection delta1 comes from the spec's stiffness model with the tooth counts implied
+by the module, z1 = 2 R2 / m and z2 = 2 R1 / m (fractional between whole-tooth designs;
+m = the spec's module, or the snapping module).  The gear backlash 2 Delta C1 / (m1 z1) uses
+m1 z1 = 2 R2.  The worm stage is unchanged by i and l except through its load (torque hold);
+it reaches the output divided by i.
+
+Units: lengths [mm], forces [N], angles [rad] (conversion to an output unit is the CLI's job).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Callable, Iterator, Optional
+
+import numpy as np
+
+from wormgear_cli.errors import UsageError
+
+#: the columns of the (i, l) sweep, in order; the first five are the stable interface
+BASE_COLUMNS = ("i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash",
+                "gear_backlash", "gear_te_phi_deg", "gear_deflection_um")
+#: extra columns when snapping to whole teeth (``module``)
+MODULE_COLUMNS = ("z1", "z2", "i_used", "l_used_mm")
+#: columns holding angles [rad] (converted to the output unit by the CLI)
+ANGLE_COLUMNS = frozenset({"gear_transmission_error", "total_transmission_error", "total_backlash",
+                           "gear_backlash"})
+#: columns holding whole numbers
+INTEGER_COLUMNS = frozenset({"z1", "z2"})
+
+HOLD_MODES = ("force", "torque")
+#: points evaluated per vectorised block (bounds memory; ~30 MB of temporaries)
+CHUNK_POINTS = 1 << 16
+#: the paper's thresholds for its findings: l "beyond 0.2 m", i "below about 6"
+PAPER_L_KNEE_MM = 200.0
+PAPER_I_KNEE = 6.0
+
+
+# --- ranges and shards -----------------------------------------------------------------------
+
+
+def parse_range(text: str, option: str, positive: bool = False, whole: bool = False) -> np.ndarray:
+    """``START:STOP:N`` -> N values from START to STOP inclusive (like numpy.linspace).
+
+    Raises :class:`UsageError` naming ``option`` for: not three parts, a non-numeric or
+    non-finite START/STOP, N not a whole number, N < 1, STOP < START with N > 1, N = 1 with
+    START != STOP, values <= 0 when ``positive``, non-whole values when ``whole``.
+    """
+    where = f'{option} "{text}"'
+    parts = text.split(":")
+    if len(parts) != 3:
+        raise UsageError(f"{where}: expected START:STOP:N (N values from START to STOP inclusive), "
+                         "e.g. 2:10:9")
+    nums = []
+    for name, part in zip(("START", "STOP"), parts[:2]):
+        try:
+            v = float(part)
+        except ValueError:
+            raise UsageError(f'{where}: {name} "{part}" is not a number') from None
+        if not math.isfinite(v):
+            raise UsageError(f'{where}: {name} "{part}" is not a finite number')
+        nums.append(v)
+    start, stop = nums
+    try:
+        n_float = float(parts[2])
+    except ValueError:
+        raise UsageError(f'{where}: N "{parts[2]}" is not a whole number') from None
+    if not math.isfinite(n_float) or not n_float.is_integer():
+        raise UsageError(f'{where}: N "{parts[2]}" is not a whole number')
+    n = int(n_float)
+    if n < 1:
+        raise UsageError(f"{where}: N must be at least 1, got {n}")
+    if n == 1 and start != stop:
+        raise UsageError(f"{where}: N = 1 needs START = STOP (got {start:g} and {stop:g})")
+    if stop < start:
+        raise UsageError(f"{where}: STOP ({stop:g}) is less than START ({start:g})")
+    if positive and start <= 0.0:
+        raise UsageError(f"{where}: values must be > 0 (START is {start:g})")
+    values = np.linspace(start, stop, n)
+    if whole:
+        bad = values[values != np.round(values)]
+        if bad.size:
+            raise UsageError(f"{where}: the key takes whole numbers, but the range gives {bad[0]:g}; "
+                             "choose N so that (STOP - START)/(N - 1) is whole")
+    return values
+
+
+def parse_shard(text: str) -> tuple[int, int]:
+    """``K/N`` (1 <= K <= N) -> (K, N); :class:`UsageError` naming ``--shard`` otherwise."""
+    parts = text.split("/")
+    try:
+        k, n = (int(p) for p in parts)
+        if len(parts) != 2:
+            raise ValueError
+    except ValueError:
+        raise UsageError(f'--shard "{text}": expected K/N with whole numbers, e.g. 2/8') from None
+    if n < 1 or not 1 <= k <= n:
+        raise UsageError(f'--shard "{text}": expected 1 <= K <= N')
+    return k, n
+
+
+def shard_bounds(total: int, k: int, n: int) -> tuple[int, int]:
+    """Point indices [start, stop) of part ``k`` (1-based) of ``n`` contiguous parts of ``total``."""
+    return (k - 1) * total // n, k * total // n
+
+
+# --- the (i, l) sweep ------------------------------------------------------------------------
+
+
+def undercut_min_teeth(pressure_angle: float) -> int:
+    """Smallest tooth count without undercut for a standard rack (addendum = 1 module):
+    z_min = 2 / sin^2(alpha), rounded to the nearest whole number (17 for 20 deg, 32 for
+    14.5 deg, 11 for 25 deg).  Profile-shifted pinions go lower (about 12 at 20 deg)."""
+    return max(1, int(round(2.0 / math.sin(pressure_angle) ** 2)))
+
+
+@dataclass(frozen=True)
+class _Reference:
+    """The spec's own design, which the sweep reproduces at its (i, l)."""
+
+    i: float
+    l: float
+    r2: float
+    gear_force: float
+    worm_force: float
+    worm_te: tuple  # (value at worm force 0, value at the spec's worm force) [rad]
+    worm_backlash: tuple
+
+
+class RatioDistanceSweep:
+    """The (i, l) response surface of a drive (see the module docstring).
+
+    ``i_values`` and ``l_values`` [mm] span the grid; points are numbered row-major with i
+    outermost: point p is (i_values[p // len(l_values)], l_values[p % len(l_values)]).
+    ``module`` [mm]: snap each point to whole teeth (:meth:`snap`), skipping designs whose
+    smaller gear has fewer than ``min_teeth`` teeth (default :func:`undercut_min_teeth`).
+    """
+
+    def __init__(self, spec, i_values, l_values, hold: str = "force", module: Optional[float] = None,
+                 min_teeth: Optional[int] = None):
+        from wormgear_cli.analysis import analyze
+        from wormgear_cli.models import gear
+        from wormgear_cli.spec import with_values
+
+        if hold not in HOLD_MODES:
+            raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
+        if module is not None and not (math.isfinite(module) and module > 0.0):
+            raise UsageError(f"--module-mm {module:g}: expected a module > 0 [mm]")
+        if min_teeth is not None and min_teeth < 1:
+            raise UsageError(f"--min-pinion-teeth {min_teeth}: expected a whole number >= 1")
+        self.spec = spec
+        self.i_values = np.asarray(i_values, dtype=float)
+        self.l_values = np.asarray(l_values, dtype=float)
+        self.hold = hold
+        self.module = module
+        gp = spec.gear_pair
+        self.alpha = gp.pressure_angle
+        self.eccentricity = spec.assembly.gear_eccentricity
+        self.min_teeth = (min_teeth if min_teeth is not None else undercut_min_teeth(self.alpha)) \
+            if module is not None else None
+        raw = spec.raw
+        self._face_width_given = "face_width_mm" in raw.get("gear_pair", {})
+        self._contact_ratio_given = "contact_ratio" in raw.get("stiffness", {})
+
+        base = analyze(spec)
+        z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
+        fw = spec.loads.worm_normal_force
+        if hold == "torque" and fw > 0.0:
+            unloaded = analyze(with_values(spec, {"loads.worm_normal_force_N": 0.0}))
+            w_te = (unloaded.angles["worm_transmission_error"], base.angles["worm_transmission_error"])
+            w_bl = (unloaded.angles["worm_backlash"], base.angles["worm_backlash"])
+        else:
+            w_te = (base.angles["worm_transmission_error"],) * 2
+            w_bl = (base.angles["worm_backlash"],) * 2
+        self.reference = _Reference(i=z1 / z2, l=gp.module * (z1 + z2) / 2.0, r2=gp.module * z1 / 2.0,
+                                    gear_force=spec.loads.gear_normal_force, worm_force=fw,
+                                    worm_te=w_te, worm_backlash=w_bl)
+        # the structure: the kinematic peak depends on l only -> once per grid centre distance
+        self._peak = gear.kinematic_peak(self.l_values, self.eccentricity, self.alpha) \
+            if module is None else None
+
+    # -- shape -----------------------------------------------------------------------------------
+
+    @property
+    def size(self) -> int:
+        """Number of grid points (before any skipping)."""
+        return self.i_values.size * self.l_values.size
+
+    @property
+    def columns(self) -> tuple:
+        return BASE_COLUMNS + (MODULE_COLUMNS if self.module is not None else ())
+
+    def grid_index(self, start: int, stop: int):
+        """(i index, l index) of points [start, stop)."""
+        p = np.arange(start, stop, dtype=np.int64)
+        return p // self.l_values.size, p % self.l_values.size
+
+    # -- snapping ----------------------------------------------------------------------------------
+
+    def snap(self, i, l):
+        """Whole tooth counts for nominal (i, l) at the sweep's module M.
+
+        Rule: the tooth sum z1 + z2 = round(2 l / M) keeps the centre distance as close as the
+        module allows; the pinion gets z2 = round((z1 + z2) / (1 + i)), the output gear the rest.
+        Returns (z1, z2, keep) with keep = min(z1, z2) >= min_teeth.  Rounding is half-to-even.
+        """
+        m = self.module
+        zsum = np.rint(2.0 * np.asarray(l, dtype=float) / m)
+        z2 = np.rint(zsum / (1.0 + np.asarray(i, dtype=float)))
+        z1 = zsum - z2
+        keep = np.minimum(z1, z2) >= self.min_teeth
+        return z1, z2, keep
+
+    def kept_count(self, start: int = 0, stop: Optional[int] = None) -> int:
+        """Points of [start, stop) that survive snapping (all of them without a module)."""
+        stop = self.size if stop is None else stop
+        if self.module is None:
+            return max(0, stop - start)
+        total = 0
+        for a in range(start, stop, CHUNK_POINTS):
+            ii, li = self.grid_index(a, min(stop, a + CHUNK_POINTS))
+            total += int(np.count_nonzero(self.snap(self.i_values[ii], self.l_values[li])[2]))
+        return total
+
+    # -- evaluation --------------------------------------------------------------------------------
+
+    def _deflections(self, z1, z2, module, r2, ratio):
+        """delta1 [mm] of the spur mesh and the worm-mesh load factor, per design."""
+        from wormgear_cli.analysis import deflections
+        from wormgear_cli.models.deformation import spur_contact_ratio
+
+        spec, ref = self.spec, self.reference
+        gp, st = spec.gear_pair, spec.stiffness
+        if self.hold == "torque":
+            gear_force = ref.gear_force * ref.r2 / r2
+            worm_scale = ref.i / ratio
+        else:
+            gear_force = np.full(np.shape(r2), ref.gear_force)
+            worm_scale = np.ones(np.shape(r2))
+        face = gp.face_width if (self._face_width_given or module == gp.module) else 10.0 * module
+        new_gp = dataclasses.replace(gp, module=module, face_width=face,
+                                     output_gear=dataclasses.replace(gp.output_gear, teeth=z1),
+                                     pinion=dataclasses.replace(gp.pinion, teeth=z2))
+        new_st = st if self._contact_ratio_given else dataclasses.replace(
+            st, contact_ratio=spur_contact_ratio(z1, z2, gp.pressure_angle))
+        shadow = dataclasses.replace(spec, gear_pair=new_gp, stiffness=new_st)
+        d1 = deflections(shadow, gear_force=gear_force).gear
+        return np.broadcast_to(np.asarray(d1, dtype=float), np.shape(r2)), worm_scale
+
+    def evaluate(self, i, l, peak=None, teeth=None) -> dict:
+        """Metrics [rad, mm, um, deg] of designs with ratio ``i`` and centre distance ``l`` [mm]
+        (arrays), with the sweep's module, hold and spec.  ``peak``: the kinematic peak per
+        design (:func:`~wormgear_cli.models.gear.kinematic_peak`), computed when omitted.
+        ``teeth``: whole (z1, z2) of snapped designs (then R = m z / 2 exactly); otherwise
+        z = 2 R / m."""
+        from wormgear_cli.models import gear
+
+        i = np.asarray(i, dtype=float)
+        l = np.asarray(l, dtype=float)
+        i, l = np.broadcast_arrays(i, l)
+        m = self.module if self.module is not None else self.spec.gear_pair.module
+        if teeth is None:
+            r1 = l / (1.0 + i)
+            r2 = l * i / (1.0 + i)
+            z1, z2 = 2.0 * r2 / m, 2.0 * r1 / m
+        else:
+            z1, z2 = (np.asarray(z, dtype=float) for z in teeth)
+            r1, r2 = m * z2 / 2.0, m * z1 / 2.0
+        if peak is None:
+            peak = gear.kinematic_peak(r1 + r2, self.eccentricity, self.alpha)
+        d1, worm_scale = self._deflections(z1, z2, m, r2, i)
+        te, phi = gear.gear_te_max_fast(r1, r2, self.eccentricity, self.alpha, d1, peak=peak)
+        bl = gear.gear_backlash_max(m, z1, self.eccentricity, self.alpha, d1)
+        ref = self.reference
+        w_te = ref.worm_te[0] + (ref.worm_te[1] - ref.worm_te[0]) * worm_scale
+        w_bl = ref.worm_backlash[0] + (ref.worm_backlash[1] - ref.worm_backlash[0]) * worm_scale
+        return {
+            "gear_transmission_error": te,
+            "total_transmission_error": te + w_te / i,
+            "total_backlash": bl + w_bl / i,
+            "gear_backlash": bl,
+            "gear_te_phi_deg": np.degrees(phi),
+            "gear_deflection_um": d1 * 1e3,
+        }
+
+    def chunks(self, start: int = 0, stop: Optional[int] = None, chunk: int = CHUNK_POINTS,
+               progress: Optional[Callable[[int], None]] = None) -> Iterator[dict]:
+        """Column arrays for grid points [start, stop), in blocks of ``chunk`` points.
+
+        Each block is a dict column -> array (see :attr:`columns`) plus ``"_point"``, the grid
+        index of each row.  With a module, skipped designs are left out.  ``progress(n)`` is
+        called after each block with the number of grid points it covered.
+        """
+        from wormgear_cli.models import gear
+
+        stop = self.size if stop is None else stop
+        for a in range(start, stop, chunk):
+            b = min(stop, a + chunk)
+            ii, li = self.grid_index(a, b)
+            i_nom, l_nom = self.i_values[ii], self.l_values[li]
+            point = np.arange(a, b, dtype=np.int64)
+            if self.module is None:
+                peak = tuple(p[li] for p in self._peak)
+                metrics = self.evaluate(i_nom, l_nom, peak=peak)
+                block = {"i": i_nom, "l_mm": l_nom, **metrics, "_point": point}
+            else:
+                z1, z2, keep = self.snap(i_nom, l_nom)
+                z1, z2, i_nom, l_nom, point = z1[keep], z2[keep], i_nom[keep], l_nom[keep], point[keep]
+                i_used, l_used = z1 / z2, self.module * (z1 + z2) / 2.0
+                uniq, inverse = np.unique(l_used, return_inverse=True)
+                peak_u = gear.kinematic_peak(uniq, self.eccentricity, self.alpha)
+                metrics = self.evaluate(i_used, l_used, peak=tuple(p[inverse] for p in peak_u), teeth=(z1, z2))
+                block = {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64),
+                         "z2": z2.astype(np.int64), "i_used": i_used, "l_used_mm": l_used, "_point": point}
+            if progress is not None:
+                progress(b - a)
+            yield block
+
+    def collect(self, start: int = 0, stop: Optional[int] = None,
+                progress: Optional[Callable[[int], None]] = None) -> dict:
+        """All of :meth:`chunks` concatenated into one dict of arrays."""
+        blocks = list(self.chunks(start, stop, progress=progress))
+        keys = self.columns + ("_point",)
+        if not blocks:
+            return {k: np.empty(0) for k in keys}
+        return {k: np.concatenate([blk[k] for blk in blocks]) for k in keys}
+
+    # -- summary -----------------------------------------------------------------------------------
+
+    def continuous(self) -> "RatioDistanceSweep":
+        """The same sweep without snapping (the paper's continuous study)."""
+        if self.module is None:
+            return self
+        return RatioDistanceSweep(self.spec, self.i_values, self.l_values, self.hold)
+
+    def gear_te(self, i, l) -> np.ndarray:
+        """Gear-stage TE [rad] of the continuous model at arbitrary (i, l)."""
+        return self.continuous().evaluate(i, l)["gear_transmission_error"]
+
+
+def best_points(data: dict) -> dict:
+    """Index of the lowest total TE and of the lowest gear TE among collected points
+    (first in point order on ties); empty when there are no points."""
+    if data["gear_transmission_error"].size == 0:
+        return {}
+    return {"total_transmission_error": int(np.argmin(data["total_transmission_error"])),
+            "gear_transmission_error": int(np.argmin(data["gear_transmission_error"]))}
+
+
+def _fall_pct(before: float, after: float) -> float:
+    return 100.0 * (1.0 - after / before)
+
+
+def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
+    """The paper's three findings on the gear-stage TE, checked on the sweep's grid ranges.
+
+    Evaluated exactly with the continuous model (also when snapping) at the spec's own i and
+    l clipped into the grid (``i_ref``, ``l_ref``):
+
+    1. ``l_more_sensitive_than_i``: the elasticities e_l = d ln TE / d ln l and
+       e_i = d ln TE / d ln i (central differences, step 1e-4) over up to ``max_axis`` x
+       ``max_axis`` grid points; holds when median |e_l| > median |e_i|.  Also the relative
+       change of TE across the grid's l range (at i_ref) and i range (at l_ref).
+    2. ``l_gain_fades_beyond_200mm``: with w = min(200 - l_min, l_max - 200), TE falls X % from
+       l = 200 - w to 200 mm and Y % from 200 to 200 + w (at i_ref); holds when Y < X.
+       Not testable (holds = None) unless l_min < 200 < l_max.
+    3. ``i_matters_below_6``: the same around i = 6 (at l_ref); holds when the fall above 6 is
+       smaller than below it.  Not testable unless i_min < 6 < i_max.
+
+    Returns a list of dicts with ``id``, ``holds`` (True/False/None), ``statement`` and numbers.
+    """
+    iv, lv = sweep.i_values, sweep.l_values
+    i_min, i_max, l_min, l_max = float(iv[0]), float(iv[-1]), float(lv[0]), float(lv[-1])
+    ref = sweep.reference
+    i_ref = float(np.clip(ref.i, i_min, i_max))
+    l_ref = float(np.clip(ref.l, l_min, l_max))
+    te = sweep.gear_te
+    out = []
+
+    # 1: elasticities on a subsample of the grid
+    si = np.unique(np.linspace(0, iv.size - 1, min(iv.size, max_axis)).round().astype(int))
+    sl = np.unique(np.linspace(0, lv.size - 1, min(lv.size, max_axis)).round().astype(int))
+    ig, lg = np.meshgrid(iv[si], lv[sl], indexing="ij")
+    ig, lg = ig.ravel(), lg.ravel()
+    h = 1e-4
+    dlog = math.log1p(h) - math.log1p(-h)
+    e_l = (np.log(te(ig, lg * (1 + h))) - np.log(te(ig, lg * (1 - h)))) / dlog
+    e_i = (np.log(te(ig * (1 + h), lg)) - np.log(te(ig * (1 - h), lg))) / dlog
+    med_l, med_i = float(np.median(e_l)), float(np.median(e_i))
+    share = float(100.0 * np.mean(np.abs(e_l) > np.abs(e_i)))
+    span_l = float(100.0 * (te(i_ref, l_max) / te(i_ref, l_min) - 1.0))
+    span_i = float(100.0 * (te(i_max, l_ref) / te(i_min, l_ref) - 1.0))
+    holds = abs(med_l) > abs(med_i)
+    spans = []
+    if lv.size > 1:
+        spans.append(f"l from {l_min:g} to {l_max:g} mm changes it by {span_l:+.1f} % (at i = {i_ref:g})")
+    if iv.size > 1:
+        spans.append(f"i from {i_min:g} to {i_max:g} {'by' if spans else 'changes it by'} {span_i:+.1f} % "
+                     f"(at l = {l_ref:g} mm)")
+    out.append({
+        "id": "l_more_sensitive_than_i",
+        "holds": bool(holds),
+        "statement": (f"gear TE is {'more' if holds else 'less'} sensitive to l than to i: +1 % in l changes "
+                      f"it by {med_l:+.2f} %, +1 % in i by {med_i:+.2f} % (medians over the grid; l dominates "
+                      f"at {share:.0f} % of points)" + ("; " + ", ".join(spans) if spans else "")),
+        "elasticity_l": med_l, "elasticity_i": med_i, "l_dominates_pct": share,
+        "change_over_l_range_pct": span_l, "change_over_i_range_pct": span_i,
+        "i_ref": i_ref, "l_ref_mm": l_ref,
+    })
+
+    # 2 and 3: diminishing returns around the paper's knees
+    for key, knee, lo, hi, unit, other, other_value, fn in (
+        ("l_gain_fades_beyond_200mm", PAPER_L_KNEE_MM, l_min, l_max, " mm", "i", i_ref,
+         lambda x: te(i_ref, x)),
+        ("i_matters_below_6", PAPER_I_KNEE, i_min, i_max, "", "l", l_ref, lambda x: te(x, l_ref)),
+    ):
+        other_txt = f"{other} = {other_value:g}" + (" mm" if other == "l" else "")
+        name = "l" if key.startswith("l_") else "i"
+        if not lo < knee < hi:
+            out.append({"id": key, "holds": None,
+                        "statement": f"not testable on this grid: the {name} range {lo:g}..{hi:g}{unit} does "
+                                     f"not straddle {knee:g}{unit}"})
+            continue
+        w = min(knee - lo, hi - knee)
+        a, b, c = (float(fn(x)) for x in (knee - w, knee, knee + w))
+        before, after = _fall_pct(a, b), _fall_pct(b, c)
+        ratio = (b - c) / (a - b) if a != b else float("nan")
+        holds = after < before
+        if key.startswith("l_"):
+            head = f"the gain from l {'fades' if holds else 'does not fade'} beyond {knee:g} mm"
+        else:
+            head = f"i {'matters mainly' if holds else 'does not matter mainly'} below {knee:g}"
+        out.append({
+            "id": key, "holds": bool(holds),
+            "statement": (f"{head}: gear TE falls {before:.1f} % from {name} = {knee - w:g} to {knee:g}{unit} and "
+                          f"{after:.1f} % from {knee:g} to {knee + w:g}{unit} (at {other_txt}); the absolute "
+                          f"fall above is {ratio:.2f} x the fall below"),
+            "window": [knee - w, knee, knee + w], "fall_below_pct": before, "fall_above_pct": after,
+            "absolute_fall_ratio": ratio, ("i_ref" if name == "l" else "l_ref_mm"): other_value,
+        })
+    return out
+
+
+# --- any-parameter sweeps --------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ParamAxis:
+    """One ``--param KEY=START:STOP:N``: the spec key and its values (in the key's unit)."""
+
+    key: str
+    values: tuple
+
+
+def parse_param(text: str) -> ParamAxis:
+    """``KEY=START:STOP:N`` over a numeric spec key; :class:`UsageError` naming it otherwise."""
+    from wormgear_cli.spec import FIELD_BY_PATH
+
+    if "=" not in text:
+        raise UsageError(f'--param "{text}": expected KEY=START:STOP:N, e.g. worm_pair.lead_error_mm=0:0.05:11')
+    key, rng = text.split("=", 1)
+    key = key.strip()
+    field = FIELD_BY_PATH.get(key)
+    if field is None:
+        near = difflib.get_close_matches(key, list(FIELD_BY_PATH), n=1, cutoff=0.6)
+        hint = f" (did you mean {near[0]}?)" if near else " (see the key reference: wormgear new)"
+        raise UsageError(f"--param {key}: unknown spec key{hint}")
+    if field.kind not in ("float", "int"):
+        what = {"str": f"takes {field.expected()}", "floats": "is an array"}.get(field.kind, "is not a number")
+        raise UsageError(f"--param {key}: not a numeric key (it {what}); only single numbers can be swept")
+    values = parse_range(rng, f"--param {key}", whole=field.kind == "int")
+    for v in values:
+        if (field.lo is not None and (v < field.lo or (field.lo_open and v == field.lo))) or \
+                (field.hi is not None and (v > field.hi or (field.hi_open and v == field.hi))):
+            raise UsageError(f"--param {key}: value {v:g} is out of range, expected {field.expected()}")
+    vals = tuple(int(round(v)) for v in values) if field.kind == "int" else tuple(float(v) for v in values)
+    return ParamAxis(key, vals)
+
+
+def check_param_axes(axes: list[ParamAxis]) -> None:
+    seen = set()
+    for ax in axes:
+        if ax.key in seen:
+            raise UsageError(f"--param {ax.key}: given twice; give each key once")
+        seen.add(ax.key)
+
+
+def param_size(axes: list[ParamAxis]) -> int:
+    return math.prod(len(ax.values) for ax in axes)
+
+
+def param_rows(spec, axes: list[ParamAxis], start: int = 0, stop: Optional[int] = None,
+               progress: Optional[Callable[[int], None]] = None) -> Iterator[tuple]:
+    """(values, Analysis) for points [start, stop) of the grid over ``axes`` (row-major, the
+    first axis outermost).  Each point is ``analyze(with_values(spec, {key: value, ...}))``."""
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import with_values
+
+    total = param_size(axes)
+    stop = total if stop is None else stop
+    grid = itertools.islice(itertools.product(*(ax.values for ax in axes)), start, stop)
+    for values in grid:
+        result = analyze(with_values(spec, dict(zip((ax.key for ax in axes), values))))
+        if progress is not None:
+            progress(1)
+        yield values, result
