@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.models import deformation, gear, worm
-from wormgear_cli.models.effects import DriveGeometry
 from wormgear_cli.units import to_unit
 
 #: flat metric columns (CSV of analyze, columns of sweep --param); all angles
@@ -49,8 +48,10 @@ class Deflections:
     model: str
 
 
-def geometry(spec) -> DriveGeometry:
-    """Derived geometry used by the effect catalogue and simulation."""
+def geometry(spec):
+    """Derived geometry used by the effect catalogue and simulation (a ``DriveGeometry``)."""
+    from wormgear_cli.models.effects import DriveGeometry
+
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     z3, zw = wp.wheel.teeth, wp.worm.starts

@@ -19,9 +19,9 @@ import copy
 import difflib
 import math
 import tomllib
-from dataclasses import dataclass, field, make_dataclass
+from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
-from types import MappingProxyType
+from types import MappingProxyType, SimpleNamespace
 from typing import Any
 
 from wormgear_cli.errors import SpecError
@@ -235,19 +235,37 @@ SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(f.section for f in FIELDS))
 REQUIRED_SECTIONS = ("gear_pair", "gear_pair.output_gear", "gear_pair.pinion", "worm_pair", "worm_pair.worm",
                      "worm_pair.wheel")
 
-# --- immutable dataclasses, one per section, generated from the schema -------------
+# --- immutable records, one class per section, generated from the schema -----------------
+
+
+class Section(SimpleNamespace):
+    """An immutable record of one spec section (attributes = the section's ``attr`` names
+    and its sub-sections).  Cheaper to create than a dataclass per section, which
+    keeps start-up fast; ``_replace(**changes)`` returns a changed copy."""
+
+    __slots__ = ()
+
+    def __setattr__(self, name, value):
+        raise FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name):
+        raise FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def __hash__(self):
+        return hash((type(self).__name__, tuple(sorted(self.__dict__.items(), key=lambda kv: kv[0]))))
+
+    def _replace(self, **changes):
+        unknown = set(changes) - set(self.__dict__)
+        if unknown:
+            raise TypeError(f"{type(self).__name__} has no field(s) {sorted(unknown)}")
+        return type(self)(**{**self.__dict__, **changes})
 
 
 def _class_name(section: str) -> str:
     return "".join(part.capitalize() for part in section.replace(".", "_").split("_"))
 
 
-_SECTION_CLASSES: dict[str, type] = {}
-for _sec in SECTIONS:
-    _children = [s for s in SECTIONS if s.rsplit(".", 1)[0] == _sec and "." in s]
-    _fields = [(f.attr, Any) for f in FIELDS if f.section == _sec]
-    _fields += [(c.rsplit(".", 1)[1], Any) for c in _children]
-    _SECTION_CLASSES[_sec] = make_dataclass(_class_name(_sec), _fields, frozen=True)
+_SECTION_CLASSES: dict[str, type] = {sec: type(_class_name(sec), (Section,), {"__slots__": ()}) for sec in SECTIONS}
 
 
 @dataclass(frozen=True)

@@ -262,11 +262,10 @@ class RatioDistanceSweep:
             gear_force = np.full(np.shape(r2), ref.gear_force)
             worm_scale = np.ones(np.shape(r2))
         face = gp.face_width if (self._face_width_given or module == gp.module) else 10.0 * module
-        new_gp = dataclasses.replace(gp, module=module, face_width=face,
-                                     output_gear=dataclasses.replace(gp.output_gear, teeth=z1),
-                                     pinion=dataclasses.replace(gp.pinion, teeth=z2))
-        new_st = st if self._contact_ratio_given else dataclasses.replace(
-            st, contact_ratio=spur_contact_ratio(z1, z2, gp.pressure_angle))
+        new_gp = gp._replace(module=module, face_width=face, output_gear=gp.output_gear._replace(teeth=z1),
+                             pinion=gp.pinion._replace(teeth=z2))
+        new_st = st if self._contact_ratio_given else st._replace(
+            contact_ratio=spur_contact_ratio(z1, z2, gp.pressure_angle))
         shadow = dataclasses.replace(spec, gear_pair=new_gp, stiffness=new_st)
         d1 = deflections(shadow, gear_force=gear_force).gear
         return np.broadcast_to(np.asarray(d1, dtype=float), np.shape(r2)), worm_scale

@@ -27,7 +27,7 @@ class WormgearGroup(TyperGroup):
             raise typer.Exit(130) from None
 
 
-app = typer.Typer(
+SETTINGS = dict(
     name="wormgear",
     cls=WormgearGroup,
     help="Transmission error and backlash of two-stage worm + spur gear precision drives.\n\n"
@@ -38,3 +38,23 @@ app = typer.Typer(
     rich_markup_mode=None,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
+
+app = typer.Typer(**SETTINGS)
+
+
+def single_command_app(name: str):
+    """An app holding only command ``name`` (registered on :data:`app`), or None if
+    there is no such command.  typer then builds one command instead of all of
+    them; that command behaves exactly as in the full app.  Used by ``main``."""
+    infos = [c for c in app.registered_commands
+             if (c.name or c.callback.__name__.replace("_", "-")) == name]
+    if not infos:
+        return None
+    single = typer.Typer(**SETTINGS)
+    single.registered_commands = infos
+
+    @single.callback()
+    def _group() -> None:  # a callback keeps it a group: "wormgear NAME ..." as with the full app
+        pass
+
+    return single
