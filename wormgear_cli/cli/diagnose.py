@@ -1,1 +1,275 @@
-"""``wormgear diagnose``: (being built)."""
+"""``wormgear diagnose``: where the model and a measurement disagree, which catalogue effect is missing."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from wormgear_cli.cli.app import app
+from wormgear_cli.cli.common import (
+    DriveArgument,
+    TableJsonFormat,
+    UnitOption,
+    emit,
+    fmt_angle,
+    json_text,
+    render,
+    stderr_is_terminal,
+)
+
+#: rows above which a progress display is shown (when stderr is a terminal)
+PROGRESS_ROWS = 20_000
+
+
+@app.command()
+def diagnose(
+    drive: DriveArgument,
+    data: Annotated[Path, typer.Argument(
+        help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
+        "time_s).", show_default=False)],
+    output: Annotated[Optional[Path], typer.Option(
+        "--output", "-o", help="Write the augmented drive spec to FILE (TOML: the fitted phases and an "
+        "[effects.NAME] table per named effect); never the input files.", dir_okay=False,
+        show_default=False)] = None,
+    format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
+                                                    case_sensitive=False)] = "table",
+    unit: UnitOption = "arcsec",
+    plot: Annotated[Optional[Path], typer.Option(
+        "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
+        "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
+    alpha: Annotated[float, typer.Option(
+        "--alpha", help="Family-wise significance level of each selection step (Bonferroni over the "
+        "candidates tested), 0 < alpha < 0.5.")] = 0.01,
+    keep_phases: Annotated[bool, typer.Option(
+        "--keep-phases", help="Hold the spec's phases (known from a direct measurement) instead of fitting "
+        "them; only the zero offset and effects are fitted.")] = False,
+    max_effects: Annotated[int, typer.Option("--max-effects", help="Name at most this many effects.",
+                                             min=0, max=20)] = 4,
+    resamples: Annotated[int, typer.Option(
+        "--resamples", help="Resamples of whole runs for the stability check (0: skip it).", min=0,
+        max=10_000)] = 50,
+):
+    """Find where the model and a measurement disagree and name the missing effect.
+
+    Fits only what a drawing cannot know (the phases of the spec's periodic
+    sources and one zero offset), shows the residual in common and
+    differential mode, by order and against load, temperature and time,
+    then scores every catalogue effect the spec lacks (GLS with run-to-run
+    noise, Bonferroni, stability under resampling of runs), names those the
+    data support, refits and shows the gap shrink.  Exit 0 whether or not an
+    effect is found; 2 for bad input.
+
+    Example: wormgear diagnose configs/mch50.toml configs/mch50-warm.csv -o mch50-warm.toml
+    """
+    from wormgear_cli.diagnosis import augmented_toml, diagnose as run, report
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.spec import load_spec
+
+    unit = getattr(unit, "value", unit)
+    fmt = getattr(format, "value", format)
+    inputs = (drive, data)
+    for target, what in ((output, "-o"), (plot, "--plot")):
+        if target is None:
+            continue
+        for src in inputs:
+            try:
+                same = Path(target).resolve() == Path(src).resolve()
+            except OSError:
+                same = False
+            if same:
+                raise UsageError(f"{target}: refusing to overwrite the input file; choose another {what}")
+    if output is not None and plot is not None and Path(output).resolve() == Path(plot).resolve():
+        raise UsageError(f"{plot}: -o and --plot name the same file")
+    if plot is not None:
+        import importlib.util
+
+        from wormgear_cli.plots import INSTALL_HINT, check_plot_path
+
+        check_plot_path(plot)
+        if importlib.util.find_spec("matplotlib") is None:
+            raise UsageError(INSTALL_HINT)
+    if output is not None and Path(output).suffix.lower() != ".toml":
+        raise UsageError(f"{output}: -o writes a drive spec; expected a file name ending in .toml")
+
+    spec = load_spec(drive)
+    meas = read_measurement(data)
+    if len(meas) > PROGRESS_ROWS and stderr_is_terminal():
+        from rich.console import Console
+
+        console = Console(stderr=True)
+        with console.status("diagnosing") as status:
+            diag = run(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                       resamples=resamples, progress=lambda text: status.update(text))
+    else:
+        diag = run(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                   resamples=resamples)
+    doc = report(diag)
+    figure = None
+    if plot is not None:
+        from wormgear_cli.plots.diagnose import draw
+
+        figure = draw(diag, doc, unit)
+    if output is not None:
+        from wormgear_cli.io import atomic_write
+
+        atomic_write(output, augmented_toml(diag, str(data)), inputs)
+        doc["augmented_spec"] = str(output)
+    else:
+        doc["augmented_spec"] = None
+    if figure is not None:
+        from wormgear_cli.plots.diagnose import save
+
+        save(figure, plot)
+    if fmt == "json":
+        emit(json_text(doc), None, inputs)
+    else:
+        render(_tables(doc, unit), None, inputs)
+    if output is not None:
+        typer.echo(f"wrote {output}", err=True)
+    if plot is not None:
+        typer.echo(f"wrote {plot}", err=True)
+
+
+def _tables(doc: dict, unit: str) -> list:
+    """The report as rich tables (every angle converted from arcsec to ``unit``)."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    from wormgear_cli.units import RAD_PER_UNIT
+
+    factor = RAD_PER_UNIT["arcsec"] / RAD_PER_UNIT[unit]
+
+    def a(x):
+        return "-" if x is None else fmt_angle(x * factor, unit)
+
+    def table(title, cols, keep=1):
+        t = Table(title=escape(title), title_justify="left")
+        for i, c in enumerate(cols):
+            t.add_column(escape(c), justify="left" if i < keep else "right", no_wrap=i < keep)
+        return t
+
+    out = []
+    sig = doc["signals"]
+    parts = [f"{doc['rows']} rows", f"{doc['noise']['before']['runs']} runs",
+             "both directions" if len(sig["directions"]) == 2 else "one direction"]
+    for key, name, u in (("temperature_C", "temperature", "degC"), ("load_Nm", "load", "N m")):
+        if sig.get(key):
+            lo, hi = sig[key]
+            parts.append(f"{name} {lo:g} to {hi:g} {u}" if hi > lo else f"{name} {lo:g} {u}")
+    out.append(escape(f"{doc['drive']} vs {doc['data']}: " + ", ".join(parts)))
+    out.append(escape(f"verdict: {doc['verdict']}"))
+    if sig.get("warning"):
+        out.append(escape(f"note: {sig['warning']}"))
+
+    gt = table(f"gap: measured - simulated [{unit}]", ["", "as specified", "before (phases fitted)",
+                                                         "after (effects added)"])
+    for key, label in (("rms_arcsec", "RMS"), ("max_arcsec", "max |.|"), ("common_rms_arcsec", "common mode RMS"),
+                       ("common_max_arcsec", "common mode max"), ("differential_rms_arcsec", "differential RMS"),
+                       ("differential_max_arcsec", "differential max")):
+        gt.add_row(label, a(doc["gap_as_specified"][key]), a(doc["gap_before"][key]), a(doc["gap_after"][key]))
+    out.append(gt)
+
+    if doc["effects_found"]:
+        et = table("effects found", ["effect / parameter", "value", "95 % interval"])
+        for e in doc["effects_found"]:
+            et.add_row(escape(e["name"]), "", "")
+            for key, value in e["parameters"].items():
+                iv = e["interval_95"].get(key)
+                et.add_row(escape(f"  {key}"), f"{value:.4g}", f"{iv[0]:.4g} to {iv[1]:.4g}" if iv else "fixed")
+        out.append(et)
+        for e in doc["effects_found"]:
+            stab = (f"best in {100 * e['stability']:.0f} % of resamples of whole runs" if e["stability"] is not None
+                    else "stability not assessed (fewer than 3 runs)")
+            out.append(escape(f"{e['name']}: explains {e['gap_share_pct']:.1f} % of the gap (p = {e['p_value']:.2g}, "
+                              f"df {e['df']:.3g}; {stab})"))
+            if "prediction" in e:
+                pr = e["prediction"]
+                out.append(escape(
+                    f"{e['name']}: physics predicts {pr['centre_distance_um_per_K']:.3g} um/K ({pr['basis']}); "
+                    f"fitted/predicted = {pr['fitted_over_predicted']:.2f}; the prediction is "
+                    f"{'inside' if pr['inside_interval'] else 'outside'} the 95 % interval"))
+            for note in e["notes"]:
+                out.append(escape(f"{e['name']}: {note}"))
+
+    ct = table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], keep=2)
+    ct.columns[3].justify = "left"
+    for c in doc["candidates"]:
+        p = c.get("p_adjusted")
+        ct.add_row(escape(c["name"]), escape(c["status"]), "-" if p is None else f"{p:.2g}",
+                   escape(c.get("reason", "")))
+    out.append(ct)
+    for c in doc["candidates"]:
+        if c.get("remedy"):
+            out.append(escape(f"{c['name']}: {c['remedy']}"))
+
+    if doc["unexplained"]:
+        ut = table(f"unexplained residual (after) [{unit}]", ["what", "mode", "size", "p (adjusted)", "note"])
+        for u in doc["unexplained"]:
+            if u["kind"] == "order":
+                what, size = f"order {u['order']:g}", a(u["amplitude_arcsec"])
+            elif u["kind"] == "trend":
+                what, size = f"trend with {u['signal']}", f"{u['slope_arcsec_per_unit'] * factor:.4g}/{u['unit']}"
+            else:
+                what, size = "mean reversal", a(u["mean_reversal_change_arcsec"])
+            ut.add_row(escape(what), u["mode"], size, f"{u['p_adjusted']:.2g}", escape(u["explanation"]))
+        out.append(ut)
+
+    fit = doc["fit"]
+    if fit["phases"]:
+        pt = table("phases of the spec's periodic sources [deg]" + ("" if fit["phases_fitted"] else " (held)"),
+                   ["source", "order", "amplitude", "specified", "fitted"])
+        for p in fit["phases"]:
+            pt.add_row(escape(p["source"]), f"{p['order']:g}", a(p["amplitude_arcsec"]), f"{p['specified_deg']:.2f}",
+                       f"{p['fitted_deg']:.2f}")
+        out.append(pt)
+        if fit["note"]:
+            out.append(escape(fit["note"]))
+    out.append(escape(f"zero offset: {a(fit['zero_offset_before_arcsec'])} before, "
+                      f"{a(fit['zero_offset_after_arcsec'])} after [{unit}]"))
+
+    nt = table(f"noise [{unit}]", ["", "before", "after"])
+    nb, na = doc["noise"]["before"], doc["noise"]["after"]
+    for key, label in (("repeat_std_arcsec", "repeatability (std over runs)"), ("white_arcsec", "white"),
+                       ("pass_arcsec", "per pass"), ("run_arcsec", "per run"), ("total_arcsec", "total")):
+        nt.add_row(label, a(nb[key]), a(na[key]))
+    out.append(nt)
+    out.append(escape(f"run structure: {nb['structure']} ({nb['passes']} passes, {nb['runs']} runs)"))
+
+    ot = table(f"residual at the physical orders [{unit}]", ["order", "shaft or mesh", "common before",
+                                                               "common after", "diff. before", "diff. after"],
+               keep=2)
+    unresolved = []
+    for b, f in zip(doc["orders"]["before"], doc["orders"]["after"]):
+        label = "constant" if b["order"] == 0 else b["label"]
+        if not b["identifiable"]:
+            unresolved.append(f"{b['order']:g}")
+            continue
+        ot.add_row(f"{b['order']:g}", escape(label), a(b["common_arcsec"]), a(f["common_arcsec"]),
+                   a(b.get("differential_arcsec")), a(f.get("differential_arcsec")))
+    out.append(ot)
+    if unresolved:
+        out.append(escape(f"not resolved at these targets (aliased, or too few targets for all orders): orders "
+                          f"{', '.join(unresolved)}"))
+
+    vs = doc["residual_vs"]
+    if vs["before"]:
+        vt = table(f"residual slope against the signals [{unit} per unit]",
+                   ["signal", "range", "common before", "common after", "differential before", "differential after"])
+        for key, b in vs["before"].items():
+            f = vs["after"][key]
+            lo, hi = b["range"]
+            s = lambda v: "-" if v is None else f"{v * factor:.4g}"  # noqa: E731
+            vt.add_row(key, f"{lo:g} to {hi:g}", s(b["slope_common"]), s(f["slope_common"]),
+                       s(b.get("slope_differential")), s(f.get("slope_differential")))
+        out.append(vt)
+
+    it = table(f"ISO 230-2 figures [{unit}]", ["figure", "measured", "simulated before", "simulated after"])
+    iso = doc["iso230"]
+    for key, label in (("A", "A accuracy"), ("B", "B reversal"), ("E", "E systematic"), ("M", "M mean bidirectional"),
+                       ("R", "R repeatability")):
+        it.add_row(label, a(iso["measured"][key]), a(iso["simulated_before"][key]), a(iso["simulated_after"][key]))
+    out.append(it)
+    return out

@@ -1,0 +1,201 @@
+"""The statistics under diagnose: distributions, GLS/REML with run and pass effects, degrees of
+freedom, run structure, cells, and the phase fit.  Checked against scipy and brute force."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import optimize, special, stats
+
+from wormgear_cli import diagnosis as dg
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=st.floats(0.2, 2000.0), b=st.floats(0.2, 2000.0), x=st.floats(0.0, 1.0))
+def test_incomplete_beta_matches_scipy(a, b, x):
+    assert dg.betainc(a, b, x) == pytest.approx(special.betainc(a, b, x), rel=1e-9, abs=1e-13)
+
+
+@settings(max_examples=60, deadline=None)
+@given(f=st.floats(0.0, 200.0), d1=st.integers(1, 6), d2=st.floats(1.0, 1e5))
+def test_f_upper_tail_matches_scipy(f, d1, d2):
+    assert dg.f_sf(f, d1, d2) == pytest.approx(stats.f.sf(f, d1, d2), rel=1e-8, abs=1e-14)
+
+
+@pytest.mark.parametrize("df", [1.0, 2.5, 4.0, 9.3, 30.0, 399.0, 401.0, 5000.0, 1e6])
+def test_t_quantile_matches_scipy(df):
+    assert dg.t_ppf(0.975, df) == pytest.approx(stats.t.ppf(0.975, df), rel=1e-7)
+
+
+def _nested(seed=0, runs=6, per_pass=15, k=3):
+    rng = np.random.default_rng(seed)
+    run = np.repeat(np.arange(runs), 2 * per_pass)
+    d = np.tile(np.repeat([1.0, -1.0], per_pass), runs)
+    n = run.shape[0]
+    x = np.column_stack([np.ones(n), d, rng.normal(size=(n, k - 2))])
+    groups = dg.make_groups(d, run)
+    y = x @ rng.normal(size=k) + rng.normal(0, 1.0, runs)[run] + rng.normal(0, 0.5, groups.passes)[
+        groups.pass_id] + rng.normal(0, 0.4, n)
+    return x, y, groups, run
+
+
+def _dense_v(groups, run, gp, gr):
+    zp = np.eye(groups.passes)[groups.pass_id]
+    zr = np.eye(groups.runs)[run]
+    return np.eye(run.shape[0]) + gp * zp @ zp.T + gr * zr @ zr.T
+
+
+@settings(max_examples=15, deadline=None)
+@given(gp=st.floats(0.0, 50.0), gr=st.floats(0.0, 50.0), seed=st.integers(0, 100))
+def test_gls_from_sufficient_statistics_equals_the_dense_inverse(gp, gr, seed):
+    x, y, groups, run = _nested(seed)
+    vinv = np.linalg.inv(_dense_v(groups, run, gp, gr))
+    A, b, c, ld = dg.Cross.build(x, y, groups).weighted([gp], [gr])
+    assert np.allclose(A[0], x.T @ vinv @ x, rtol=1e-9, atol=1e-9)
+    assert np.allclose(b[0], x.T @ vinv @ y, rtol=1e-9, atol=1e-9)
+    assert c[0] == pytest.approx(y @ vinv @ y, rel=1e-9)
+    assert ld[0] == pytest.approx(np.linalg.slogdet(_dense_v(groups, run, gp, gr))[1], rel=1e-9, abs=1e-9)
+
+
+def test_reml_matches_a_brute_force_optimum():
+    x, y, groups, run = _nested(3)
+    zp = np.eye(groups.passes)[groups.pass_id]
+    zr = np.eye(groups.runs)[run]
+
+    def neg2l(t):
+        s2, sp, sr = np.exp(t)
+        v = s2 * np.eye(y.shape[0]) + sp * zp @ zp.T + sr * zr @ zr.T
+        vi = np.linalg.inv(v)
+        a = x.T @ vi @ x
+        beta = np.linalg.solve(a, x.T @ vi @ y)
+        r = y - x @ beta
+        return np.linalg.slogdet(v)[1] + np.linalg.slogdet(a)[1] + r @ vi @ r
+
+    best = optimize.minimize(neg2l, np.log([0.2, 0.3, 1.0]), method="Nelder-Mead",
+                             options={"xatol": 1e-9, "fatol": 1e-12, "maxiter": 20000})
+    s2, sp, sr = np.sqrt(np.exp(best.x))
+    vf = dg.reml(dg.Cross.build(x, y, groups))
+    assert vf.s_white == pytest.approx(s2, rel=2e-3)
+    assert vf.s_pass == pytest.approx(sp, rel=2e-2)
+    assert vf.s_run == pytest.approx(sr, rel=2e-2)
+
+
+def test_satterthwaite_df_follow_the_level_a_column_varies_at():
+    # balanced one-level design: G groups of m rows; a group-level covariate has G - 2 df,
+    # a covariate varying only within groups about N - G - 1
+    rng = np.random.default_rng(7)
+    g_count, m = 12, 20
+    grp = np.repeat(np.arange(g_count), m)
+    groups = dg.make_groups(np.ones(grp.shape[0]), grp)
+    between = rng.normal(size=g_count)[grp]
+    within = rng.normal(size=grp.shape[0])
+    within -= (np.bincount(grp, within) / m)[grp]
+    x = np.column_stack([np.ones(grp.shape[0]), between, within])
+    y = 0.3 * between + rng.normal(0, 1.0, g_count)[grp] + rng.normal(0, 1.0, grp.shape[0])
+    cross = dg.Cross.build(x, y, groups)
+    vf = dg.reml(cross)
+    assert vf.gp > 0
+    assert dg.wald(cross, vf, [1]).df == pytest.approx(g_count - 2, abs=0.3)
+    assert dg.wald(cross, vf, [2]).df == pytest.approx(grp.shape[0] - g_count - 1, rel=0.05)
+    # containment df agree and cap
+    assert dg.containment_df(groups, x[:, :1], x[:, 1:2]) == g_count - 2
+    assert dg.containment_df(groups, x[:, :2], x[:, 2:3]) == grp.shape[0] - 3
+
+
+def test_wald_p_values_are_uniform_under_the_null():
+    # a between-run covariate with run-to-run noise: the Satterthwaite test keeps its level
+    rejections = 0
+    trials = 200
+    rng = np.random.default_rng(11)
+    runs, per = 6, 30
+    run = np.repeat(np.arange(runs), per)
+    groups = dg.make_groups(np.ones(run.shape[0]), run)
+    cov = np.linspace(-1, 1, runs)[run]
+    x = np.column_stack([np.ones(run.shape[0]), cov])
+    for _ in range(trials):
+        y = rng.normal(0, 1.0, runs)[run] + rng.normal(0, 1.0, run.shape[0])
+        cross = dg.Cross.build(x, y, groups)
+        rejections += dg.wald(cross, dg.reml(cross), [1], containment=dg.containment_df(groups, x[:, :1],
+                                                                                        x[:, 1:])).p < 0.05
+    # ordinary least squares would reject about 60 % here; the nominal 5 % allows 0..20 of 200
+    assert rejections <= 20
+
+
+def test_groups_with_and_without_a_run_column():
+    d = np.array([1, 1, -1, -1, 1, 1, -1, -1], dtype=float)
+    g = dg.make_groups(d, np.array([1, 1, 1, 1, 2, 2, 2, 2]))
+    assert (g.passes, g.runs, g.nested) == (4, 2, False)  # passes of 2 rows are too short for random effects
+    g = dg.make_groups(np.repeat(d, 3), np.repeat([1, 1, 1, 1, 2, 2, 2, 2], 3))
+    assert (g.passes, g.runs, g.nested, g.random) == (4, 2, True, True)
+    assert list(g.pass_run) == [0, 0, 1, 1]
+    g = dg.make_groups(np.repeat(d, 3), None)
+    assert (g.passes, g.runs, g.nested) == (4, 4, False)
+    assert list(g.pass_id[:7]) == [0, 0, 0, 0, 0, 0, 1]
+
+
+def test_cells_and_cell_level_columns():
+    theta = np.radians(np.tile([0.0, 10.0, 20.0], 4))
+    d = np.repeat([1.0, -1.0, 1.0, -1.0], 3)
+    cells = dg.make_cells(theta, d)
+    assert cells.cells == 6 and cells.replicated
+    assert dg.cell_level(np.sin(3 * theta) * d, cells)
+    assert not dg.cell_level(np.arange(12.0), cells)
+
+
+def test_lack_of_fit_counts_as_error_in_the_cell_means_test():
+    # a pattern repeated in every run at 12 targets, tested against an unrelated column
+    rng = np.random.default_rng(2)
+    targets = np.radians(np.sort(rng.uniform(0, 360, 12)))
+    theta = np.tile(targets, 10)
+    d = np.ones(theta.shape[0])
+    cells = dg.make_cells(theta, d)
+    pattern = 3.0 * np.sin(3 * theta)
+    resid = pattern + rng.normal(0, 0.1, theta.shape[0])
+    basis = np.ones((theta.shape[0], 1))
+    other = np.column_stack([np.cos(40 * theta), np.sin(40 * theta)])
+    F, df, p = dg.CellTester(cells, basis, resid).test(other)
+    assert df == 12 - 1 - 2 and p > 0.01
+    F3, _, p3 = dg.CellTester(cells, basis, resid).test(np.column_stack([np.cos(3 * theta), np.sin(3 * theta)]))
+    assert p3 < 1e-6
+
+
+def test_phase_fit_recovers_the_model_on_noise_free_data(mch50_spec):
+    from wormgear_cli.analysis import geometry
+    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.simulation import periodic_sources, simulate
+
+    rng = np.random.default_rng(4)
+    theta = np.radians(np.tile(np.sort(rng.uniform(0, 360, 40)), 4))
+    d = np.repeat([1.0, -1.0, 1.0, -1.0], 40)
+    sig = Signals.make(theta, d)
+    truth = {s.name: float(rng.uniform(0, 2 * np.pi)) for s in periodic_sources(mch50_spec)}
+    y = simulate(mch50_spec, sig, truth) / dg.ARCSEC + 2.0
+    sources, _ = dg.phase_sources(mch50_spec, geometry(mch50_spec), sig)
+    base = simulate(mch50_spec, sig) / dg.ARCSEC - dg._src_total(sources, sig, [s.phase for s in sources])
+    groups = dg.make_groups(d, np.repeat([1, 1, 2, 2], 40))
+    fit = dg.fit_model(y, sig, groups, base, sources, [s.phase for s in sources], np.ones((y.shape[0], 1)))
+    assert np.max(np.abs(fit.residual)) < 1e-4
+    assert fit.offset == pytest.approx(2.0, abs=1e-5)
+    # single sources on their shaft come back exactly (mod 2 pi); shafts with several only as a sum
+    by_name = dict(zip([s.name for s in sources], fit.psi))
+    gear = by_name["gear_eccentricity"] - truth["gear_eccentricity"]
+    assert math.isclose(math.cos(gear), 1.0, abs_tol=1e-6)
+
+
+def test_candidate_columns_recognise_the_three_signature_forms(mch50_spec):
+    from wormgear_cli.analysis import geometry
+    from wormgear_cli.models.effects import Signals
+
+    sig = Signals(np.linspace(0, 6, 50), np.ones(50), np.linspace(-100, 100, 50), np.linspace(20, 30, 50),
+                  np.zeros(50))
+    g = geometry(mch50_spec)
+    assert dg.candidate("gear_mesh_error", sig, g).kind == "periodic"
+    assert dg.candidate("torsional_compliance", sig, g).kind == "reciprocal"
+    assert dg.candidate("thermal_drift", sig, g).kind == "linear"
+    c = dg.candidate("output_gear_runout", sig, g)
+    params = dg.candidate_params(c, np.array([0.003, 0.004]))
+    assert params["eccentricity"] == pytest.approx(0.005) and params["phase"] == pytest.approx(math.atan2(4, 3))
