@@ -204,8 +204,8 @@ def analyze(spec) -> Analysis:
     defl = deflections(spec)
 
     # --- gear stage -------------------------------------------------------------
-    _, phi_star = gear.gear_te_max(r_pinion, r_gear, de, alpha, defl.gear)
-    te_kin_only, _ = gear.gear_te_max(r_pinion, r_gear, de, alpha, 0.0)
+    _, phi_star = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, defl.gear)
+    te_kin_only, _ = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, 0.0)
     te_kin_part = gear.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
     te_def_part = gear.gear_deformation_te(phi_star, r_pinion, r_gear, de, alpha, defl.gear)
     te_max = te_kin_part + te_def_part
