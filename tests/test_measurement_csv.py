@@ -129,3 +129,24 @@ def test_unterminated_quote_is_a_data_error():
     with pytest.raises(DataError) as exc:
         parse_measurement('angle_deg,error_arcsec\n0,1\n10,"2\n', "q.csv")
     assert exc.value.problems[0].startswith("q.csv:3: unreadable CSV line")
+
+
+@pytest.mark.parametrize("cell, column, message", [
+    ("1_0", "run", "expected a number, got '1_0'"),
+    ("99999999999999999999999", "run", "expected a number in [-1e+09, 1e+09], got '99999999999999999999999'"),
+    ("1e6", "temperature_C", "expected a number in [-100, 300], got '1e6'"),
+    ("1e300", "error_arcsec", "expected a number in [-1e+07, 1e+07], got '1e300'"),
+    ("\uff11", "error_arcsec", "expected a number, got '\uff11'"),
+])
+def test_implausible_or_exotic_numbers_are_rejected_with_line_and_column(tmp_path, cell, column, message):
+    from wormgear_cli.errors import DataError
+    from wormgear_cli.measurement import read_measurement
+
+    cols = ["angle_deg", "error_arcsec", "run", "temperature_C"]
+    row = {"angle_deg": "0", "error_arcsec": "1", "run": "1", "temperature_C": "20"}
+    row[column] = cell
+    path = tmp_path / "m.csv"
+    path.write_text(",".join(cols) + "\n" + ",".join(row[c] for c in cols) + "\n10,2,1,20\n", encoding="utf-8")
+    with pytest.raises(DataError) as info:
+        read_measurement(path)
+    assert info.value.problems == [f"{path}:2: column {column}: {message}"]

@@ -101,6 +101,8 @@ def test_spec_is_immutable(mch50_spec):
         (("assembly", "worm_pair_errors_mm", [0.01, 0.02]),
          "d.toml: assembly.worm_pair_errors_mm: expected an array of 6 numbers >= 0 [mm], got 2 values"),
         ((None, "gearpair", {}), "d.toml: gearpair: unknown table (did you mean gear_pair?)"),
+        (("drive", "name", "MCH50\nrev B"),
+         'd.toml: drive.name: expected a single-line name without control characters, got "MCH50\\nrev B"'),
         (("assembly", "worm_phase_deg", 10.0),
          "d.toml: assembly.worm_phase_deg: unknown key (did you mean assembly.worm_eccentricity_phase_deg?)"),
         (("effects", "thermal_backlsh", {"centre_distance_um_per_K": 1.0}),

@@ -86,8 +86,29 @@ def _split_lines(text: str) -> list[str]:
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
 
 
+#: plausible range of each numeric column (inclusive); a value outside is a data error
+RANGES = {
+    "angle_deg": (-3.6e6, 3.6e6),  # 10 000 turns either way
+    "error_arcsec": (-1e7, 1e7),
+    "direction": (-1.0, 1.0),
+    "run": (-1e9, 1e9),
+    "load_Nm": (-1e9, 1e9),
+    "temperature_C": (-100.0, 300.0),
+    "time_s": (-1e10, 1e10),
+}
+
+
 def _column(name: str, col: str, cells: list[str], line_numbers: list[int]) -> np.ndarray:
-    """Cells of one column as floats; DataError naming the first bad cell."""
+    """Cells of one column as floats; DataError naming the first bad cell.
+
+    Numbers are plain ASCII decimal or exponent notation (no digit separators,
+    no other scripts' digits), finite, and within the column's :data:`RANGES`."""
+    joined = "".join(cells)
+    if "_" in joined or not joined.isascii():
+        for k, cell in enumerate(cells):
+            if "_" in cell or not cell.isascii():
+                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
+                                f"{cell.strip()!r}")
     try:
         arr = np.asarray(cells, dtype=float)
     except ValueError:
@@ -102,6 +123,12 @@ def _column(name: str, col: str, cells: list[str], line_numbers: list[int]) -> n
     if bad.size:
         k = int(bad[0])
         raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a finite number, got "
+                        f"{cells[k].strip()!r}")
+    lo, hi = RANGES[col]
+    bad = np.flatnonzero((arr < lo) | (arr > hi))
+    if bad.size:
+        k = int(bad[0])
+        raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number in [{lo:g}, {hi:g}], got "
                         f"{cells[k].strip()!r}")
     return arr
 

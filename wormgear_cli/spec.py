@@ -422,6 +422,8 @@ def _check_value(f: Field, raw) -> tuple[str | None, Any]:
     if f.kind == "str":
         if not isinstance(raw, str):
             return f"expected {f.expected()}, got {_type_name(raw)}", None
+        if f.path == "drive.name" and not raw.isprintable():
+            return f"expected a single-line name without control characters, got {_quote(raw)}", None
         if f.choices and raw not in f.choices:
             near = difflib.get_close_matches(raw, f.choices, n=1)
             hint = f' (did you mean "{near[0]}"?)' if near else ""

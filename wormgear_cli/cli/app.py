@@ -16,8 +16,18 @@ class WormgearGroup(TyperGroup):
     """Runs a command; a user mistake becomes messages + exit code, never a traceback."""
 
     def invoke(self, ctx):
+        from wormgear_cli.io import output_transaction
+
         try:
-            return super().invoke(ctx)
+            # every file a command writes is committed together at its end: a failed
+            # run (user error, bug, Ctrl-C) leaves no output; a clean exit (also
+            # exit code 1 of a failed check) writes them
+            with output_transaction() as tx:
+                try:
+                    return super().invoke(ctx)
+                except typer.Exit:
+                    tx.commit()
+                    raise
         except WormgearError as exc:
             for line in exc.problems:
                 typer.echo(f"error: {line}", err=True)

@@ -112,18 +112,29 @@ def use_color() -> bool:
     return "NO_COLOR" not in os.environ and sys.stdout.isatty()
 
 
+def text_width() -> int:
+    """Width for tables written to a file or a pipe: $COLUMNS when it is a sane
+    number (40..1000), else 100."""
+    try:
+        width = int(os.environ.get("COLUMNS", "100"))
+    except ValueError:
+        return 100
+    return width if 40 <= width <= 1000 else 100
+
+
 def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
     """Draw rich renderables to stdout (colour only on a terminal without
     NO_COLOR) or, as plain text, to ``output``."""
     from rich.console import Console
 
     if output is None and sys.stdout.isatty():
-        console = Console(no_color="NO_COLOR" in os.environ, highlight=False)
+        console = Console(no_color="NO_COLOR" in os.environ, highlight=False,
+                          width=text_width() if "COLUMNS" in os.environ else None)
         for r in renderables:
             console.print(r)
         return
     buf = io.StringIO()
-    console = Console(file=buf, width=int(os.environ.get("COLUMNS", 100)), no_color=True, color_system=None,
+    console = Console(file=buf, width=text_width(), no_color=True, color_system=None,
                       highlight=False, force_terminal=False, soft_wrap=False)
     for r in renderables:
         console.print(r)
