@@ -308,3 +308,12 @@ def test_help_has_an_example(runner):
     result = runner.invoke(app, ["measure", "--help"])
     assert result.exit_code == 0
     assert "Example: wormgear measure" in result.stdout
+
+
+def test_absurd_orders_are_refused(runner):
+    from conftest import CONFIGS
+
+    r = runner.invoke(app, ["measure", str(CONFIGS / "mch50-warm.csv"), "--orders", "1,1e9"])
+    assert r.exit_code == 2
+    assert r.stderr == ("error: --orders: 1e9 is above 100000 cycles per revolution, finer than angle "
+                        "readings resolve\n")

@@ -32,6 +32,10 @@ DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, 
                                               "run, load_Nm, temperature_C, time_s).", show_default=False)]
 
 
+#: largest order accepted by --orders: beyond it, 1/1000 deg of angle error is a sizeable phase error
+MAX_ORDER = 100_000.0
+
+
 def parse_orders(text: str) -> list[float]:
     """``"1,8,240.5"`` -> [1.0, 8.0, 240.5]; UsageError unless every item is a finite number > 0."""
     from wormgear_cli.errors import UsageError
@@ -45,6 +49,9 @@ def parse_orders(text: str) -> list[float]:
             value = math.nan
         if not math.isfinite(value) or value <= 0:
             raise UsageError(f"--orders: expected positive numbers separated by commas, got {item!r}")
+        if value > MAX_ORDER:
+            raise UsageError(f"--orders: {item} is above {MAX_ORDER:g} cycles per revolution, finer than "
+                             "angle readings resolve")
         if value not in out:
             out.append(value)
     return out
