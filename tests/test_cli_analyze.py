@@ -114,7 +114,7 @@ def test_bad_input_exits_2_without_traceback(runner, tmp_path):
     result = runner.invoke(app, ["analyze", str(bad)])
     assert result.exit_code == 2
     assert "Traceback" not in result.stderr and result.stdout == ""
-    assert f"error: {bad}: gear_pair.module_mm: expected a number > 0 [mm], got -2" in result.stderr.splitlines()
+    assert f"error: {bad}: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got -2" in result.stderr.splitlines()
     result = runner.invoke(app, ["analyze", str(tmp_path / "missing.toml")])
     assert (result.exit_code, result.stderr) == (2, f"error: {tmp_path / 'missing.toml'}: file not found\n")
 
@@ -150,7 +150,7 @@ def test_check_passes_fails_and_rejects(runner, tmp_path):
     assert r.stdout.splitlines() == [f"{ok}: ok (1 requirement met)", line]
     r = runner.invoke(app, ["check", str(ok), str(tight), str(bad)])
     assert r.exit_code == 2
-    assert f"error: {bad}: gear_pair.module_mm: missing required key, expected a number > 0 [mm]" in r.stderr
+    assert f"error: {bad}: gear_pair.module_mm: missing required key, expected a number in [0.05, 100] [mm]" in r.stderr
 
 
 def test_check_json(runner, tmp_path):
@@ -214,3 +214,39 @@ def test_no_colour_in_a_pipe_even_with_a_terminal_type():
     r = subprocess.run([sys.executable, "-m", "wormgear_cli", "analyze", str(MCH50)], capture_output=True,
                        text=True, env=env, check=False)
     assert r.returncode == 0 and "\x1b[" not in r.stdout
+
+
+def test_spec_with_a_byte_order_mark_loads(runner, tmp_path):
+    bom = tmp_path / "bom.toml"
+    bom.write_bytes(b"\xef\xbb\xbf" + MCH50.read_bytes())
+    assert run_json(runner, "analyze", str(bom), "-f", "json")["drive"] == "MCH50 rotary table"
+
+
+def test_new_escapes_the_name_and_refuses_a_dangling_symlink(runner, tmp_path):
+    path = tmp_path / "q.toml"
+    r = runner.invoke(app, ["new", str(path), "--name", 'Table "A" \\ 2'])
+    assert r.exit_code == 0
+    assert run_json(runner, "analyze", str(path), "-f", "json")["drive"] == 'Table "A" \\ 2'
+    link = tmp_path / "link.toml"
+    link.symlink_to(tmp_path / "missing.toml")
+    r = runner.invoke(app, ["new", str(link)])
+    assert r.exit_code == 2 and link.is_symlink()
+
+
+def test_check_echoes_the_limit_as_written(runner):
+    r = runner.invoke(app, ["check", str(MCH50), "-f", "json"])
+    limits = {q["key"]: q["limit_arcsec"] for q in json.loads(r.stdout)["files"][0]["requirements"]}
+    assert limits == {"requirements.max_transmission_error_arcsec": 72.0, "requirements.max_backlash_arcsec": 252.0}
+
+
+def test_load_share_is_undefined_without_eccentricity(runner, tmp_path):
+    text = MCH50.read_text().replace("gear_centre_distance_error_mm = 0.030", "gear_centre_distance_error_mm = 0.0")
+    drive = tmp_path / "no-ecc.toml"
+    drive.write_text(text)
+    doc = run_json(runner, "analyze", str(drive), "-f", "json")
+    assert doc["stages"]["gear"]["load_share_pct"] is None
+    assert doc["stages"]["gear"]["transmission_error"] > 0  # all of it from the load
+    table = runner.invoke(app, ["analyze", str(drive)]).stdout
+    assert "load adds n/a (no eccentric part)" in table
+    row = next(csv.DictReader(io.StringIO(runner.invoke(app, ["analyze", str(drive), "-f", "csv"]).stdout)))
+    assert row["gear_load_share_pct"] == ""

@@ -84,23 +84,31 @@ def test_spec_is_immutable(mch50_spec):
     [
         (("gear_pair", "modul_mm", 2.5), "d.toml: gear_pair.modul_mm: unknown key (did you mean gear_pair.module_mm?)"),
         (("gear_pair.output_gear", "teeth", 18.5),
-         "d.toml: gear_pair.output_gear.teeth: expected an integer >= 1, got 18.5 (not a whole number)"),
-        (("gear_pair.output_gear", "teeth", 0), "d.toml: gear_pair.output_gear.teeth: expected an integer >= 1, got 0"),
-        (("gear_pair.pinion", "teeth", -3), "d.toml: gear_pair.pinion.teeth: expected an integer >= 1, got -3"),
+         "d.toml: gear_pair.output_gear.teeth: expected an integer in [1, 10000], got 18.5 (not a whole number)"),
+        (("gear_pair.output_gear", "teeth", 0), "d.toml: gear_pair.output_gear.teeth: expected an integer in [1, 10000], got 0"),
+        (("gear_pair.pinion", "teeth", -3), "d.toml: gear_pair.pinion.teeth: expected an integer in [1, 10000], got -3"),
         (("gear_pair", "pressure_angle_deg", 95.0),
-         "d.toml: gear_pair.pressure_angle_deg: expected a number in (0, 45) [deg], got 95.0"),
+         "d.toml: gear_pair.pressure_angle_deg: expected a number in [1, 45) [deg], got 95.0"),
         (("worm_pair", "lead_angle_deg", 0),
-         "d.toml: worm_pair.lead_angle_deg: expected a number in (0, 45) [deg], got 0"),
-        (("worm_pair", "lead_error_mm", -0.01), "d.toml: worm_pair.lead_error_mm: expected a number >= 0 [mm], got -0.01"),
-        (("gear_pair", "module_mm", "2.5"), 'd.toml: gear_pair.module_mm: expected a number > 0 [mm], got "2.5"'),
-        (("gear_pair", "module_mm", True), "d.toml: gear_pair.module_mm: expected a number > 0 [mm], got a boolean"),
-        (("gear_pair", "module_mm", float("nan")), "d.toml: gear_pair.module_mm: expected a number > 0 [mm], got nan"),
-        (("gear_pair", "module_mm", float("inf")), "d.toml: gear_pair.module_mm: expected a number > 0 [mm], got inf"),
+         "d.toml: worm_pair.lead_angle_deg: expected a number in [0.1, 45) [deg], got 0"),
+        (("worm_pair", "lead_error_mm", -0.01), "d.toml: worm_pair.lead_error_mm: expected a number in [0, 10] [mm], got -0.01"),
+        (("gear_pair", "module_mm", "2.5"), 'd.toml: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got "2.5"'),
+        (("gear_pair", "module_mm", True), "d.toml: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got a boolean"),
+        (("gear_pair", "module_mm", float("nan")), "d.toml: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got nan"),
+        (("gear_pair", "module_mm", float("inf")), "d.toml: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got inf"),
         (("stiffness", "model", "iso6663"),
          'd.toml: stiffness.model: expected one of "iso6336", "empirical", got "iso6663" (did you mean "iso6336"?)'),
         (("assembly", "worm_pair_errors_mm", [0.01, 0.02]),
-         "d.toml: assembly.worm_pair_errors_mm: expected an array of 6 numbers >= 0 [mm], got 2 values"),
+         "d.toml: assembly.worm_pair_errors_mm: expected an array of 6 numbers in [0, 10] [mm], got 2 values"),
         ((None, "gearpair", {}), "d.toml: gearpair: unknown table (did you mean gear_pair?)"),
+        (("gear_pair", "module_mm", 10**400),
+         "d.toml: gear_pair.module_mm: expected a number in [0.05, 100] [mm], got an integer of 401 digits"),
+        (("gear_pair.output_gear", "teeth", 10**6),
+         "d.toml: gear_pair.output_gear.teeth: expected an integer in [1, 10000], got 1000000"),
+        (("worm_pair", "lead_error_mm", 1e155), "d.toml: worm_pair.lead_error_mm: expected a number in [0, 10] [mm], got 1e+155"),
+        (("stiffness", "model", "ISO6336"),
+         'd.toml: stiffness.model: expected one of "iso6336", "empirical", got "ISO6336" (did you mean "iso6336"?)'),
+        (("assembly", "gear_eccentricity_mm", {"a": 1}), "d.toml: assembly.gear_eccentricity_mm: expected a value, got a table"),
         (("drive", "name", "MCH50\nrev B"),
          'd.toml: drive.name: expected a single-line name without control characters, got "MCH50\\nrev B"'),
         (("assembly", "worm_phase_deg", 10.0),
@@ -129,7 +137,7 @@ def test_missing_required_key_and_section():
     del data["worm_pair"]["wheel"]
     assert problems_of(data) == [
         "d.toml: worm_pair.wheel: missing section [worm_pair.wheel]",
-        "d.toml: gear_pair.module_mm: missing required key, expected a number > 0 [mm]",
+        "d.toml: gear_pair.module_mm: missing required key, expected a number in [0.05, 100] [mm]",
     ]
 
 
@@ -185,7 +193,7 @@ def test_with_values_revalidates(mch50_spec):
     s = with_values(mch50_spec, {"worm_pair.lead_error_mm": 0.05})
     assert s.worm_pair.lead_error == 0.05
     assert mch50_spec.worm_pair.lead_error == 0.030  # the original is untouched
-    with pytest.raises(SpecError, match="worm_pair.lead_error_mm: expected a number >= 0"):
+    with pytest.raises(SpecError, match=r"worm_pair.lead_error_mm: expected a number in \[0, 10\]"):
         with_values(mch50_spec, {"worm_pair.lead_error_mm": -1.0})
 
 

@@ -124,7 +124,7 @@ class Analysis:
     def metrics(self, unit: str) -> dict:
         """Flat ``column -> value`` (angles in ``unit``) for CSV and sweeps."""
         out = {c: float(to_unit(self.angles[c], unit)) for c in METRIC_COLUMNS}
-        out.update({c: float(self.info[c]) for c in INFO_COLUMNS})
+        out.update({c: (None if self.info[c] is None else float(self.info[c])) for c in INFO_COLUMNS})
         return out
 
     def report(self, unit: str) -> dict:
@@ -257,8 +257,9 @@ def analyze(spec) -> Analysis:
         "deflection_model": defl.model,
         "gear_te_phi_deg": float(np.degrees(phi_star)),
         # the paper's "load adds ~0.11 %": increase of the maximum caused by the deflection
-        "gear_load_share_pct": (float(100.0 * (te_max - te_kin_only) / te_kin_only)
-                                if te_kin_only > 0 and defl.gear > 0 else 0.0),
+        # (undefined, None, when there is no eccentric part to increase: Delta e = 0)
+        "gear_load_share_pct": (float(100.0 * (te_max - te_kin_only) / te_kin_only) if te_kin_only > 0 and defl.gear > 0
+                                else (0.0 if defl.gear == 0 else None)),
         "gear_deflection_um": float(defl.gear * 1e3),
         "worm_deflection_um": float(defl.worm * 1e3),
         "gear_te_share_pct": _pct(te_max, total_te),

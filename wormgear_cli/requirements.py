@@ -37,6 +37,8 @@ def evaluate(spec, analysis) -> list[Verdict]:
         limit = getattr(spec.requirements, attr)
         if limit is None:
             continue
-        out.append(Verdict(f"requirements.{attr}_arcsec", float(to_unit(limit, "arcsec")),
-                           float(to_unit(analysis.angles[metric], "arcsec"))))
+        key = f"{attr}_arcsec"
+        written = spec.raw.get("requirements", {}).get(key)  # echo the limit exactly as the user wrote it
+        limit_arcsec = float(written) if written is not None else float(to_unit(limit, "arcsec"))
+        out.append(Verdict(f"requirements.{key}", limit_arcsec, float(to_unit(analysis.angles[metric], "arcsec"))))
     return out

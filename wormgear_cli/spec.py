@@ -108,11 +108,21 @@ def _f(path, attr, unit, default, doc, lo=None, hi=None, lo_open=False, hi_open=
 
 
 def _teeth(path, attr, doc, table1, lo=1):
-    return Field(path, attr, "int", "-", None, doc, lo, None, False, False, table1)
+    return Field(path, attr, "int", "-", None, doc, lo, 10000, False, False, table1)
 
 
 def _tol(path, attr, doc, table1="", default=0.0):
-    return _f(path, attr, "mm", default, doc, lo=0.0, table1=table1)
+    return _f(path, attr, "mm", default, doc, **TOLERANCE, table1=table1)
+
+
+# Physical ranges shared by several keys (in the keys' units).  Upper bounds keep the
+# models finite and catch unit mistakes (a tolerance of 30 mm was meant as 30 um).
+MODULE = dict(lo=0.05, hi=100.0)  # [mm]
+PRESSURE_ANGLE = dict(lo=1.0, hi=45.0, hi_open=True)  # [deg]
+FACE_WIDTH = dict(lo=0.1, hi=5000.0)  # [mm]
+TOLERANCE = dict(lo=0.0, hi=10.0)  # [mm]
+FORCE = dict(lo=0.0, hi=1e8)  # [N]
+FACTOR = dict(lo=0.01, hi=10.0)  # ISO 6336 correction factors [-]
 
 
 def _phase(path, attr, doc):
@@ -124,11 +134,11 @@ FIELDS: tuple[Field, ...] = (
     Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
     Field("drive.description", "description", "str", "", "", "free text"),
     # --- stage 2: spur gear pair -------------------------------------------------
-    _f("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", lo=0.0, lo_open=True, table1="2.5"),
-    _f("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", lo=0.0, hi=45.0,
-       lo_open=True, hi_open=True, table1="20"),
+    _f("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", **MODULE, table1="2.5"),
+    _f("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", **PRESSURE_ANGLE,
+       table1="20"),
     _f("gear_pair.face_width_mm", "face_width", "mm", "derived",
-       "face width b of the spur mesh (default: 10 x module)", lo=0.0, lo_open=True),
+       "face width b of the spur mesh (default: 10 x module)", **FACE_WIDTH),
     _teeth("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
     _tol("gear_pair.output_gear.profile_error_mm", "profile_error",
          "profile error of gear 1 (not used by the paper's gear-stage equations)", "0.007"),
@@ -140,20 +150,20 @@ FIELDS: tuple[Field, ...] = (
     _tol("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
          "tooth thickness deviation of gear 2 (not used by the paper's gear-stage equations)", "0.045"),
     # --- stage 1: worm pair ------------------------------------------------------
-    _f("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", lo=0.0,
-       lo_open=True, table1="2.5"),
+    _f("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", **MODULE,
+       table1="2.5"),
     _f("worm_pair.normal_pressure_angle_deg", "normal_pressure_angle", "deg", None, "normal pressure angle alpha_n",
-       lo=0.0, hi=45.0, lo_open=True, hi_open=True, table1="20"),
-    _f("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.0, hi=45.0,
-       lo_open=True, hi_open=True, table1="3.178"),
+       **PRESSURE_ANGLE, table1="20"),
+    _f("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.1, hi=45.0,
+       hi_open=True, table1="3.178"),
     _f("worm_pair.transverse_pressure_angle_deg", "transverse_pressure_angle", "deg", "derived",
        "wheel transverse pressure angle alpha_2 (default: atan(tan alpha_n / cos lambda), DIN 3975)",
-       lo=0.0, hi=45.0, lo_open=True, hi_open=True),
+       **PRESSURE_ANGLE),
     _f("worm_pair.face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
-       lo=0.0, lo_open=True),
+       **FACE_WIDTH),
     _tol("worm_pair.lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
     _phase("worm_pair.lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
-    Field("worm_pair.worm.starts", "starts", "int", "-", None, "number of worm starts (threads)", 1, None,
+    Field("worm_pair.worm.starts", "starts", "int", "-", None, "number of worm starts (threads)", 1, 100,
           table1="1"),
     _tol("worm_pair.worm.profile_error_mm", "profile_error", "worm profile error f_t1", "0.036"),
     _tol("worm_pair.worm.thickness_deviation_mm", "thickness_deviation", "worm thickness deviation T_s1", "0.045"),
@@ -169,7 +179,7 @@ FIELDS: tuple[Field, ...] = (
     _tol("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
          "centre-distance error of the spur pair", "0.030"),
     _f("assembly.gear_eccentricity_mm", "gear_eccentricity", "mm", "derived",
-       "the paper's Delta e (default: gear_centre_distance_error_mm)", lo=0.0),
+       "the paper's Delta e (default: gear_centre_distance_error_mm)", **TOLERANCE),
     _phase("assembly.gear_eccentricity_phase_deg", "gear_eccentricity_phase",
            "phase of Delta e (once per pinion turn)"),
     _tol("assembly.worm_centre_distance_error_mm", "worm_centre_distance_error",
@@ -182,27 +192,27 @@ FIELDS: tuple[Field, ...] = (
     _tol("assembly.wheel_bearing_clearance_mm", "wheel_bearing_clearance", "wheel bearing clearance C2"),
     Field("assembly.worm_pair_errors_mm", "worm_pair_errors", "floats", "mm", (0.0,) * 6,
           "the paper's six e_i of the worm pair (shaft-position and alignment errors entering Delta j)",
-          0.0, None, length=6),
+          0.0, 10.0, length=6),
     # --- loads -------------------------------------------------------------------
-    _f("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", lo=0.0,
+    _f("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", **FORCE,
        table1="666 (text)"),
-    _f("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", lo=0.0,
+    _f("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", **FORCE,
        table1="85 (text)"),
     # --- stiffness (deformation model) -------------------------------------------
     Field("stiffness.model", "model", "str", "", "iso6336",
           "deflection model: iso6336 (ISO 6336-1 c') or empirical (the paper's form)",
           choices=tuple(DEFORMATION_MODELS)),
-    _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", lo=0.0, lo_open=True),
-    _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", lo=0.0, lo_open=True),
-    _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", lo=0.0, lo_open=True),
+    _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", **FACTOR),
+    _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", **FACTOR),
+    _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", **FACTOR),
     _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (see README for the calibration)",
-       lo=0.0),
+       lo=0.0, hi=1000.0),
     _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
     _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
     _f("stiffness.contact_ratio", "contact_ratio", "-", "derived",
        "contact ratio eps of the empirical form (default: standard spur eps_alpha)", lo=1.0, hi=3.0),
     _f("stiffness.empirical_lambda2", "empirical_lambda2", "-", 0.0, "the paper's lambda2 (undefined there)",
-       lo=0.0),
+       lo=0.0, hi=100.0),
     # --- materials ---------------------------------------------------------------
     _f("materials.gear_elastic_modulus_GPa", "gear_elastic_modulus", "GPa", 206.0,
        "Young's modulus E of the spur gears (steel)", lo=1.0, hi=1000.0),
@@ -218,7 +228,8 @@ FIELDS: tuple[Field, ...] = (
        "thermal expansion of the housing (grey cast iron 10.5)", lo=-5.0, hi=50.0),
     # --- requirements (all optional) ---------------------------------------------
     *(
-        _f(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, lo_open=True)
+        _f(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, hi=1e9,
+           lo_open=True)
         for name, what in (
             ("transmission_error", "the total transmission error at the output"),
             ("backlash", "the total backlash at the output"),
@@ -321,7 +332,7 @@ def load_spec(path: str | Path) -> Spec:
 
     path = Path(path)
     name = str(path)
-    text = read_text_file(path, "a TOML drive file", SpecError)
+    text = read_text_file(path, "a TOML drive file", SpecError, encoding="utf-8-sig")  # a BOM is tolerated
     if not text.strip():
         raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
     return loads_spec(text, name, default_name=path.stem)
@@ -374,6 +385,9 @@ def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "driv
             values[f.path] = _MISSING
             continue
         raw = parent[f.key]
+        if isinstance(raw, dict):  # reported once, by _walk_unknown ("expected a value, got a table")
+            values[f.path] = _MISSING
+            continue
         err, val = _check_value(f, raw)
         if err:
             bad(f.path, err)
@@ -425,7 +439,8 @@ def _check_value(f: Field, raw) -> tuple[str | None, Any]:
         if f.path == "drive.name" and not raw.isprintable():
             return f"expected a single-line name without control characters, got {_quote(raw)}", None
         if f.choices and raw not in f.choices:
-            near = difflib.get_close_matches(raw, f.choices, n=1)
+            lowered = {c.lower(): c for c in f.choices}
+            near = [lowered[m] for m in difflib.get_close_matches(raw.lower(), list(lowered), n=1)]
             hint = f' (did you mean "{near[0]}"?)' if near else ""
             return f"expected {f.expected()}, got {_quote(raw)}{hint}", None
         return None, raw
@@ -460,6 +475,8 @@ def _number_problem(f: Field, raw) -> str | None:
             return f"expected {f.expected()}, got {raw!r} (not a whole number)"
     if isinstance(raw, float) and not math.isfinite(raw):
         return f"expected {f.expected()}, got {raw!r}"
+    if isinstance(raw, int) and abs(raw) > 1e300:
+        return f"expected {f.expected()}, got an integer of {len(str(abs(raw)))} digits"
     v = float(raw)
     if f.lo is not None and (v < f.lo or (f.lo_open and v == f.lo)):
         return f"expected {f.expected()}, got {raw!r}"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 from wormgear_cli.spec import FIELDS, Field
 
 
@@ -51,7 +53,7 @@ def template(name: str = "my drive") -> str:
         t1 = f"; Table 1: {f.table1}" if f.table1 else ""
         lines.append(f"# {f.doc}. {f.expected()}; {dflt}{t1}")
         if f.path == "drive.name":
-            lines.append(f'name = "{name}"')
+            lines.append(f"name = {json.dumps(name, ensure_ascii=False)}")  # a TOML basic string, escaped
         elif f.default == "derived" and not f.table1:
             lines.append(f"# {f.key} = ")
         elif f.section == "requirements":

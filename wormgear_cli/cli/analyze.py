@@ -69,8 +69,9 @@ def _tables(r: dict, unit: str) -> list:
                f"{g['contribution']['transmission_error_pct']:.1f} %")
     gt.add_row("backlash", a(g["backlash_parts"]["eccentricity"]), a(g["backlash_parts"]["deformation"]),
                a(g["backlash"]), f"{g['contribution']['backlash_pct']:.1f} %")
+    share = "n/a (no eccentric part)" if g["load_share_pct"] is None else f"{g['load_share_pct']:.2f} %"
     gear_note = escape(f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
-                  f"{g['load_share_pct']:.2f} % to it (delta1 = {g['deflection_um']:.3f} um, "
+                  f"{share} to it (delta1 = {g['deflection_um']:.3f} um, "
                   f"{r['deflection_model']})")
     out += [gt, gear_note]
     wt = Table(title=escape(f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]"),
@@ -173,7 +174,9 @@ def new(
     from wormgear_cli.io import atomic_write
     from wormgear_cli.template import template
 
-    if path.exists():
+    if path.exists() or path.is_symlink():
         raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
+    if name is not None and not name.isprintable():
+        raise UsageError("--name: expected a single-line name without control characters")
     atomic_write(path, template(name or path.stem))
     typer.echo(f"wrote {path}; edit it, then run: wormgear check {path}", err=True)

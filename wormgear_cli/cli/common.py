@@ -84,7 +84,9 @@ def _clean(obj):
 
 
 def fmt_number(x) -> str:
-    """CSV number: shortest repr that round-trips; integers as integers."""
+    """CSV number: shortest repr that round-trips; integers as integers; None (undefined) empty."""
+    if x is None:
+        return ""
     if isinstance(x, bool):
         return str(int(x))
     if isinstance(x, int):
@@ -138,7 +140,8 @@ def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> 
                       highlight=False, force_terminal=False, soft_wrap=False)
     for r in renderables:
         console.print(r)
-    emit(buf.getvalue(), output, inputs)
+    text = "\n".join(line.rstrip() for line in buf.getvalue().splitlines()) + "\n"  # no padding spaces
+    emit(text, output, inputs)
 
 
 def stderr_is_terminal() -> bool:
