@@ -48,16 +48,18 @@ class AngleUnit(str, Enum):
 
 
 FormatOption = Annotated[TableFormat, typer.Option("--format", "-f", help="Output format.", case_sensitive=False)]
-UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of every angle in the output.",
+UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the angular errors in the "
+                                               "output (positions such as target angles stay in deg).",
                                                case_sensitive=False)]
 OutputOption = Annotated[Optional[Path], typer.Option("--output", "-o", help="Write the result to FILE "
-                                                      "(atomically) instead of stdout.", dir_okay=False)]
+                                                      "(atomically) instead of stdout; - is stdout.",
+                                                      dir_okay=False)]
 DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False)]
 
 
 def emit(text: str, output: Optional[Path], inputs: Iterable = ()) -> None:
-    """Send a result to stdout, or atomically to ``output``."""
-    if output is None:
+    """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``."""
+    if output is None or str(output) == "-":
         sys.stdout.write(text)
         sys.stdout.flush()
         return
