@@ -302,3 +302,11 @@ def test_output_files_must_differ_and_not_be_the_drive(runner, tmp_path):
 def test_help_has_example(runner):
     res = runner.invoke(app, ["synth", "--help"])
     assert res.exit_code == 0 and "Example: wormgear synth" in res.stdout
+
+
+def test_effect_key_given_twice_is_refused():
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.synth import parse_effect
+
+    with pytest.raises(UsageError, match=r"bearing_clearance.clearance_arcsec is given twice"):
+        parse_effect("bearing_clearance:clearance_arcsec=1,clearance_arcsec=2")

@@ -240,6 +240,8 @@ def parse_effect(text: str, option: str = "--effect") -> tuple[str, dict]:
             near = difflib.get_close_matches(key, keys, n=1)
             hint = f" (did you mean {near[0]}?)" if near else f" (valid: {', '.join(keys)})"
             raise UsageError(f"{option}: {name}: unknown key {key!r}{hint}")
+        if key in values:
+            raise UsageError(f"{option}: {name}.{key} is given twice in {text!r}")
         try:
             values[key] = float(value)
         except ValueError:
