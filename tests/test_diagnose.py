@@ -47,10 +47,11 @@ def test_demo_names_thermal_backlash_and_the_gap_shrinks(demo_json):
     assert doc["gap_after"]["differential_rms_arcsec"] < 0.5 * doc["gap_before"]["differential_rms_arcsec"]
     # the materials predict the coefficient the demo was made with (synth's default): inside the interval
     assert found["prediction"]["inside_interval"] is True
-    # the CSV carries how it was made but not the truth values
+    # the CSV gives away nothing of the truth: not its values, not the effect, not the seed
+    # (the command that made it is in the truth file and the README)
     text = DEMO.read_text()
-    assert "# made with: wormgear synth" in text
     assert f"{k_true}" not in text and "phase_deg" not in text
+    assert "thermal_backlash" not in text and "--seed" not in text
 
 
 def test_demo_report_has_every_view(demo_json):

@@ -310,3 +310,23 @@ def test_effect_key_given_twice_is_refused():
 
     with pytest.raises(UsageError, match=r"bearing_clearance.clearance_arcsec is given twice"):
         parse_effect("bearing_clearance:clearance_arcsec=1,clearance_arcsec=2")
+
+
+def test_shipped_demo_is_exactly_what_its_documented_command_makes(runner, tmp_path):
+    """configs/mch50-warm.csv is reproducible from the command kept in its truth file."""
+    import json
+    import shlex
+
+    from conftest import CONFIGS, ROOT
+
+    truth = json.loads((CONFIGS / "mch50-warm.truth.json").read_text())
+    args = shlex.split(truth["command"])[1:]
+    args[args.index("-o") + 1] = str(tmp_path / "warm.csv")
+    args[args.index("--truth") + 1] = str(tmp_path / "warm.json")
+    args[args.index("configs/mch50.toml")] = str(ROOT / "configs" / "mch50.toml")
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.stderr
+    assert (tmp_path / "warm.csv").read_bytes() == (CONFIGS / "mch50-warm.csv").read_bytes()
+    made = json.loads((tmp_path / "warm.json").read_text())
+    assert made.pop("spec").endswith("configs/mch50.toml")
+    assert made == {k: v for k, v in truth.items() if k not in ("command", "spec")}

@@ -60,13 +60,31 @@ Selection (forward, over groups of columns)
    least 60 % of resamples of whole runs (cluster bootstrap, fixed seed).
    Otherwise the selection stops and says why.
 4. Refit everything (phases, offset, accepted effects, variance
-   components) and repeat.
+   components).  If the RMS residual does not shrink, the candidate is
+   rejected and the selection stops (a significant GLS test whose fit makes
+   the gap larger follows structure that is not its signature, the random
+   effects absorbing what it gets wrong).  Otherwise repeat.
+
+With fewer than MIN_RUNS runs no variance between runs or passes is
+estimated (the noise is taken as white); candidates whose columns vary
+mainly between passes, and thermal ones in a monotonic warm-up, are
+"untestable", and the others are tested with their columns as nuisance.
+
+A candidate that stops the selection narrowly (adjusted p < NEAR_FACTOR
+alpha) or at the --max-effects limit is refitted: if it removes at least
+NEAR_SHARE of the remaining mean-square gap it is reported as likely, and
+each named effect's interval is widened to cover its interval in that
+larger model.  An effect on the order of spec sources with fitted phases
+gets the range of sizes that fit as well (profile of the GLS cost) instead
+of an interval.
 
 What is left is scanned for structure no catalogue effect explains:
 harmonics at the drive's physical orders and low integer orders (common
 and differential mode) and trends against temperature, load and time, and
 a mean reversal change (each a Wald test, with the cell-means check for
-orders; Bonferroni over the scan).
+orders; Bonferroni over the scan).  The RMS residual is compared with the
+noise floor (point-to-point noise within passes plus the fitted scatter
+between passes and runs): above EXCESS_FACTOR times it, it is reported.
 
 Sources: REML and the nested-intercept GLS are textbook linear mixed model
 results (Harville 1977; Searle, Casella & McCulloch 1992); the degrees of
@@ -96,6 +114,16 @@ MIN_TOLERANCE = 1e-6
 MIN_STABILITY = 0.6
 #: smallest temperature range [K] that lets thermal effects be seen
 MIN_TEMPERATURE_RANGE = 0.1
+#: fewest runs from which scatter between runs and passes can be estimated
+MIN_RUNS = 3
+#: |correlation| of temperature and time above which a warm-up is called monotonic
+MONOTONIC = 0.95
+#: a candidate not significant at alpha but below this multiple of it is reported as a likely effect ...
+NEAR_FACTOR = 5.0
+#: ... when adding it would remove at least this share of the remaining mean-square gap
+NEAR_SHARE = 0.05
+#: a residual RMS above this multiple of the noise floor is reported as unexplained
+EXCESS_FACTOR = 2.0
 
 
 # ============================================================================ distributions
@@ -1071,13 +1099,15 @@ def _group_scan(y, sig, base, sources, psi, lin, grid: int = 24, sweeps: int = 4
     return out
 
 
-def fit_model(y, sig, groups, base, sources, spec_psi, lin, fit_phases=True, extra_starts=()) -> ModelFit:
+def fit_model(y, sig, groups, base, sources, spec_psi, lin, fit_phases=True, extra_starts=(),
+              variance: VarFit | None = None) -> ModelFit:
     """Fit the phases (if ``fit_phases``) and the linear coefficients of ``lin`` by
     GLS with REML variance components (alternating, at most three rounds).
 
     The phases start from several deterministic points (:func:`_harmonic_starts`
     plus ``extra_starts``), each refined on a subsample of at most 3000 rows with
-    white-noise weights; the best is then refined on every row."""
+    white-noise weights; the best is then refined on every row.  With
+    ``variance`` the variance ratios are held at that fit's (no REML)."""
     m = len(sources) if fit_phases else 0
     n = y.shape[0]
     psi = np.array(spec_psi, dtype=float)
@@ -1102,6 +1132,10 @@ def fit_model(y, sig, groups, base, sources, spec_psi, lin, fit_phases=True, ext
             if best is None or c < best[1] - 1e-9 * abs(c):
                 best = (p, c)
         psi = best[0]
+    if variance is not None:
+        psi, beta, resid, cost = _lm(y, sig, groups, base, sources, psi, lin, variance.gp, variance.gr, m > 0)
+        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+        return ModelFit(psi, beta, y - resid, resid, jac, lin, variance, cost)
     gp = gr = 0.0
     var = None
     for _ in range(3):
@@ -1212,6 +1246,33 @@ def needs_problem(name: str, needs: str | None, info: DataInfo) -> str | None:
     return None
 
 
+REPLICATION_REMEDY = "measure at least 3 runs in each direction"
+
+
+def replication_problem(cand: "Candidate", basis, groups: Groups, info: DataInfo) -> tuple[str, str] | None:
+    """Why, with fewer than MIN_RUNS runs, a candidate cannot be tested (None: it can), and the remedy.
+
+    Its test needs replication between runs when its columns (after the
+    model) vary mainly between passes or runs: with one or two runs, scatter
+    between passes cannot be estimated and would be taken for the effect.  A
+    thermal effect in a monotonic warm-up within so few runs is tied to time
+    and angle as well (a drift over time or an angle pattern fits as well)."""
+    runs = groups.runs
+    plural = "s" if runs != 1 else ""
+    res = _residualise(basis, cand.columns)
+    if float(np.sum(res * res)) > 1e-12 * float(np.sum(cand.columns**2)):
+        run_s, pass_s = _level_shares(res, groups)
+        if max(float(np.max(run_s)), float(np.max(pass_s))) > 0.5:
+            return (f"it changes mainly between passes, and with {runs} run{plural} the scatter between passes "
+                    "cannot be estimated: it would be taken for the effect", REPLICATION_REMEDY)
+    corr = info.temperature_time_corr
+    if cand.needs == "temperature" and not math.isnan(corr) and abs(corr) > MONOTONIC:
+        return (f"with {runs} run{plural}, a monotonic warm-up ties temperature to time and angle (correlation "
+                f"{corr:.2f}): a drift over time or an angle pattern fits as well",
+                REPLICATION_REMEDY + ", ideally heating and cooling")
+    return None
+
+
 def _residualise(basis, cols):
     """cols minus their least-squares projection on an orthonormal (unit-RMS) basis."""
     if basis.shape[1] == 0:
@@ -1271,19 +1332,39 @@ class Step:
     """Scores of every candidate against the current model (one selection step)."""
 
     def __init__(self, state: ModelFit, cands: dict, groups: Groups, info: DataInfo, lin_names, sources,
-                 alias_notes: dict, alpha: float, cells: Cells, nonlinear: Callable | None = None):
+                 alias_notes: dict, alpha: float, cells: Cells, nonlinear: Callable | None = None,
+                 few_runs: bool = False):
         self.state = state
         self.groups = groups
         nuis = np.hstack([state.lin, state.jac])
-        self.basis, _ = _orthonormal(nuis)
-        kb = self.basis.shape[1]
+        basis0, _ = _orthonormal(nuis)
         blocks = _blocks(lin_names, sources, state.jac, state.lin)
         self.scores: dict[str, Score] = {}
         self.better_null = None
+        # with fewer than MIN_RUNS runs, effects that need replication between runs cannot be tested; they may
+        # still be there, so every other candidate is tested with their signatures as nuisance columns
+        untestable_cols = []
+        if few_runs:
+            for name, cand in cands.items():
+                if cand is None or needs_problem(name, cand.needs, info) is not None:
+                    continue
+                if alias_notes.get(name) and any(a[0] == 0.0 for a in alias_notes[name]):
+                    continue
+                problem = replication_problem(cand, basis0, groups, info)
+                if problem is not None:
+                    self.scores[name] = Score(name, "untestable", problem[0], problem[1],
+                                              aliases=alias_notes.get(name, []))
+                    untestable_cols.append(cand.columns)
+                    blocks.append((f"{name}'s signature (untestable with {groups.runs} run"
+                                   f"{'s' if groups.runs != 1 else ''})", cand.columns))
+        self.basis = _orthonormal(np.hstack([nuis, *untestable_cols]))[0] if untestable_cols else basis0
+        kb = self.basis.shape[1]
         tested_cols = []
         slices = {}
         nonlinear_names: list[str] = []
         for name, cand in cands.items():
+            if name in self.scores:
+                continue
             if cand is None:
                 self.scores[name] = Score(name, "unobservable", "its signature is not linear in its parameters")
                 continue
@@ -1456,8 +1537,12 @@ class Found:
     """A named effect: internal ``params``; ``intervals`` catalogue key -> (lo, hi)
     at 95 %; ``p``/``df`` of its test in the final model; ``share``: fraction of the
     gap (mean square residual after step 1) it removed when added; ``stability``:
-    share of run resamples in which it scored best (None: fewer than 3 runs);
-    ``notes``: caveats (same-order sources, correlated candidates)."""
+    share of run resamples in which it scored best (None: not assessed,
+    ``stability_note`` says why); ``notes``: caveats (same-order sources,
+    correlated candidates); ``separable``: False when its size trades against
+    the fitted phases of spec sources on its order (``intervals`` then holds
+    the range of sizes that fit as well, the phase none); ``fixed_keys``:
+    catalogue keys held at their defaults (reference temperatures)."""
 
     name: str
     kind: str
@@ -1472,6 +1557,9 @@ class Found:
     notes: list = field(default_factory=list)
     indistinguishable_from: list = field(default_factory=list)
     signature_rms: float = 0.0
+    stability_note: str = ""
+    separable: bool = True
+    fixed_keys: list = field(default_factory=list)
 
 
 @dataclass
@@ -1497,6 +1585,9 @@ class Diagnosis:
     augmented: dict
     augmented_fitted: np.ndarray
     thermal_prediction: float | None
+    few_runs: bool = False
+    noise_floor: float = math.nan
+    likely: dict | None = None
 
 
 def _alias_notes(theta, cands: dict, sources, geometry) -> dict:
@@ -1562,6 +1653,14 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     n = y.shape[0]
     g = drive_geometry(spec)
     groups = make_groups(meas.direction, meas.run if "run" in meas.present else None)
+    few_runs = groups.runs < MIN_RUNS
+    if few_runs:
+        # one or two runs: scatter between runs and passes cannot be estimated (a variance from one run is
+        # meaningless); the noise is taken as white and effects that need replication are not tested
+        plural = "s" if groups.runs != 1 else ""
+        groups = Groups(groups.pass_id, groups.pass_size, groups.pass_run, groups.pass_direction, groups.runs,
+                        False, False, groups.describe.split(";")[0] + f"; {groups.runs} run{plural}, fewer than "
+                        f"{MIN_RUNS}: scatter between runs and passes cannot be estimated, noise taken as white")
     info = data_info(meas, groups)
     fittable, _ = phase_sources(spec, g, sig)
     sources = fittable if fit_phases else []
@@ -1595,7 +1694,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             return _nonlinear_test(y, sig, groups, base, sources, spec_psi, current, current_lin, cand, cells)
 
         step = Step(state, remaining, groups, info, lin_names, sources, alias_notes, alpha, cells,
-                    nonlinear if fit_phases else None)
+                    nonlinear if fit_phases else None, few_runs=few_runs)
         if step.better_null is not None and redo < 3:
             # a same-order refit showed the phase fit sat in a local minimum: refit from there, score again
             redo += 1
@@ -1634,33 +1733,73 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             stop = {"reason": "unphysical", "candidate": best, "detail": problem,
                     "hint": UNPHYSICAL_HINT.get(best, "")}
             break
-        say(f"checking {best} on {resamples} resamples of whole runs")
-        stab = step.stability(resamples, alpha) if best not in step.nonlinear else {}
+        stab, stab_note = {}, ""
+        if best in step.nonlinear:
+            stab_note = ("not assessed: its test refits the phases of the spec's sources on its order, which "
+                         "resampling does not repeat")
+        elif resamples <= 0:
+            stab_note = "not assessed (--resamples 0)"
+        elif groups.runs < MIN_RUNS:
+            stab_note = (f"not assessed: {groups.runs} run{'s' if groups.runs != 1 else ''}; resampling whole "
+                         f"runs needs at least {MIN_RUNS}")
+        else:
+            say(f"checking {best} on {resamples} resamples of whole runs")
+            stab = step.stability(resamples, alpha)
         frac = stab.get(best) if stab else None
         if frac is not None and frac < MIN_STABILITY:
             rivals = sorted(((v, k) for k, v in stab.items() if k != best and v > 0), reverse=True)
             stop = {"reason": "unstable", "candidate": best, "stability": frac,
                     "rivals": [{"name": k, "share": v} for v, k in rivals]}
             break
-        record["accepted"] = best
         near = [(o, step.similar[(best, o)]) for o in step.tested if o != best
                 and step.similar.get((best, o), 0.0) >= NEARLY]
-        cand = remaining.pop(best)
+        cand = remaining[best]
         start = lin.shape[1]
-        lin = np.hstack([lin, cand.columns])
-        lin_names.append((best, slice(start, start + cand.q)))
+        new_lin = np.hstack([lin, cand.columns])
         prev_rss = float(state.residual @ state.residual)
         say(f"refitting with {best}")
-        state = fit_model(y, sig, groups, base, sources, spec_psi, lin, fit_phases, extra_starts=[state.psi])
-        new_rss = float(state.residual @ state.residual)
+        new_state = fit_model(y, sig, groups, base, sources, spec_psi, new_lin, fit_phases,
+                              extra_starts=[state.psi])
+        new_rss = float(new_state.residual @ new_state.residual)
+        if not new_rss < prev_rss * (1.0 - 1e-9):
+            # significant in the GLS metric, yet the gap grows once everything is refitted: the estimate follows
+            # structure that is not its signature (typically the random effects absorb what it gets wrong)
+            stop = {"reason": "worsens", "candidate": best, "p_adjusted": sc.p_adj,
+                    "rms_before_arcsec": math.sqrt(prev_rss / n), "rms_with_arcsec": math.sqrt(new_rss / n)}
+            record["rejected"] = best
+            break
+        record["accepted"] = best
+        remaining.pop(best)
+        lin = new_lin
+        lin_names.append((best, slice(start, start + cand.q)))
+        state = new_state
         accepted.append((best, cand, sc, frac, len(steps), (prev_rss - new_rss) / rss_before if rss_before else 0.0,
-                         near))
+                         near, stab_note))
     after = state
     found = _final_inference(after, accepted, lin_names, groups, fittable, fit_phases)
     for f in found:
         final_scores[f.name] = Score(f.name, "named")
+    for f in found:
+        if not f.separable:
+            say(f"profiling the size of {f.name} against the phases of its shaft's sources")
+            cand = next(a[1] for a in accepted if a[0] == f.name)
+            sl = next(sl_ for nm, sl_ in lin_names if nm == f.name)
+            _same_order_range(f, y, sig, groups, base, sources, after, lin, sl, cand, g)
+    likely = None
+    if stop.get("reason") in ("no further candidate is significant", f"--max-effects {max_effects} reached") \
+            and stop.get("best") in remaining and stop["best"] in step.slices:
+        best = stop["best"]
+        sc = step.scores[best]
+        if sc.p_adj < min(NEAR_FACTOR * alpha, 0.5) or stop["reason"].startswith("--max-effects"):
+            say(f"checking whether {best} is a likely further effect")
+            likely = _likely_effect(y, sig, groups, base, sources, spec_psi, after, lin, lin_names, accepted, found,
+                                    best, remaining[best], sc, fittable, fit_phases, len(steps))
+            if likely is not None:
+                final_scores[best].status = "likely"
     say("scanning the residual for structure")
     unexplained = _scan(after, sig, groups, g, alpha, info, sources, cells)
+    floor = _noise_floor_rms(after, groups, sig.time if "time_s" in meas.present else None)
+    unexplained = _annotate(unexplained, final_scores, groups, few_runs, likely, after, floor, g)
     augmented, aug_fitted = _augment(spec, sig, after, sources, found, fit_phases, y)
     thermal = None
     try:
@@ -1670,7 +1809,8 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     except (ImportError, AttributeError):
         thermal = None
     return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,
-                     before, after, found, final_scores, steps, stop, unexplained, augmented, aug_fitted, thermal)
+                     before, after, found, final_scores, steps, stop, unexplained, augmented, aug_fitted, thermal,
+                     few_runs, floor, likely)
 
 
 def _nonlinear_test(y, sig, groups, base, sources, spec_psi, state: ModelFit, lin, cand: Candidate, cells: Cells):
@@ -1731,7 +1871,7 @@ def _final_inference(state: ModelFit, accepted, lin_names, groups, sources, fit_
     vinfo = _variance_info(cross, vf)
     out = []
     design = np.hstack([nuis, eff_cols * scale])
-    for (name, cand, sc, frac, step_no, share, near), (_, sl) in zip(accepted, lin_names[1:]):
+    for (name, cand, sc, frac, step_no, share, near, stab_note), (_, sl) in zip(accepted, lin_names[1:]):
         idx = np.arange(kb + sl.start - 1, kb + sl.stop - 1)
         rest = np.delete(design, idx, axis=1)
         cont = containment_df(groups, rest, _residualise(_orthonormal(rest)[0], design[:, idx]))
@@ -1776,15 +1916,13 @@ def _final_inference(state: ModelFit, accepted, lin_names, groups, sources, fit_
             intervals = {}
             w = Wald(w.estimate, w.cov, sc.wald.F, sc.wald.q, sc.wald.df, sc.wald.p)
         f = Found(name, cand.kind, params, intervals, w.p, min(1.0, w.p * len(accepted)), w.df, share, frac,
-                  step_no)
+                  step_no, stability_note=stab_note, separable=not same_fitted,
+                  fixed_keys=[p.key for p in eff.params if p.name in cand.fixed])
         f.signature_rms = float(np.sqrt(np.mean((lin[:, sl] @ beta) ** 2)))
         if cand.order is not None:
             same = [s.name for s in sources if abs(s.order - cand.order) < 1e-9 and s.amplitude > 1e-9]
             if same and fit_phases:
-                f.notes.append(f"shares order {cand.order:g} with the spec's {', '.join(same)}: only the part of "
-                               f"the order-{cand.order:g} content those sources cannot produce with their "
-                               "specified sizes is attributed to it (no interval: it trades against their "
-                               "fitted phases); a larger " + " or ".join(same) + " would fit as well")
+                # the note with the range of sizes that fit as well is added by _same_order_range
                 f.indistinguishable_from += same
             elif same:
                 f.notes.append(f"shares order {cand.order:g} with the spec's {', '.join(same)}, held at their "
@@ -1797,6 +1935,236 @@ def _final_inference(state: ModelFit, accepted, lin_names, groups, sources, fit_
             if corr >= INDISTINGUISHABLE:
                 f.indistinguishable_from.append(other)
         out.append(f)
+    return out
+
+
+def _same_order_range(f: Found, y, sig, groups, base, sources, state: ModelFit, lin, sl, cand: Candidate,
+                      geometry, steps: int = 5) -> None:
+    """Sizes of an effect on the order of spec sources with fitted phases that fit as well as the best.
+
+    The effect becomes one more periodic source of fixed size a with a free
+    phase; for each a the phases of the spec's sources on that order and the
+    effect's are refitted (the other sources held at their fitted phases, the
+    variance ratios at the final fit's) and the GLS cost c(a) is recorded.
+    Sizes with c(a) <= c_min (1 + t^2 / dof) (t: 97.5 % quantile of Student's t;
+    the profile-likelihood 95 % region) fit as well: the lower end by bisection
+    between 0 and the fitted size, the upper end by bisection beyond it.  Sets
+    ``f.intervals`` to that range of the amplitude key (the phase has none) and
+    adds a note."""
+    from wormgear_cli.models.effects import EFFECTS
+
+    eff = EFFECTS[cand.name]
+    same = [j for j, src in enumerate(sources) if abs(src.order - cand.order) < 1e-9]
+    other = [j for j in range(len(sources)) if j not in same]
+    n = y.shape[0]
+    base2 = base + sum((sources[j].contrib(sig, state.psi[j]) for j in other), np.zeros(n))
+    lin2 = np.delete(lin, np.arange(sl.start, sl.stop), axis=1)
+    dof = max(n - lin.shape[1] - len(sources), 1)
+    a_fit, ph_fit = float(f.params[eff.amplitude]), float(f.params[eff.phase])
+    unit = math.sqrt(float(np.mean(np.sum(cand.columns**2, axis=1))))  # arcsec per internal unit of size
+    reach = float(sum(sources[j].amplitude for j in same))
+    span = max(reach / unit if unit > 0 else 0.0, a_fit, 1e-12)
+    same_src = [sources[j] for j in same]
+    costs: dict[float, float] = {}
+
+    def cost(a: float) -> float:
+        if a not in costs:
+            if a <= 0.0:
+                start = np.asarray(state.psi)[same]
+                srcs = same_src
+            else:
+                start = np.r_[np.asarray(state.psi)[same], ph_fit]
+                srcs = [*same_src, PhaseSource(f"effect:{cand.name}", "", float(cand.order), a * unit, ph_fit,
+                                               _effect_contrib(eff, {**cand.fixed, eff.amplitude: a}, geometry))]
+            fm = fit_model(y, sig, groups, base2, srcs, start, lin2, True, extra_starts=[start], variance=state.var)
+            costs[a] = float(fm.cost)
+        return costs[a]
+
+    factor = 1.0 + t_ppf(0.975, dof) ** 2 / dof
+
+    def fits(a: float) -> bool:
+        c = cost(a)
+        return c <= min(costs.values()) * factor
+
+    cost(a_fit)
+    if fits(0.0):
+        lo = 0.0
+    else:
+        a, b = 0.0, a_fit
+        for _ in range(steps):
+            m = 0.5 * (a + b)
+            if fits(m):
+                b = m
+            else:
+                a = m
+        lo = b
+    a, b = a_fit, a_fit + span
+    open_ended = False
+    for _ in range(3):
+        if not fits(b):
+            break
+        a, b = b, b + span
+    else:
+        open_ended = True
+    if not open_ended:
+        for _ in range(steps):
+            m = 0.5 * (a + b)
+            if fits(m):
+                a = m
+            else:
+                b = m
+    hi = b if open_ended else a
+    amp_key = next(p.key for p in eff.params if p.name == eff.amplitude)
+    amp_p = eff.param(amp_key)
+    f.intervals = {amp_key: (lo / amp_p.scale, hi / amp_p.scale)}
+    names = [sources[j].name for j in same]
+    f.notes.append(
+        f"shares order {cand.order:g} with the spec's {', '.join(names)}, whose phases are fitted: its size trades "
+        f"against their phases, so any {amp_key} from {lo / amp_p.scale:.3g} to {hi / amp_p.scale:.3g} {amp_p.unit}"
+        f"{' or more' if open_ended else ''} fits as well (95 % profile of the fit) and its phase is not determined; "
+        f"a larger {' or '.join(names)} would fit as well. To separate them, measure the runout and phase of "
+        "those parts directly (dial indicator), enter the phases in the spec and rerun with --keep-phases")
+
+
+def _likely_effect(y, sig, groups, base, sources, spec_psi, state: ModelFit, lin, lin_names, accepted, found,
+                   name: str, cand: Candidate, sc: Score, fittable, fit_phases, step_no) -> dict | None:
+    """A candidate that missed the significance level narrowly (or the --max-effects limit): refit with it.
+
+    When it would remove at least NEAR_SHARE of the remaining mean-square gap
+    it is reported as a likely further effect, and every named effect's
+    interval is widened to cover its interval in that larger model too (the
+    named effect's estimate may be biased by what is left out).  Returns the
+    report entry, or None."""
+    n = y.shape[0]
+    rss = float(state.residual @ state.residual)
+    alt_lin = np.hstack([lin, cand.columns])
+    alt = fit_model(y, sig, groups, base, sources, spec_psi, alt_lin, fit_phases, extra_starts=[state.psi])
+    rss_alt = float(alt.residual @ alt.residual)
+    gain = (rss - rss_alt) / rss if rss > 0 else 0.0
+    if not gain >= NEAR_SHARE:
+        return None
+    alt_names = [*lin_names, (name, slice(lin.shape[1], lin.shape[1] + cand.q))]
+    alt_found = _final_inference(alt, [*accepted, (name, cand, sc, None, step_no, gain, [], "")], alt_names, groups,
+                                 fittable, fit_phases)
+    by = {f.name: f for f in alt_found}
+    extra = by[name]
+    if physical_problem(name, extra.params):
+        return None
+    for f in found:
+        other = by.get(f.name)
+        if other is None or not f.separable:
+            continue
+        for key, (lo, hi) in list(f.intervals.items()):
+            if key in other.intervals:
+                lo2, hi2 = other.intervals[key]
+                f.intervals[key] = (min(lo, lo2), max(hi, hi2))
+        est = augmented_params(other)
+        values = ", ".join(f"{k} = {est[k]:.4g} [{lo:.4g}, {hi:.4g}]" for k, (lo, hi) in other.intervals.items())
+        f.notes.append(f"with {name} also in the model (a likely further effect, see unexplained) it would be "
+                       f"{values}; its interval covers both models")
+    return {"name": name, "p_adjusted": sc.p_adj, "gain": gain, "rms_now": math.sqrt(rss / n),
+            "rms_with": math.sqrt(rss_alt / n), "parameters": augmented_params(extra),
+            "interval_95": {k: [float(lo), float(hi)] for k, (lo, hi) in extra.intervals.items()}}
+
+
+def short_term_noise(resid: np.ndarray, groups: Groups, time: np.ndarray | None = None) -> float:
+    """Point-to-point noise [arcsec]: robust standard deviation (1.4826 x median absolute value) of the
+    differences of consecutive rows within a pass (in time order), over sqrt(2).  Offsets per pass or
+    run cancel; structure that changes slowly along a pass adds little.  NaN without such pairs."""
+    t = np.arange(resid.shape[0], dtype=float) if time is None else np.asarray(time, dtype=float)
+    order = np.lexsort((np.arange(resid.shape[0]), t, groups.pass_id))
+    pid = groups.pass_id[order]
+    diff = np.diff(resid[order])[pid[1:] == pid[:-1]]
+    if diff.shape[0] < 3:
+        return math.nan
+    return float(1.4826 * np.median(np.abs(diff)) / math.sqrt(2.0))
+
+
+def _noise_floor_rms(state: ModelFit, groups: Groups, time=None) -> float:
+    """The noise the data establish [arcsec]: point-to-point noise within passes, plus the fitted scatter
+    between passes and runs where it can be estimated (at least MIN_RUNS runs)."""
+    short = short_term_noise(state.residual, groups, time)
+    if not math.isfinite(short):
+        short = state.var.s_white
+    between = state.var.sigma2 * (state.var.gp + state.var.gr) if groups.runs >= MIN_RUNS else 0.0
+    return math.sqrt(short**2 + between)
+
+
+#: the catalogue effect whose signature a pattern of the residual scan is
+def _signature_of(item: dict, geometry) -> str | None:
+    from wormgear_cli.models.effects import EFFECTS
+
+    if item["kind"] == "reversal":
+        return "bearing_clearance"
+    if item["kind"] == "trend":
+        return {("temperature_C", "differential"): "thermal_backlash", ("temperature_C", "common"): "thermal_drift",
+                ("load_Nm", "common"): "torsional_compliance"}.get((item["signal"], item["mode"]))
+    if item["kind"] == "order" and item["mode"] == "common":
+        for name, eff in EFFECTS.items():
+            if eff.order is not None and abs(float(eff.order(geometry)) - item["order"]) < 1e-9:
+                return name
+    return None
+
+
+def _pattern(name: str, geometry) -> tuple[str, str]:
+    """(mode, words) of a catalogue effect's signature."""
+    from wormgear_cli.models.effects import EFFECTS
+
+    eff = EFFECTS[name]
+    if name == "thermal_backlash":
+        return "differential", "a differential-mode trend with temperature (the reversal changing as it warms)"
+    if name == "bearing_clearance":
+        return "differential", "a change of the mean reversal"
+    if name == "thermal_drift":
+        return "common", "a common-mode trend with temperature"
+    if name == "torsional_compliance":
+        return "common", "a common-mode trend with load"
+    if eff.order is not None:
+        return "common", f"order {float(eff.order(geometry)):g} content in common mode"
+    return "common", eff.doc
+
+
+def _annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: dict | None, state: ModelFit,
+              floor: float, geometry) -> list:
+    """Add to the scan's items what the run structure and the candidates say about them: a pattern that is
+    the signature of a candidate these data cannot test, the caveat of few runs, a likely further effect,
+    and a residual far above the noise floor."""
+    runs = groups.runs
+    for item in items:
+        name = _signature_of(item, geometry)
+        if name == "bearing_clearance" and item.get("mean_reversal_change_arcsec", 0.0) < 0.0:
+            name = None  # less lost motion than modelled is not a clearance
+        sc = scores.get(name) if name else None
+        if item["kind"] == "reversal" and scores.get("thermal_backlash") is not None and \
+                scores["thermal_backlash"].status == "untestable" and (sc is None or sc.status != "untestable"):
+            name, sc = "thermal_backlash", scores["thermal_backlash"]  # a warm-up changes the reversal between passes
+        if sc is not None and sc.status == "untestable":
+            item["untestable_candidate"] = name
+            item["explanation"] += (f"; it is {name}'s signature, which {runs} run{'s' if runs != 1 else ''} "
+                                    f"cannot test: {sc.remedy}")
+        elif few_runs and item["kind"] in ("trend", "reversal"):
+            item["explanation"] += (f"; with {runs} run{'s' if runs != 1 else ''} it cannot be told from scatter "
+                                    f"between passes: {REPLICATION_REMEDY}")
+    out = list(items)
+    if likely is not None:
+        mode, words = _pattern(likely["name"], geometry)
+        item = {"kind": "likely_effect", "mode": mode, "p_adjusted": likely["p_adjusted"], "name": likely["name"],
+                "parameters": likely["parameters"], "interval_95": likely["interval_95"],
+                "rms_arcsec": likely["rms_now"], "rms_with_arcsec": likely["rms_with"]}
+        item["explanation"] = (f"{words}: {likely['name']} would explain it (adjusted p = "
+                               f"{likely['p_adjusted']:.2g}, short of the level) and would bring the RMS gap from "
+                               f"{likely['rms_now']:.3g} to "
+                               f"{likely['rms_with']:.3g} arcsec: a likely further effect; more runs would settle it")
+        out.insert(0, item)
+    rms = float(np.sqrt(np.mean(state.residual**2)))
+    if math.isfinite(floor) and floor > 0 and rms > EXCESS_FACTOR * floor:
+        words = ("point-to-point noise within passes" if few_runs or groups.runs < MIN_RUNS
+                 else "point-to-point noise within passes and the scatter between passes and runs")
+        out.append({"kind": "excess", "mode": "all", "p_adjusted": None, "rms_arcsec": rms,
+                    "noise_floor_arcsec": floor,
+                    "explanation": f"the residual ({rms:.3g} arcsec RMS) is {rms / floor:.1f} times the noise floor "
+                                   f"({floor:.3g} arcsec, {words}): the model still misses something"
+                                   + ("" if items or likely else "; no single order or trend stands out")})
     return out
 
 
@@ -1906,6 +2274,12 @@ def _scan(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo, sources
         p_adj = min(1.0, w.p * m)
         if p_adj >= alpha:
             continue
+        if tcols is not None:
+            # as for the candidates: a trend whose GLS slope makes the residual larger is an artefact of the
+            # variance components absorbing what it gets wrong, not structure of the residual
+            moved = r - tcols @ w.estimate
+            if not float(moved @ moved) < float(r @ r):
+                continue
         item = {"kind": kind, "mode": mode, "p_adjusted": p_adj}
         if kind == "order":
             if full_rot is not None:
@@ -2029,6 +2403,11 @@ def augmented_toml(diag: Diagnosis, data_name: str = "") -> str:
         lines.append("# fitted phases: " + ", ".join(s.key for s in diag.sources))
     if diag.found:
         lines.append("# effects added: " + ", ".join(f.name for f in diag.found))
+        for f in diag.found:
+            if not f.separable and f.intervals:
+                key, (lo, hi) = next(iter(f.intervals.items()))
+                lines.append(f"# {f.name}: its size is not separable from the fitted phases of "
+                             f"{', '.join(f.indistinguishable_from)} ({key} from {lo:.3g} to {hi:.3g} fits as well)")
     else:
         lines.append("# no effect added (no missing effect found)")
     lines.append(f"# the fitted zero offset ({diag.after.offset:.4f} arcsec) is not part of a drive spec")
@@ -2211,8 +2590,9 @@ def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
         ok = np.isfinite(s) & (nn >= 2)
         num += float(np.sum((nn[ok] - 1) * (s[ok] / ARCSEC) ** 2))
         den += float(np.sum(nn[ok] - 1))
+    between = groups.runs >= MIN_RUNS  # scatter between passes and runs is estimated only from enough runs
     return {"repeat_std_arcsec": math.sqrt(num / den) if den > 0 else None, "white_arcsec": var.s_white,
-            "pass_arcsec": var.s_pass, "run_arcsec": var.s_run,
+            "pass_arcsec": var.s_pass if between else None, "run_arcsec": var.s_run if between else None,
             "total_arcsec": math.sqrt(var.sigma2 * (1.0 + var.gp + var.gr)), "passes": groups.passes,
             "runs": groups.runs, "structure": groups.describe}
 
@@ -2247,10 +2627,16 @@ def _status(diag: Diagnosis) -> list[dict]:
         sc = diag.candidates.get(name)
         if name in named:
             entry["status"] = "named"
+            f = next(f for f in diag.found if f.name == name)
+            if not f.separable:
+                entry["reason"] = ("indistinguishable from a larger " + " or ".join(f.indistinguishable_from)
+                                   + ": its size trades against their fitted phases")
+                entry["remedy"] = ("measure the runout and phase of those parts directly (dial indicator), enter "
+                                   "the phases in the spec and rerun with --keep-phases")
         elif sc is None:
             entry.update(status="unobservable", reason="not scored")
-        elif sc.status == "unobservable":
-            entry.update(status="unobservable", reason=sc.reason)
+        elif sc.status in ("unobservable", "untestable"):
+            entry.update(status=sc.status, reason=sc.reason)
             if sc.remedy:
                 entry["remedy"] = sc.remedy
         else:
@@ -2275,6 +2661,16 @@ def _status(diag: Diagnosis) -> list[dict]:
             elif stop.get("reason") == "unstable" and stop.get("candidate") == name:
                 entry.update(status="unstable",
                              reason=f"best in only {100 * stop['stability']:.0f} % of resamples of whole runs")
+            elif stop.get("reason") == "worsens" and stop.get("candidate") == name:
+                entry.update(status="rejected",
+                             reason=f"significant, but fitting it makes the RMS gap larger "
+                                    f"({stop['rms_before_arcsec']:.3g} -> {stop['rms_with_arcsec']:.3g} arcsec): its "
+                                    "estimate follows structure that is not its signature (see unexplained)")
+            elif diag.likely is not None and diag.likely["name"] == name:
+                entry.update(status="likely",
+                             reason=f"short of the level, but it would remove {100 * diag.likely['gain']:.0f} % of "
+                                    "the remaining mean-square gap: a likely further effect (see unexplained)",
+                             remedy="measure more runs (or a wider temperature or load range) to settle it")
             if sc.wald is not None:
                 entry.update(p_value=sc.wald.p, p_adjusted=sc.p_adj, F=sc.wald.F, df=sc.wald.df)
                 if sc.params is not None and not sc.same_order:
@@ -2310,20 +2706,71 @@ def _separate_hint(names) -> str:
 
 
 def _verdict(diag: Diagnosis) -> str:
-    if diag.found:
-        names = ", ".join(f.name for f in diag.found)
-        return f"missing effect{'s' if len(diag.found) > 1 else ''} found: {names}"
-    text = "no missing effect found"
-    stop = diag.stop
-    if stop.get("reason") == "ambiguous":
-        text += (f" that the data can single out: {' or '.join(stop['candidates'])} fit equally well")
-    elif stop.get("reason") == "unphysical":
-        text += f" ({stop['candidate']} would fit only with {stop['detail']})"
-    elif stop.get("reason") == "unstable":
-        text += f" ({stop['candidate']} is significant but not stable under resampling of runs)"
-    if diag.unexplained:
-        text += "; the residual keeps structure no catalogue effect explains (see unexplained)"
-    return text
+    found = [f for f in diag.found if f.separable]
+    mixed = [f for f in diag.found if not f.separable]
+    parts = []
+    if found:
+        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(f.name for f in found))
+    for f in mixed:
+        key, (lo, hi) = next(iter(f.intervals.items())) if f.intervals else ("size", (math.nan, math.nan))
+        order = _effect_order(f.name, diag)
+        parts.append(f"missing content at order {order:g} that the spec's sources cannot produce: {f.name} "
+                     f"({key} anywhere from {lo:.3g} to {hi:.3g}) or a larger "
+                     + " or ".join(f.indistinguishable_from)
+                     + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
+                     "--keep-phases)")
+    untestable = [n for n, sc in diag.candidates.items() if sc.status == "untestable"]
+    if not diag.found:
+        text = "no missing effect found"
+        if untestable:
+            text += " that these data can test"
+        elif diag.unexplained:
+            text += " in the catalogue"
+        stop = diag.stop
+        if stop.get("reason") == "ambiguous":
+            text += (f" that the data can single out: {' or '.join(stop['candidates'])} fit equally well")
+        elif stop.get("reason") == "unphysical":
+            text += f" ({stop['candidate']} would fit only with {stop['detail']})"
+        elif stop.get("reason") == "unstable":
+            text += f" ({stop['candidate']} is significant but not stable under resampling of runs)"
+        elif stop.get("reason") == "worsens":
+            text += (f" ({stop['candidate']} tests significant, but fitting it makes the RMS gap larger: "
+                     f"{stop['rms_before_arcsec']:.3g} -> {stop['rms_with_arcsec']:.3g} arcsec)")
+        parts.append(text)
+    elif diag.stop.get("reason") == "worsens":
+        parts.append(f"{diag.stop['candidate']} was rejected: fitting it makes the RMS gap larger")
+    if untestable:
+        runs = diag.groups.runs
+        parts.append(f"untestable with {runs} run{'s' if runs != 1 else ''}: {', '.join(untestable)} "
+                     f"({REPLICATION_REMEDY})")
+    if diag.likely is not None:
+        parts.append(f"likely {'further ' if diag.found else ''}effect: {diag.likely['name']} (adjusted p = "
+                     f"{diag.likely['p_adjusted']:.2g}, short of the level; see unexplained)")
+    others = [u for u in diag.unexplained if u["kind"] != "likely_effect"]
+    if others:
+        text = "the residual keeps structure no catalogue effect explains"
+        excess = next((u for u in others if u["kind"] == "excess"), None)
+        if excess is not None:
+            text += (f" ({excess['rms_arcsec']:.3g} arcsec RMS against a noise floor of "
+                     f"{excess['noise_floor_arcsec']:.3g})")
+        parts.append(text + " (see unexplained)")
+    return "; ".join(parts)
+
+
+def _direction_warning(meas, groups: Groups) -> str | None:
+    """A note when the file has no direction column yet a pass visits a target more than once."""
+    from wormgear_cli.iso230 import group_targets
+
+    if "direction" in meas.present:
+        return None
+    tgt, _ = group_targets(meas.angle)
+    key = groups.pass_id.astype(np.int64) * (int(np.max(tgt)) + 1) + tgt.astype(np.int64)
+    if np.unique(key).shape[0] == key.shape[0]:
+        return None
+    return ("no direction column: every row is taken as forward, yet one "
+            + ("run" if "run" in meas.present else "block of rows") + " visits the same target more than once: if "
+            "some visits were made in reverse, add a direction column (+1 forward, -1 reverse)"
+            + ("" if "run" in meas.present else "; if they are repeated runs, add a run column"))
 
 
 def report(diag: Diagnosis) -> dict:
@@ -2344,9 +2791,12 @@ def _report(diag: Diagnosis) -> dict:
         item = {"name": f.name, "parameters": augmented_params(f),
                 "interval_95": {k: [float(lo), float(hi)] for k, (lo, hi) in f.intervals.items()},
                 "p_value": f.p, "df": f.df, "gap_share_pct": 100.0 * f.share,
-                "stability": f.stability, "signature_rms_arcsec": f.signature_rms, "step": f.step,
+                "stability": f.stability, "stability_note": f.stability_note,
+                "signature_rms_arcsec": f.signature_rms, "step": f.step, "separable": f.separable,
+                "fixed_parameters": list(f.fixed_keys),
                 "notes": list(f.notes), "indistinguishable_from": list(f.indistinguishable_from)}
-        if f.name == "thermal_backlash" and diag.thermal_prediction is not None:
+        if f.name == "thermal_backlash" and diag.thermal_prediction is not None and \
+                "centre_distance_um_per_K" in f.intervals:
             lo, hi = f.intervals["centre_distance_um_per_K"]
             pred = diag.thermal_prediction
             fitted = item["parameters"]["centre_distance_um_per_K"]
@@ -2383,7 +2833,8 @@ def _report(diag: Diagnosis) -> dict:
                                                                                        for p in phases) else "",
         },
         "noise": {"before": noise_floor(meas, diag.before.residual, diag.before.var, diag.groups),
-                  "after": noise_floor(meas, resid_after, diag.after.var, diag.groups)},
+                  "after": noise_floor(meas, resid_after, diag.after.var, diag.groups),
+                  "floor_arcsec": diag.noise_floor if math.isfinite(diag.noise_floor) else None},
         "orders": {"before": order_table(meas, diag.before.residual, g), "after": order_table(meas, resid_after, g)},
         "residual_vs": {"before": versus(meas, diag.before.residual, info), "after": versus(meas, resid_after, info)},
         "iso230": {"measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
@@ -2399,8 +2850,13 @@ def _report(diag: Diagnosis) -> dict:
         "selection": {"alpha": diag.alpha, "steps": diag.steps, "stop": diag.stop,
                       "method": "forward selection; Wald F-test with REML run/pass random intercepts and "
                                 "Satterthwaite df, Bonferroni over the candidates of each step; stability by "
-                                "cluster bootstrap of whole runs"},
+                                "cluster bootstrap of whole runs; a candidate whose refit does not shrink the "
+                                "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
+                                "replication untestable"},
     }
+    data_warning = _direction_warning(meas, diag.groups)
+    if data_warning:
+        doc["signals"]["data_warning"] = data_warning
     if info.temperature_present and not math.isnan(info.temperature_time_corr) and \
             abs(info.temperature_time_corr) > 0.95:
         doc["signals"]["warning"] = (f"temperature and time correlate {info.temperature_time_corr:.2f}: a "

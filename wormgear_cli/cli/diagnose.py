@@ -9,9 +9,9 @@ import typer
 
 from wormgear_cli.cli.app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     TableJsonFormat,
-    UnitOption,
     emit,
     fmt_angle,
     json_text,
@@ -22,6 +22,11 @@ from wormgear_cli.cli.common import (
 #: rows above which a progress display is shown (when stderr is a terminal)
 PROGRESS_ROWS = 20_000
 
+#: --unit of diagnose: the table and the plot follow it; the JSON report keeps arcsec (keys end in _arcsec)
+DiagnoseUnitOption = Annotated[AngleUnit, typer.Option(
+    "--unit", "-u", help="Unit of the angles in the table report and the plot. The JSON report is always in "
+    "arcsec (its keys end in _arcsec).", case_sensitive=False)]
+
 
 @app.command()
 def diagnose(
@@ -30,12 +35,13 @@ def diagnose(
         help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
         "time_s).", show_default=False)],
     output: Annotated[Optional[Path], typer.Option(
-        "--output", "-o", help="Write the augmented drive spec to FILE (TOML: the fitted phases and an "
-        "[effects.NAME] table per named effect); never the input files.", dir_okay=False,
+        "--output", "-o", help="Write the augmented drive spec to FILE (TOML written from the parsed spec: the "
+        "fitted phases and an [effects.NAME] table per named effect; the input's comments are not kept); never "
+        "the input files.", dir_okay=False,
         show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
                                                     case_sensitive=False)] = "table",
-    unit: UnitOption = "arcsec",
+    unit: DiagnoseUnitOption = "arcsec",
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
@@ -134,7 +140,8 @@ def diagnose(
 
 
 def _tables(doc: dict, unit: str) -> list:
-    """The report as rich tables (every angle converted from arcsec to ``unit``)."""
+    """The report as rich tables (every angle converted from arcsec to ``unit``; effect parameters stay in
+    their catalogue units)."""
     from rich.markup import escape
     from rich.table import Table
 
@@ -153,7 +160,8 @@ def _tables(doc: dict, unit: str) -> list:
 
     out = []
     sig = doc["signals"]
-    parts = [f"{doc['rows']} rows", f"{doc['noise']['before']['runs']} runs",
+    runs = doc["noise"]["before"]["runs"]
+    parts = [f"{doc['rows']} rows", f"{runs} run{'s' if runs != 1 else ''}",
              "both directions" if len(sig["directions"]) == 2 else "one direction"]
     for key, name, u in (("temperature_C", "temperature", "degC"), ("load_Nm", "load", "N m")):
         if sig.get(key):
@@ -163,6 +171,8 @@ def _tables(doc: dict, unit: str) -> list:
     out.append(escape(f"verdict: {doc['verdict']}"))
     if sig.get("warning"):
         out.append(escape(f"note: {sig['warning']}"))
+    if sig.get("data_warning"):
+        out.append(escape(f"note: {sig['data_warning']}"))
 
     gt = table(f"gap: measured - simulated [{unit}]", ["", "as specified", "before (phases fitted)",
                                                          "after (effects added)"])
@@ -175,14 +185,20 @@ def _tables(doc: dict, unit: str) -> list:
     if doc["effects_found"]:
         et = table("effects found", ["effect / parameter", "value", "95 % interval"])
         for e in doc["effects_found"]:
-            et.add_row(escape(e["name"]), "", "")
+            et.add_row(escape(e["name"] + ("" if e["separable"] else " (size not separable)")), "", "")
             for key, value in e["parameters"].items():
                 iv = e["interval_95"].get(key)
-                et.add_row(escape(f"  {key}"), f"{value:.4g}", f"{iv[0]:.4g} to {iv[1]:.4g}" if iv else "fixed")
+                if iv:
+                    span = f"{iv[0]:.4g} to {iv[1]:.4g}" + ("" if e["separable"] else " (fit as well)")
+                elif key in e["fixed_parameters"]:
+                    span = "fixed"
+                else:
+                    span = "not determined"
+                et.add_row(escape(f"  {key}"), f"{value:.4g}", span)
         out.append(et)
         for e in doc["effects_found"]:
             stab = (f"best in {100 * e['stability']:.0f} % of resamples of whole runs" if e["stability"] is not None
-                    else "stability not assessed (fewer than 3 runs)")
+                    else f"stability {e['stability_note'] or 'not assessed'}")
             out.append(escape(f"{e['name']}: explains {e['gap_share_pct']:.1f} % of the gap (p = {e['p_value']:.2g}, "
                               f"df {e['df']:.3g}; {stab})"))
             if "prediction" in e:
@@ -207,14 +223,20 @@ def _tables(doc: dict, unit: str) -> list:
 
     if doc["unexplained"]:
         ut = table(f"unexplained residual (after) [{unit}]", ["what", "mode", "size", "p (adjusted)", "note"])
+        ut.columns[4].justify = "left"
         for u in doc["unexplained"]:
             if u["kind"] == "order":
                 what, size = f"order {u['order']:g}", a(u["amplitude_arcsec"])
             elif u["kind"] == "trend":
                 what, size = f"trend with {u['signal']}", f"{u['slope_arcsec_per_unit'] * factor:.4g}/{u['unit']}"
+            elif u["kind"] == "likely_effect":
+                what, size = f"likely effect {u['name']}", f"RMS {a(u['rms_arcsec'])} -> {a(u['rms_with_arcsec'])}"
+            elif u["kind"] == "excess":
+                what, size = "residual above the noise floor", f"RMS {a(u['rms_arcsec'])}"
             else:
                 what, size = "mean reversal", a(u["mean_reversal_change_arcsec"])
-            ut.add_row(escape(what), u["mode"], size, f"{u['p_adjusted']:.2g}", escape(u["explanation"]))
+            p = u.get("p_adjusted")
+            ut.add_row(escape(what), u["mode"], size, "-" if p is None else f"{p:.2g}", escape(u["explanation"]))
         out.append(ut)
 
     fit = doc["fit"]
@@ -236,7 +258,12 @@ def _tables(doc: dict, unit: str) -> list:
                        ("pass_arcsec", "per pass"), ("run_arcsec", "per run"), ("total_arcsec", "total")):
         nt.add_row(label, a(nb[key]), a(na[key]))
     out.append(nt)
-    out.append(escape(f"run structure: {nb['structure']} ({nb['passes']} passes, {nb['runs']} runs)"))
+    if doc["noise"].get("floor_arcsec") is not None:
+        out.append(escape(f"noise floor (point-to-point noise within passes"
+                          f"{'' if nb['runs'] < 3 else ' and scatter between passes and runs'}): "
+                          f"{a(doc['noise']['floor_arcsec'])} [{unit}]"))
+    out.append(escape(f"run structure: {nb['structure']} ({nb['passes']} pass{'es' if nb['passes'] != 1 else ''}, "
+                      f"{nb['runs']} run{'s' if nb['runs'] != 1 else ''})"))
 
     ot = table(f"residual at the physical orders [{unit}]", ["order", "shaft or mesh", "common before",
                                                                "common after", "diff. before", "diff. after"],

@@ -55,7 +55,11 @@ def draw(diag, doc: dict, unit: str):
     axes[0, 0].set_ylabel(f"error [{unit}]")
     axes[1, 0].set_ylabel(f"measured - simulated [{unit}]")
     axes[0, 0].legend(loc="upper right", fontsize=7, markerscale=3)
-    fig.suptitle(f"{doc['drive']} vs {Path(doc['data']).name}: {doc['verdict']}", fontsize=11)
+    import textwrap
+
+    # the verdict's first clause (the rest is in the report), wrapped to the figure's width
+    headline = doc["verdict"].split("; ")[0]
+    fig.suptitle(textwrap.fill(f"{doc['drive']} vs {Path(doc['data']).name}: {headline}", 130), fontsize=11)
     fig.tight_layout()
     return fig
 
