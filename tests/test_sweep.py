@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize_scalar
 
 from wormgear_cli.cli import app
+from wormgear_cli.spec import FIELD_BY_PATH
 
 ARCSEC = math.pi / 648000.0
 
@@ -269,7 +270,7 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
     (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected 1 <= K <= N'),
     (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8'),
-    (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module > 0 [mm]"),
+    (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module from 0.05 to 100 [mm]"),
     (("--i", "2:4:3", "--min-pinion-teeth", "12"), "--min-pinion-teeth applies only with --module-mm"),
     (("--i", "2:4:3", "--l-mm", "10:20:3", "--module-mm", "2.5"),
      "no design left: at --module-mm 2.5 every point of the grid has a gear with fewer than 17 teeth; raise l, "
@@ -280,7 +281,8 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
      '--param stiffness.model: not a numeric key (it takes one of "iso6336", "empirical"); only single numbers '
      "can be swept"),
     (("--param", "gear_pair.pressure_angle_deg=10:45:3"),
-     "--param gear_pair.pressure_angle_deg: value 45 is out of range, expected a number in (0, 45) [deg]"),
+     "--param gear_pair.pressure_angle_deg: value 45 is out of range, expected "
+     + FIELD_BY_PATH["gear_pair.pressure_angle_deg"].expected()),
     (("--param", "gear_pair.pinion.teeth=16:17:3"),
      '--param gear_pair.pinion.teeth "16:17:3": the key takes whole numbers, but the range gives 16.5; choose N '
      "so that (STOP - START)/(N - 1) is whole"),
@@ -426,3 +428,262 @@ def test_fast_formatter_on_hard_cases():
     rng = np.random.default_rng(3)
     x = rng.random(5000) * 10.0 ** rng.integers(-8, 14, 5000)
     assert csv_block([x]).decode().splitlines() == ["%.12g" % v for v in x]
+
+
+# --- regressions: review of the sweep command ------------------------------------------------------
+
+
+def _drive_with(tmp_path, name, **keys):
+    """The MCH50 drive file with top-level-in-section keys replaced (like sed on the file)."""
+    import re
+
+    from conftest import MCH50
+
+    text = MCH50.read_text()
+    for key, value in keys.items():
+        text, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
+        assert n == 1, key
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture
+def zero_te_drive(tmp_path):
+    """No gear eccentricity and no gear tooth load: the paper's Delta phi_cc is 0 for every phi."""
+    return _drive_with(tmp_path, "zero.toml", gear_centre_distance_error_mm=0, gear_normal_force_N=0)
+
+
+@pytest.mark.parametrize("grid", [("--i", "2:10:3", "--l-mm", "100:300:3"), ("--l-mm", "100:300:3")])
+def test_findings_are_na_when_gear_te_is_zero(runner, zero_te_drive, grid):
+    doc_run = run(runner, zero_te_drive, *grid, "--format", "json")
+    assert doc_run.exit_code == 0, doc_run.stderr
+    assert doc_run.stderr == ""
+    doc = json.loads(doc_run.stdout)
+    # the model: with Delta e = 0 and delta1 = 0 the gear TE vanishes at every point
+    assert all(p["gear_transmission_error"] == 0.0 for p in doc["points"])
+    found = {f["id"]: f for f in doc["summary"]["findings"]}
+    assert found["l_more_sensitive_than_i"]["holds"] is None
+    assert found["l_gain_fades_beyond_200mm"]["holds"] is None
+    reason = ("not testable on this grid: gear TE is 0 everywhere (the spec has no gear eccentricity and no gear "
+              "tooth load), so its relative changes are undefined")
+    assert found["l_more_sensitive_than_i"]["statement"] == reason
+    assert found["l_gain_fades_beyond_200mm"]["statement"] == reason
+    table = run(runner, zero_te_drive, *grid)
+    assert table.exit_code == 0 and table.stderr == ""
+    assert "holds" not in table.stdout and table.stdout.count("n/a") == 3
+
+
+def test_findings_stay_testable_without_eccentricity_but_with_load(tmp_path, runner):
+    """Delta e = 0 alone leaves the load term delta1 sin(alpha)/R2 > 0: the checks still run."""
+    path = _drive_with(tmp_path, "noecc.toml", gear_centre_distance_error_mm=0)
+    doc = json.loads(run(runner, path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "json").stdout)
+    assert all(p["gear_transmission_error"] > 0 for p in doc["points"])
+    assert all(f["holds"] is not None for f in doc["summary"]["findings"])
+
+
+def test_fall_pct_is_safe_on_zero():
+    from wormgear_cli.sweep import _fall_pct
+
+    assert math.isnan(_fall_pct(0.0, 0.0))
+    assert _fall_pct(4.0, 3.0) == pytest.approx(25.0)
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:1e20"), '--i "2:10:1e20": N = 1e20 is more than the limit of 10000000 values per axis'),
+    (("--l-mm", "100:300:10000001"),
+     '--l-mm "100:300:10000001": N = 10000001 is more than the limit of 10000000 values per axis'),
+    (("--param", "worm_pair.lead_error_mm=0:1:1e20"),
+     '--param worm_pair.lead_error_mm "0:1:1e20": N = 1e20 is more than the limit of 100000 values in a --param '
+     "sweep"),
+    (("--i", "2:10:1e9", "--l-mm", "100:300:1e9"),
+     '--i "2:10:1e9": N = 1e9 is more than the limit of 10000000 values per axis'),
+])
+@pytest.mark.parametrize("fmt", ["table", "json", "csv"])
+def test_huge_n_exits_2_naming_the_option(runner, mch50_path, args, message, fmt):
+    r = run(runner, mch50_path, *args, "--format", fmt)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:1e7", "--format", "table"),
+     "--i x --l-mm: 10000000 x 1 = 10000000 points are more than the limit of 2000000 for --format table (it "
+     "holds the whole grid); use --format csv or fewer values"),
+    (("--i", "2:10:1000", "--l-mm", "100:300:101", "--format", "json"),
+     "--i x --l-mm: 1000 x 101 = 101000 points are more than the limit of 100000 for --format json (it holds "
+     "every point as an object); use --format csv, fewer values or --shard K/N"),
+    (("--i", "2:10:1e6", "--l-mm", "100:300:3", "--format", "csv", "-o", "OUT"),
+     "--i x --l-mm: 1000000 x 3 = 3000000 points are more than the limit of 2000000 for --format csv with -o "
+     "(the file is written at once); write to stdout instead (it is streamed: > FILE) or use --shard K/N"),
+    (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv"),
+     "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points are more than the limit of 1000000000 for "
+     "--format csv (about 2.5 us per point); split it with --shard K/N"),
+    (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv", "--shard", "2/1000"),
+     "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points (100000000000 in this shard) are more than the "
+     "limit of 1000000000 for --format csv (about 2.5 us per point); split it with --shard K/N"),
+    (("--i", "2:10:2000", "--l-mm", "100:300:1001", "--format", "csv", "--plot", "PLOT"),
+     "--i x --l-mm: 2000 x 1001 = 2002000 points are more than the limit of 2000000 for --plot (it holds the "
+     "whole grid); plot a coarser grid"),
+])
+def test_point_limits_are_checked_before_building_anything(runner, mch50_path, tmp_path, monkeypatch, args,
+                                                            message):
+    from wormgear_cli import sweep as core
+
+    def no_arrays(self):
+        raise AssertionError("an axis was built before the size check")
+
+    monkeypatch.setattr(core.RangeSpec, "values", no_arrays)
+    args = [str(tmp_path / "out.csv") if a == "OUT" else str(tmp_path / "p.png") if a == "PLOT" else a
+            for a in args]
+    r = run(runner, mch50_path, *args)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_shard_of_a_huge_grid_runs(runner, mch50_path):
+    """Per-axis limits allow big grids to be sharded; this shard has 100 points."""
+    r = run(runner, mch50_path, "--i", "2:10:2e6", "--l-mm", "100:300:2e6", "--format", "csv",
+            "--shard", "3/40000000000")
+    assert r.exit_code == 0, r.stderr
+    header, rows = parse_csv(r.stdout)
+    assert len(rows) == 100
+    step_l = 200 / (2e6 - 1)
+    # points 200..299 of the row-major list: i index 0, l indices 200..299
+    expected_l = [100 + k * step_l for k in range(200, 300)]
+    assert [row[1] for row in rows] == pytest.approx(expected_l, rel=1e-11)  # CSV has 12 digits
+    assert all(row[0] == 2.0 for row in rows)
+
+
+def test_long_l_axis_is_computed_in_blocks_with_the_same_values(mch50_spec, monkeypatch):
+    """An l axis longer than a block gets its kinematic peak block by block (bounded memory);
+    the values equal the precomputed path and do not depend on where a shard starts."""
+    from wormgear_cli import sweep as core
+
+    i, l = np.linspace(2, 10, 3), np.linspace(100, 300, 150)
+    whole = core.RatioDistanceSweep(mch50_spec, i, l).collect()
+    monkeypatch.setattr(core, "CHUNK_POINTS", 64)
+    blocked = core.RatioDistanceSweep(mch50_spec, i, l)
+    assert blocked._peak is None
+    data = blocked.collect()
+    np.testing.assert_allclose(data["gear_transmission_error"], whole["gear_transmission_error"], rtol=1e-13)
+    parts = [blocked.collect(a, b) for a, b in ((0, 37), (37, 301), (301, 450))]
+    for key in ("gear_transmission_error", "gear_te_phi_deg", "total_backlash"):
+        assert np.array_equal(np.concatenate([p[key] for p in parts]), data[key])
+
+
+def test_param_grid_size_is_limited(runner, mch50_path):
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:1000", "--param",
+            "gear_pair.pinion.teeth=10:1009:1000", "--format", "csv")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == ("error: --param: 1000 x 1000 = 1000000 points are more than the limit of 100000 points of "
+                        "a --param sweep (each point is a full analyze, about 1.3 ms); use fewer values\n")
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:50001", "--format", "json")
+    assert r.exit_code == 2 and r.stderr == ("error: --param: 50001 = 50001 points are more than the limit of 50000 "
+                                             "for --format json (it holds every point as an object); use --format "
+                                             "csv or --shard K/N\n")
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:100001", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == ('error: --param worm_pair.lead_error_mm "0:1:100001": N = 100001 is '
+                                             "more than the limit of 100000 values in a --param sweep\n")
+
+
+def test_param_csv_streams_rows_to_stdout(runner, mch50_path, tmp_path, monkeypatch):
+    args = (mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:6", "--format", "csv")
+    out = tmp_path / "p.csv"
+    assert run(runner, *args, "-o", out).exit_code == 0
+    streamed = run(runner, *args)
+    assert streamed.exit_code == 0 and streamed.stdout == out.read_text()  # same bytes either way
+    # streamed: rows computed before a failure are already out (nothing is held back)
+    from wormgear_cli import sweep as core
+    from wormgear_cli.errors import UsageError
+
+    real = core.param_rows
+
+    def failing(*a, **k):
+        for n, item in enumerate(real(*a, **k)):
+            if n == 150:
+                raise UsageError("stop")
+            yield item
+
+    monkeypatch.setattr(core, "param_rows", failing)
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:200", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == "error: stop\n"
+    header, rows = parse_csv(r.stdout)
+    assert header[0] == "worm_pair.lead_error_mm" and len(rows) == 100
+    assert [row[0] for row in rows] == pytest.approx(list(np.linspace(0, 0.05, 200)[:100]), rel=1e-15)
+
+
+@pytest.mark.parametrize("module, message", [
+    ("1e-300", "--module-mm 1e-300: expected a module from 0.05 to 100 [mm]"),
+    ("0.04", "--module-mm 0.04: expected a module from 0.05 to 100 [mm]"),
+    ("101", "--module-mm 101: expected a module from 0.05 to 100 [mm]"),
+    ("nan", "--module-mm nan: expected a module from 0.05 to 100 [mm]"),
+])
+def test_module_outside_the_physical_range_exits_2(runner, mch50_path, module, message):
+    r = run(runner, mch50_path, "--i", "2:10:3", "--module-mm", module, "--format", "csv")
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+
+
+def test_module_tooth_counts_stay_whole_and_positive(runner, mch50_path):
+    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "1:2:3", "--module-mm", "0.05", "--format", "json")
+    assert r.exit_code == 0, r.stderr
+    pts = json.loads(r.stdout)["points"]
+    assert pts
+    for p in pts:
+        assert p["z1"] > 0 and p["z2"] > 0
+        assert p["z1"] + p["z2"] == round(2 * p["l_mm"] / 0.05)  # the tooth sum for l at this module
+    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "100:1e9:2", "--module-mm", "0.05", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == (
+        "error: --module-mm 0.05: l = 1e+09 mm needs 4e+10 teeth (z1 + z2 = 2 l / m); at most 1000000 are "
+        "supported, use a larger module or a shorter --l-mm range\n")
+
+
+def test_undercut_min_teeth_is_safe_for_any_angle():
+    from wormgear_cli.sweep import MAX_MIN_TEETH, undercut_min_teeth
+
+    # textbook values for a standard rack: 17 at 20 deg, 32 at 14.5 deg
+    assert undercut_min_teeth(math.radians(20)) == 17 and undercut_min_teeth(math.radians(14.5)) == 32
+    for alpha in (0.0, 1e-320, 1e-300, -0.3, float("nan"), float("inf")):
+        assert undercut_min_teeth(alpha) == MAX_MIN_TEETH
+    angles = np.radians(np.geomspace(1e-6, 45, 60))
+    counts = [undercut_min_teeth(a) for a in angles]
+    assert all(b <= a for a, b in zip(counts, counts[1:]))  # fewer teeth needed at larger angles
+    assert counts[0] == MAX_MIN_TEETH and counts[-1] == 4  # 2/sin^2(45 deg) = 4
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:2:1", "--l-mm", "200:200:1"),
+     "--plot needs at least 2 values of i or of l (a single point has no curve to draw)"),
+    (("--l-mm", "200:200:1"), "--plot needs at least 2 values of i or of l (a single point has no curve to draw)"),
+    (("--param", "worm_pair.lead_error_mm=0.01:0.01:1"),
+     "--plot needs at least 2 values of a --param key (a single point has no curve to draw)"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:2", "--param", "gear_pair.pinion.teeth=16:20:3",
+      "--param", "loads.gear_normal_force_N=0:1:2"), "--plot draws one or two --param keys, got 3"),
+])
+@pytest.mark.parametrize("fmt", ["csv", "json", "table"])
+def test_infeasible_plot_fails_before_any_output(runner, mch50_path, tmp_path, monkeypatch, args, message, fmt):
+    from wormgear_cli import sweep as core
+
+    def no_work(*a, **k):
+        raise AssertionError("the sweep ran before the plot check")
+
+    monkeypatch.setattr(core, "RatioDistanceSweep", no_work)
+    monkeypatch.setattr(core, "param_rows", no_work)
+    png = tmp_path / "p.png"
+    r = run(runner, mch50_path, *args, "--plot", png, "--format", fmt)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+    assert not png.exists()
+
+
+def test_effect_parameters_are_refused_with_a_reason(runner, mch50_path, mch50_spec):
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import with_values
+
+    # the reason: [effects.*] do not enter the analyze metrics, so every row would be the same
+    with_effect = with_values(mch50_spec, {"effects.bearing_clearance.clearance_arcsec": 8.0})
+    assert with_effect.effects  # the key is a valid spec key ...
+    assert analyze(with_effect).metrics("arcsec") == analyze(mch50_spec).metrics("arcsec")  # ... without effect
+    r = run(runner, mch50_path, "--param", "effects.bearing_clearance.clearance_arcsec=0:8:2", "--format", "csv")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == ("error: --param effects.bearing_clearance.clearance_arcsec: effect parameters cannot be "
+                        "swept with --param (the [effects.*] tables feed simulate and diagnose, not the analyze "
+                        "metrics of a sweep); vary it in the drive file and run wormgear simulate\n")

@@ -159,16 +159,21 @@ def _beta_fraction(a: float, b: float, x: float) -> float:
     return f
 
 
-def betainc(a: float, b: float, x: float) -> float:
-    """Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1."""
+def betainc(a: float, b: float, x: float, y: float | None = None) -> float:
+    """Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1.
+
+    ``y`` = 1 - x when the caller knows it more accurately than 1 - x rounds
+    (x close to 1)."""
+    if y is None:
+        y = 1.0 - x
     if x <= 0.0:
         return 0.0
-    if x >= 1.0:
+    if y <= 0.0:  # x is 1 (judged by y, which may be exact where x has rounded to 1)
         return 1.0
-    log_front = (a * math.log(x) + b * math.log1p(-x) + math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b))
+    log_front = (a * math.log(x) + b * math.log(y) + math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b))
     if x < (a + 1.0) / (a + b + 2.0):
         return math.exp(log_front) * _beta_fraction(a, b, x) / a
-    return 1.0 - math.exp(log_front) * _beta_fraction(b, a, 1.0 - x) / b
+    return 1.0 - math.exp(log_front) * _beta_fraction(b, a, y) / b
 
 
 def f_sf(f: float, d1: float, d2: float) -> float:
@@ -178,7 +183,8 @@ def f_sf(f: float, d1: float, d2: float) -> float:
     if f <= 0.0:
         return 1.0
     d2 = min(d2, 1e7)
-    return betainc(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f))
+    # x = d2 / (d2 + d1 f) and 1 - x = d1 f / (d2 + d1 f), both without cancellation
+    return betainc(d2 / 2.0, d1 / 2.0, d2 / (d2 + d1 * f), d1 * f / (d2 + d1 * f))
 
 
 def _norm_ppf(p: float) -> float:

@@ -53,6 +53,16 @@ ANGLE_COLUMNS = frozenset({"gear_transmission_error", "total_transmission_error"
 INTEGER_COLUMNS = frozenset({"z1", "z2"})
 
 HOLD_MODES = ("force", "torque")
+#: most values of one --i, --l-mm axis (checked before any array is built; 80 MB per axis)
+MAX_AXIS_VALUES = 10**7
+#: most points of a --param grid (each is a full re-validated analyze, about 1.3 ms)
+MAX_PARAM_POINTS = 100_000
+#: the accepted snapping module [mm] (fine-pitch to very coarse spur gears)
+MODULE_RANGE_MM = (0.05, 100.0)
+#: most teeth of a snapped gear pair (z1 + z2) at the largest centre distance
+MAX_TOOTH_SUM = 10**6
+#: cap of :func:`undercut_min_teeth` (reached only for pressure angles below ~0.08 deg)
+MAX_MIN_TEETH = 10**6
 #: points evaluated per vectorised block (bounds memory; ~30 MB of temporaries)
 CHUNK_POINTS = 1 << 16
 #: the paper's thresholds for its findings: l "beyond 0.2 m", i "below about 6"
@@ -63,12 +73,27 @@ PAPER_I_KNEE = 6.0
 # --- ranges and shards -----------------------------------------------------------------------
 
 
-def parse_range(text: str, option: str, positive: bool = False, whole: bool = False) -> np.ndarray:
-    """``START:STOP:N`` -> N values from START to STOP inclusive (like numpy.linspace).
+@dataclass(frozen=True)
+class RangeSpec:
+    """A checked ``START:STOP:N`` (``option`` names it in messages); no array built yet."""
 
-    Raises :class:`UsageError` naming ``option`` for: not three parts, a non-numeric or
-    non-finite START/STOP, N not a whole number, N < 1, STOP < START with N > 1, N = 1 with
-    START != STOP, values <= 0 when ``positive``, non-whole values when ``whole``.
+    option: str
+    text: str
+    start: float
+    stop: float
+    n: int
+
+    def values(self) -> np.ndarray:
+        """The N values, START to STOP inclusive (numpy.linspace)."""
+        return np.linspace(self.start, self.stop, self.n)
+
+
+def parse_range_spec(text: str, option: str, positive: bool = False,
+                     max_n: int = MAX_AXIS_VALUES, limit_note: str = "per axis") -> RangeSpec:
+    """Check ``START:STOP:N`` without building the values (see :func:`parse_range`).
+
+    N above ``max_n`` is refused here, before any array exists (a huge N would otherwise
+    exhaust memory in numpy.linspace); ``limit_note`` says what the limit applies to.
     """
     where = f'{option} "{text}"'
     parts = text.split(":")
@@ -94,19 +119,37 @@ def parse_range(text: str, option: str, positive: bool = False, whole: bool = Fa
     n = int(n_float)
     if n < 1:
         raise UsageError(f"{where}: N must be at least 1, got {n}")
+    if n > max_n:
+        raise UsageError(f"{where}: N = {parts[2].strip()} is more than the limit of {max_n} values {limit_note}")
     if n == 1 and start != stop:
         raise UsageError(f"{where}: N = 1 needs START = STOP (got {start:g} and {stop:g})")
     if stop < start:
         raise UsageError(f"{where}: STOP ({stop:g}) is less than START ({start:g})")
     if positive and start <= 0.0:
         raise UsageError(f"{where}: values must be > 0 (START is {start:g})")
-    values = np.linspace(start, stop, n)
+    return RangeSpec(option, text, start, stop, n)
+
+
+def parse_range(text: str, option: str, positive: bool = False, whole: bool = False,
+                max_n: int = MAX_AXIS_VALUES) -> np.ndarray:
+    """``START:STOP:N`` -> N values from START to STOP inclusive (like numpy.linspace).
+
+    Raises :class:`UsageError` naming ``option`` for: not three parts, a non-numeric or
+    non-finite START/STOP, N not a whole number, N < 1, N > ``max_n`` (default
+    :data:`MAX_AXIS_VALUES`), STOP < START with N > 1, N = 1 with START != STOP, values <= 0
+    when ``positive``, non-whole values when ``whole``.
+    """
+    values = parse_range_spec(text, option, positive, max_n).values()
     if whole:
-        bad = values[values != np.round(values)]
-        if bad.size:
-            raise UsageError(f"{where}: the key takes whole numbers, but the range gives {bad[0]:g}; "
-                             "choose N so that (STOP - START)/(N - 1) is whole")
+        _check_whole(values, f'{option} "{text}"')
     return values
+
+
+def _check_whole(values: np.ndarray, where: str) -> None:
+    bad = values[values != np.round(values)]
+    if bad.size:
+        raise UsageError(f"{where}: the key takes whole numbers, but the range gives {bad[0]:g}; "
+                         "choose N so that (STOP - START)/(N - 1) is whole")
 
 
 def parse_shard(text: str) -> tuple[int, int]:
@@ -134,8 +177,22 @@ def shard_bounds(total: int, k: int, n: int) -> tuple[int, int]:
 def undercut_min_teeth(pressure_angle: float) -> int:
     """Smallest tooth count without undercut for a standard rack (addendum = 1 module):
     z_min = 2 / sin^2(alpha), rounded to the nearest whole number (17 for 20 deg, 32 for
-    14.5 deg, 11 for 25 deg).  Profile-shifted pinions go lower (about 12 at 20 deg)."""
-    return max(1, int(round(2.0 / math.sin(pressure_angle) ** 2)))
+    14.5 deg, 11 for 25 deg).  Profile-shifted pinions go lower (about 12 at 20 deg).
+
+    Safe for any angle: the count grows without bound as alpha -> 0 and is capped at
+    :data:`MAX_MIN_TEETH` (below about 0.08 deg, and for alpha <= 0 or NaN), so a degenerate
+    angle skips every design instead of dividing by zero."""
+    s2 = math.sin(pressure_angle) ** 2 if math.isfinite(pressure_angle) and pressure_angle > 0.0 else 0.0
+    if not s2 * MAX_MIN_TEETH > 2.0:  # also catches s2 == 0 (underflow)
+        return MAX_MIN_TEETH
+    return max(1, min(MAX_MIN_TEETH, int(round(2.0 / s2))))
+
+
+def check_module(module: float) -> None:
+    """Refuse (UsageError naming --module-mm) a snapping module outside :data:`MODULE_RANGE_MM`."""
+    lo, hi = MODULE_RANGE_MM
+    if not (math.isfinite(module) and lo <= module <= hi):
+        raise UsageError(f"--module-mm {module:g}: expected a module from {lo:g} to {hi:g} [mm]")
 
 
 @dataclass(frozen=True)
@@ -168,13 +225,19 @@ class RatioDistanceSweep:
 
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
-        if module is not None and not (math.isfinite(module) and module > 0.0):
-            raise UsageError(f"--module-mm {module:g}: expected a module > 0 [mm]")
+        if module is not None:
+            check_module(module)
         if min_teeth is not None and min_teeth < 1:
             raise UsageError(f"--min-pinion-teeth {min_teeth}: expected a whole number >= 1")
         self.spec = spec
         self.i_values = np.asarray(i_values, dtype=float)
         self.l_values = np.asarray(l_values, dtype=float)
+        if module is not None and self.l_values.size:
+            zsum = 2.0 * float(self.l_values.max()) / module
+            if zsum > MAX_TOOTH_SUM:
+                raise UsageError(f"--module-mm {module:g}: l = {float(self.l_values.max()):g} mm needs {zsum:.3g} "
+                                 f"teeth (z1 + z2 = 2 l / m); at most {MAX_TOOTH_SUM} are supported, use a larger "
+                                 "module or a shorter --l-mm range")
         self.hold = hold
         self.module = module
         gp = spec.gear_pair
@@ -200,8 +263,11 @@ class RatioDistanceSweep:
                                     gear_force=spec.loads.gear_normal_force, worm_force=fw,
                                     worm_te=w_te, worm_backlash=w_bl)
         # the structure: the kinematic peak depends on l only -> once per grid centre distance
+        # (precomputed for up to one block of l values; a longer l axis gets it per block,
+        # which keeps memory bounded: every l then appears at most twice in a block)
         self._peak = gear.kinematic_peak(self.l_values, self.eccentricity, self.alpha) \
-            if module is None else None
+            if module is None and self.l_values.size <= CHUNK_POINTS else None
+        self._peak_blocks: dict = {}
 
     # -- shape -----------------------------------------------------------------------------------
 
@@ -306,6 +372,29 @@ class RatioDistanceSweep:
             "gear_deflection_um": d1 * 1e3,
         }
 
+    def _peak_at(self, li) -> tuple:
+        """The kinematic peak at l indices ``li``.  A long l axis is done in fixed blocks of
+        :data:`CHUNK_POINTS` l values (the last two kept), so a value never depends on which
+        points share its block of work: shards stay byte-identical to the whole run."""
+        from wormgear_cli.models import gear
+
+        if self._peak is not None:
+            return tuple(p[li] for p in self._peak)
+        size = CHUNK_POINTS
+        block = li // size
+        out = [np.empty(li.size) for _ in range(5)]
+        for b in np.unique(block).tolist():
+            pk = self._peak_blocks.get(b)
+            if pk is None:
+                pk = gear.kinematic_peak(self.l_values[b * size:(b + 1) * size], self.eccentricity, self.alpha)
+                if len(self._peak_blocks) >= 2:
+                    self._peak_blocks.pop(next(iter(self._peak_blocks)))
+                self._peak_blocks[b] = pk
+            sel = block == b
+            for o, p in zip(out, pk):
+                o[sel] = p[li[sel] - b * size]
+        return tuple(out)
+
     def chunks(self, start: int = 0, stop: Optional[int] = None, chunk: int = CHUNK_POINTS,
                progress: Optional[Callable[[int], None]] = None) -> Iterator[dict]:
         """Column arrays for grid points [start, stop), in blocks of ``chunk`` points.
@@ -323,7 +412,7 @@ class RatioDistanceSweep:
             i_nom, l_nom = self.i_values[ii], self.l_values[li]
             point = np.arange(a, b, dtype=np.int64)
             if self.module is None:
-                peak = tuple(p[li] for p in self._peak)
+                peak = self._peak_at(li)
                 metrics = self.evaluate(i_nom, l_nom, peak=peak)
                 block = {"i": i_nom, "l_mm": l_nom, **metrics, "_point": point}
             else:
@@ -371,7 +460,22 @@ def best_points(data: dict) -> dict:
 
 
 def _fall_pct(before: float, after: float) -> float:
-    return 100.0 * (1.0 - after / before)
+    """Percent fall from ``before`` to ``after``; NaN when ``before`` is not > 0 (undefined)."""
+    return 100.0 * (1.0 - after / before) if before > 0.0 else float("nan")
+
+
+def _usable(*values) -> bool:
+    """True when every gear TE value is finite and > 0, so ratios and logarithms are defined."""
+    return all(bool(np.all(np.isfinite(v) & (np.asarray(v) > 0.0))) for v in values)
+
+
+def _zero_te_reason(sweep: RatioDistanceSweep) -> str:
+    """The statement of a finding that cannot be evaluated because gear TE is 0 (or undefined)."""
+    if sweep.eccentricity == 0.0 and sweep.reference.gear_force == 0.0:
+        cause = "gear TE is 0 everywhere (the spec has no gear eccentricity and no gear tooth load)"
+    else:
+        cause = "gear TE is 0 or undefined at points this check needs"
+    return f"not testable on this grid: {cause}, so its relative changes are undefined"
 
 
 def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
@@ -390,6 +494,10 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
     3. ``i_matters_below_6``: the same around i = 6 (at l_ref); holds when the fall above 6 is
        smaller than below it.  Not testable unless i_min < 6 < i_max.
 
+    A finding is also not testable (holds = None, the statement says why) when the gear TE it
+    needs is 0 -- a drive without gear eccentricity and without gear tooth load -- since its
+    relative changes are then undefined.
+
     Returns a list of dicts with ``id``, ``holds`` (True/False/None), ``statement`` and numbers.
     """
     iv, lv = sweep.i_values, sweep.l_values
@@ -407,29 +515,12 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
     ig, lg = ig.ravel(), lg.ravel()
     h = 1e-4
     dlog = math.log1p(h) - math.log1p(-h)
-    e_l = (np.log(te(ig, lg * (1 + h))) - np.log(te(ig, lg * (1 - h)))) / dlog
-    e_i = (np.log(te(ig * (1 + h), lg)) - np.log(te(ig * (1 - h), lg))) / dlog
-    med_l, med_i = float(np.median(e_l)), float(np.median(e_i))
-    share = float(100.0 * np.mean(np.abs(e_l) > np.abs(e_i)))
-    span_l = float(100.0 * (te(i_ref, l_max) / te(i_ref, l_min) - 1.0))
-    span_i = float(100.0 * (te(i_max, l_ref) / te(i_min, l_ref) - 1.0))
-    holds = abs(med_l) > abs(med_i)
-    spans = []
-    if lv.size > 1:
-        spans.append(f"l from {l_min:g} to {l_max:g} mm changes it by {span_l:+.1f} % (at i = {i_ref:g})")
-    if iv.size > 1:
-        spans.append(f"i from {i_min:g} to {i_max:g} {'by' if spans else 'changes it by'} {span_i:+.1f} % "
-                     f"(at l = {l_ref:g} mm)")
-    out.append({
-        "id": "l_more_sensitive_than_i",
-        "holds": bool(holds),
-        "statement": (f"gear TE is {'more' if holds else 'less'} sensitive to l than to i: +1 % in l changes "
-                      f"it by {med_l:+.2f} %, +1 % in i by {med_i:+.2f} % (medians over the grid; l dominates "
-                      f"at {share:.0f} % of points)" + ("; " + ", ".join(spans) if spans else "")),
-        "elasticity_l": med_l, "elasticity_i": med_i, "l_dominates_pct": share,
-        "change_over_l_range_pct": span_l, "change_over_i_range_pct": span_i,
-        "i_ref": i_ref, "l_ref_mm": l_ref,
-    })
+    stencil = (te(ig, lg * (1 + h)), te(ig, lg * (1 - h)), te(ig * (1 + h), lg), te(ig * (1 - h), lg))
+    ends = (te(i_ref, l_max), te(i_ref, l_min), te(i_max, l_ref), te(i_min, l_ref))
+    if not _usable(*stencil, *ends):
+        out.append({"id": "l_more_sensitive_than_i", "holds": None, "statement": _zero_te_reason(sweep)})
+    else:
+        out.append(_sensitivity(stencil, ends, dlog, iv, lv, i_ref, l_ref))
 
     # 2 and 3: diminishing returns around the paper's knees
     for key, knee, lo, hi, unit, other, other_value, fn in (
@@ -446,6 +537,9 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
             continue
         w = min(knee - lo, hi - knee)
         a, b, c = (float(fn(x)) for x in (knee - w, knee, knee + w))
+        if not _usable(a, b, c):
+            out.append({"id": key, "holds": None, "statement": _zero_te_reason(sweep)})
+            continue
         before, after = _fall_pct(a, b), _fall_pct(b, c)
         ratio = (b - c) / (a - b) if a != b else float("nan")
         holds = after < before
@@ -464,6 +558,36 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
     return out
 
 
+def _sensitivity(stencil, ends, dlog, iv, lv, i_ref, l_ref) -> dict:
+    """Finding 1 from the gear TE on the difference stencil and at the grid's ends (all > 0)."""
+    l_up, l_down, i_up, i_down = stencil
+    e_l = (np.log(l_up) - np.log(l_down)) / dlog
+    e_i = (np.log(i_up) - np.log(i_down)) / dlog
+    med_l, med_i = float(np.median(e_l)), float(np.median(e_i))
+    share = float(100.0 * np.mean(np.abs(e_l) > np.abs(e_i)))
+    te_l_max, te_l_min, te_i_max, te_i_min = ends
+    span_l = float(100.0 * (te_l_max / te_l_min - 1.0))
+    span_i = float(100.0 * (te_i_max / te_i_min - 1.0))
+    i_min, i_max, l_min, l_max = float(iv[0]), float(iv[-1]), float(lv[0]), float(lv[-1])
+    holds = abs(med_l) > abs(med_i)
+    spans = []
+    if lv.size > 1:
+        spans.append(f"l from {l_min:g} to {l_max:g} mm changes it by {span_l:+.1f} % (at i = {i_ref:g})")
+    if iv.size > 1:
+        spans.append(f"i from {i_min:g} to {i_max:g} {'by' if spans else 'changes it by'} {span_i:+.1f} % "
+                     f"(at l = {l_ref:g} mm)")
+    return {
+        "id": "l_more_sensitive_than_i",
+        "holds": bool(holds),
+        "statement": (f"gear TE is {'more' if holds else 'less'} sensitive to l than to i: +1 % in l changes "
+                      f"it by {med_l:+.2f} %, +1 % in i by {med_i:+.2f} % (medians over the grid; l dominates "
+                      f"at {share:.0f} % of points)" + ("; " + ", ".join(spans) if spans else "")),
+        "elasticity_l": med_l, "elasticity_i": med_i, "l_dominates_pct": share,
+        "change_over_l_range_pct": span_l, "change_over_i_range_pct": span_i,
+        "i_ref": i_ref, "l_ref_mm": l_ref,
+    }
+
+
 # --- any-parameter sweeps --------------------------------------------------------------------
 
 
@@ -475,8 +599,20 @@ class ParamAxis:
     values: tuple
 
 
+def _effect_param_keys() -> list[str]:
+    from wormgear_cli.models.effects import EFFECTS
+
+    return [f"effects.{name}.{p.key}" for name, eff in EFFECTS.items() for p in eff.params]
+
+
 def parse_param(text: str) -> ParamAxis:
-    """``KEY=START:STOP:N`` over a numeric spec key; :class:`UsageError` naming it otherwise."""
+    """``KEY=START:STOP:N`` over a numeric spec key; :class:`UsageError` naming it otherwise.
+
+    N is checked against :data:`MAX_PARAM_POINTS` before the values are built.  Keys of the
+    ``[effects.*]`` tables are refused with their own message: effects feed ``simulate`` and
+    ``diagnose``, not the ``analyze`` metrics a --param sweep reports, so every row would be
+    the same.
+    """
     from wormgear_cli.spec import FIELD_BY_PATH
 
     if "=" not in text:
@@ -485,13 +621,21 @@ def parse_param(text: str) -> ParamAxis:
     key = key.strip()
     field = FIELD_BY_PATH.get(key)
     if field is None:
-        near = difflib.get_close_matches(key, list(FIELD_BY_PATH), n=1, cutoff=0.6)
+        effect_keys = _effect_param_keys()
+        if key in effect_keys:
+            raise UsageError(f"--param {key}: effect parameters cannot be swept with --param (the [effects.*] "
+                             "tables feed simulate and diagnose, not the analyze metrics of a sweep); vary it "
+                             "in the drive file and run wormgear simulate")
+        near = difflib.get_close_matches(key, list(FIELD_BY_PATH) + effect_keys, n=1, cutoff=0.6)
         hint = f" (did you mean {near[0]}?)" if near else " (see the key reference: wormgear new)"
         raise UsageError(f"--param {key}: unknown spec key{hint}")
     if field.kind not in ("float", "int"):
         what = {"str": f"takes {field.expected()}", "floats": "is an array"}.get(field.kind, "is not a number")
         raise UsageError(f"--param {key}: not a numeric key (it {what}); only single numbers can be swept")
-    values = parse_range(rng, f"--param {key}", whole=field.kind == "int")
+    where = f"--param {key}"
+    values = parse_range_spec(rng, where, max_n=MAX_PARAM_POINTS, limit_note="in a --param sweep").values()
+    if field.kind == "int":
+        _check_whole(values, f'{where} "{rng}"')
     for v in values:
         if (field.lo is not None and (v < field.lo or (field.lo_open and v == field.lo))) or \
                 (field.hi is not None and (v > field.hi or (field.hi_open and v == field.hi))):
@@ -501,11 +645,18 @@ def parse_param(text: str) -> ParamAxis:
 
 
 def check_param_axes(axes: list[ParamAxis]) -> None:
+    """Each key once, and at most :data:`MAX_PARAM_POINTS` points in the whole grid."""
     seen = set()
     for ax in axes:
         if ax.key in seen:
             raise UsageError(f"--param {ax.key}: given twice; give each key once")
         seen.add(ax.key)
+    total = param_size(axes)
+    if total > MAX_PARAM_POINTS:
+        counts = " x ".join(str(len(ax.values)) for ax in axes)
+        raise UsageError(f"--param: {counts} = {total} points are more than the limit of {MAX_PARAM_POINTS} "
+                         "points of a --param sweep (each point is a full analyze, about 1.3 ms); use fewer "
+                         "values")
 
 
 def param_size(axes: list[ParamAxis]) -> int:

@@ -18,8 +18,18 @@ from wormgear_cli.cli.common import DriveArgument, FormatOption, OutputOption, U
 
 #: significant digits of numbers in the (i, l) CSV ('%.12g'; ~1e-12 relative)
 CSV_DIGITS = 12
-#: points above which --format table/json and --plot refuse (they hold the whole grid)
+#: most points of one (i, l) run (the whole grid, or this --shard's part), by output; checked
+#: from the axes' N before any array is built.  --format table and --plot hold the whole grid
+#: as arrays (~160 bytes per point); --format json holds every point as a Python object and
+#: its text (~3 KB per point); csv with -o holds the file text for the atomic write (~115
+#: bytes per point); csv on stdout is streamed in blocks (memory constant, ~2.5 us per point).
 MAX_COLLECTED_POINTS = 2_000_000
+MAX_JSON_POINTS = 100_000
+MAX_CSV_FILE_POINTS = 2_000_000
+MAX_CSV_STREAM_POINTS = 1_000_000_000
+#: most points of one --param run with --format json (~9 KB per point: 30 columns); every
+#: --param grid is also limited to wormgear_cli.sweep.MAX_PARAM_POINTS points
+MAX_PARAM_JSON_POINTS = 50_000
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
 _SECONDS_PER_PARAM_POINT = 5e-3
@@ -27,6 +37,8 @@ _SECONDS_PER_PARAM_POINT = 5e-3
 _TABLE_ROWS, _TABLE_COLS = 12, 8
 #: rows of the --param table
 _TABLE_PARAM_ROWS = 40
+#: --param CSV rows written to stdout at a time (about 0.1 s of work)
+_CSV_PARAM_BATCH = 100
 
 
 class HoldMode(str, Enum):
@@ -46,14 +58,15 @@ def sweep(
     param: Annotated[Optional[list[str]], typer.Option(
         "--param", metavar="KEY=START:STOP:N",
         help="Sweep a numeric spec key (TOML path, the key's unit), e.g. worm_pair.lead_error_mm=0:0.05:11. "
-             "Repeatable: the grid spans all of them (first key outermost). Every analyze metric is a "
-             "column. Not combinable with --i/--l-mm.", show_default=False)] = None,
+             "Repeatable: the grid spans all of them (first key outermost), at most 100000 points. Every "
+             "analyze metric is a column. Not for effects.* keys; not combinable with --i/--l-mm.",
+        show_default=False)] = None,
     hold: Annotated[Optional[HoldMode], typer.Option(
         "--hold", help="What stays fixed as i and l change: the normal tooth forces (force, default) or "
                        "the output torque (torque).", case_sensitive=False, show_default=False)] = None,
     module_mm: Annotated[Optional[float], typer.Option(
-        "--module-mm", help="Snap every point to whole tooth counts at this module [mm]; adds columns z1, "
-                            "z2, i_used, l_used_mm.", show_default=False)] = None,
+        "--module-mm", help="Snap every point to whole tooth counts at this module [mm], 0.05 to 100; adds "
+                            "columns z1, z2, i_used, l_used_mm.", show_default=False)] = None,
     min_pinion_teeth: Annotated[Optional[int], typer.Option(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
@@ -101,33 +114,99 @@ def sweep(
         check_plot_path(plot)
         if output is not None and Path(plot).resolve() == Path(output).resolve():
             raise UsageError(f"{plot}: --plot and -o name the same file")
-        from wormgear_cli.plots import pyplot
-
-        pyplot()  # fail now (exit 2, install hint) rather than after the sweep
 
     from wormgear_cli import sweep as core
-    from wormgear_cli.spec import load_spec
 
     k_n = core.parse_shard(shard) if shard is not None else None
     if params:
         axes = [core.parse_param(p) for p in params]
         core.check_param_axes(axes)
+        total = core.param_size(axes)
+        start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
+        if fmt == "json" and stop - start > MAX_PARAM_JSON_POINTS:
+            counts = " x ".join(str(len(ax.values)) for ax in axes)
+            raise UsageError(f"--param: {counts} = {total} points" + (f" ({stop - start} in this shard)" if k_n else "")
+                             + f" are more than the limit of {MAX_PARAM_JSON_POINTS} for --format json (it holds "
+                             "every point as an object); use --format csv or --shard K/N")
+        if plot is not None:
+            from wormgear_cli.plots.sweep import check_param_plot
+
+            check_param_plot([len(ax.values) for ax in axes])
+            _require_matplotlib()
+        from wormgear_cli.spec import load_spec
+
         spec = load_spec(drive)
         _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n)
         return
+
+    # sizes first: nothing is built, loaded or printed before the grid is known to be feasible
+    i_range = core.parse_range_spec(i, "--i", positive=True) if i is not None else None
+    l_range = core.parse_range_spec(l_mm, "--l-mm", positive=True) if l_mm is not None else None
+    if module_mm is not None:
+        core.check_module(module_mm)
+    n_i = i_range.n if i_range is not None else 1
+    n_l = l_range.n if l_range is not None else 1
+    _check_rl_size(n_i, n_l, fmt, plot, output, k_n)
+    if plot is not None:
+        from wormgear_cli.plots.sweep import check_ratio_distance_plot
+
+        check_ratio_distance_plot(n_i, n_l)
+        _require_matplotlib()
+
     import numpy as np
 
-    i_values = core.parse_range(i, "--i", positive=True) if i is not None else None
-    l_values = core.parse_range(l_mm, "--l-mm", positive=True) if l_mm is not None else None
+    from wormgear_cli.spec import load_spec
+
     spec = load_spec(drive)
     gp = spec.gear_pair
-    if i_values is None:
-        i_values = np.array([gp.output_gear.teeth / gp.pinion.teeth])
-    if l_values is None:
-        l_values = np.array([gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2.0])
+    i_values = i_range.values() if i_range is not None else np.array([gp.output_gear.teeth / gp.pinion.teeth])
+    l_values = l_range.values() if l_range is not None else \
+        np.array([gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2.0])
     sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=(hold.value if hold is not None else "force"),
                                  module=module_mm, min_teeth=min_pinion_teeth)
     _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n)
+
+
+def _require_matplotlib() -> None:
+    """Exit 2 with the install hint now, rather than after the sweep."""
+    from wormgear_cli.plots import pyplot
+
+    pyplot()
+
+
+def _rl_limits(fmt, plot, output) -> list:
+    """(limit, what it is for, what to do instead) for an (i, l) run with these outputs."""
+    if fmt == "table":
+        out = [(MAX_COLLECTED_POINTS, "--format table (it holds the whole grid)",
+                "use --format csv or fewer values")]
+    elif fmt == "json":
+        out = [(MAX_JSON_POINTS, "--format json (it holds every point as an object)",
+                "use --format csv, fewer values or --shard K/N")]
+    elif output is not None:
+        out = [(MAX_CSV_FILE_POINTS, "--format csv with -o (the file is written at once)",
+                "write to stdout instead (it is streamed: > FILE) or use --shard K/N")]
+    else:
+        out = [(MAX_CSV_STREAM_POINTS, "--format csv (about 2.5 us per point)", "split it with --shard K/N")]
+    if plot is not None:
+        out.append((MAX_COLLECTED_POINTS, "--plot (it holds the whole grid)", "plot a coarser grid"))
+    return out
+
+
+def _check_rl_size(n_i: int, n_l: int, fmt, plot, output, k_n) -> None:
+    """Refuse a run whose point count exceeds the limit of its output (see MAX_* above)."""
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.sweep import shard_bounds
+
+    total = n_i * n_l
+    start, stop = shard_bounds(total, *k_n) if k_n else (0, total)
+    points = stop - start
+    where = f"--i x --l-mm: {n_i} x {n_l} = {total} points" + (f" ({points} in this shard)" if k_n else "")
+    for limit, what, instead in _rl_limits(fmt, plot, output):
+        if points > limit:
+            raise UsageError(f"{where} are more than the limit of {limit} for {what}; {instead}")
+    if fmt == "json" and n_i + n_l > MAX_JSON_POINTS:
+        raise UsageError(f"--i x --l-mm: {n_i} + {n_l} grid values are more than the limit of {MAX_JSON_POINTS} "
+                         "for --format json (it lists the grid); use --format csv")
 
 
 # --- progress --------------------------------------------------------------------------------
@@ -174,10 +253,6 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
     if sw.module is not None and k_n is None and sw.kept_count() == 0:
         raise UsageError(f"no design left: at --module-mm {sw.module:g} every point of the grid has a gear with "
                          f"fewer than {sw.min_teeth} teeth; raise l, or lower --min-pinion-teeth")
-    if (fmt != "csv" or plot is not None) and stop - start > MAX_COLLECTED_POINTS:
-        raise UsageError(f"{stop - start} points are too many for --format {fmt}"
-                         f"{' or --plot' if plot is not None else ''} (limit {MAX_COLLECTED_POINTS}); "
-                         "use --format csv (streamed) or --shard")
     seconds = (stop - start) * _SECONDS_PER_RL_POINT
     if fmt == "csv" and plot is None:
         with _Progress(stop - start, seconds, "sweep") as bar:
@@ -186,7 +261,7 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
     with _Progress(stop - start, seconds, "sweep") as bar:
         data = sw.collect(start, stop, progress=bar.advance)
     if fmt == "csv":
-        _write(b"".join(_csv_header(sw.columns) + [_csv_rows(sw.columns, data, unit)]), output, drive)
+        _write_collected_csv(sw, data, unit, output, drive)
     elif fmt == "json":
         from wormgear_cli.cli.common import emit, json_text
 
@@ -199,6 +274,20 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
         from wormgear_cli.plots.sweep import plot_ratio_distance
 
         plot_ratio_distance(plot, sw, data, unit)
+
+
+def _write_collected_csv(sw, data, unit, output, drive) -> None:
+    """CSV of collected points, formatted a block at a time into one buffer (formatting every
+    column at once would need ~500 bytes per point; the buffer is freed on return)."""
+    import io
+
+    from wormgear_cli.sweep import CHUNK_POINTS
+
+    buf = io.BytesIO()
+    buf.write(_csv_header(sw.columns)[0])
+    for a in range(0, data["_point"].size, CHUNK_POINTS):
+        buf.write(_csv_rows(sw.columns, {c: data[c][a:a + CHUNK_POINTS] for c in sw.columns}, unit))
+    _write(buf.getvalue(), output, drive)
 
 
 def _csv_header(columns) -> list:
@@ -245,8 +334,15 @@ def _stream_csv(sw, start, stop, unit, output, drive, advance):
             write(data)
         (buf or out).flush()
         return
-    parts.extend(_formatted_blocks(sw, start, stop, unit, advance))
-    _write(b"".join(parts), output, drive)
+    import io
+
+    # one growing buffer (getvalue() hands it over without a copy): ~1x the file in memory,
+    # where collecting the blocks and joining them would need 2x
+    buf = io.BytesIO()
+    buf.write(parts[0])
+    for data in _formatted_blocks(sw, start, stop, unit, advance):
+        buf.write(data)
+    _write(buf.getvalue(), output, drive)
 
 
 def _write(data: bytes, output, drive):
@@ -422,20 +518,34 @@ def _rl_tables(sw, data, unit) -> list:
 def _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n):
     from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS
     from wormgear_cli.cli.common import csv_text, emit, json_text, render
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.sweep import param_rows, param_size, shard_bounds
 
-    if plot is not None and len(axes) > 2:
-        raise UsageError(f"--plot draws one or two --param keys, got {len(axes)}")
     total = param_size(axes)
     start, stop = shard_bounds(total, *k_n) if k_n else (0, total)
     keys = [ax.key for ax in axes]
     columns = keys + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
-    rows = []
-    with _Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:
+
+    def computed_rows(bar):
         for values, result in param_rows(spec, axes, start, stop, progress=bar.advance):
             m = result.metrics(unit)
-            rows.append(list(values) + [m[c] for c in columns[len(keys):]])
+            yield list(values) + [m[c] for c in columns[len(keys):]]
+
+    with _Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:
+        if fmt == "csv" and output is None and plot is None:
+            # stdout: rows are written as they are computed, a batch at a time (no rows held)
+            out = sys.stdout
+            out.write(csv_text(columns, []))
+            batch = []
+            for row in computed_rows(bar):
+                batch.append(row)
+                if len(batch) >= _CSV_PARAM_BATCH:
+                    out.write(csv_text(columns, batch, header=False))
+                    out.flush()
+                    batch = []
+            out.write(csv_text(columns, batch, header=False))
+            out.flush()
+            return
+        rows = list(computed_rows(bar))
     if fmt == "csv":
         emit(csv_text(columns, rows), output, [drive])
     elif fmt == "json":

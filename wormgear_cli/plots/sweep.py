@@ -27,14 +27,31 @@ def _grid(sweep, data, name, unit):
     return to_unit(grid.reshape(sweep.i_values.size, sweep.l_values.size), unit)
 
 
+def check_ratio_distance_plot(n_i: int, n_l: int) -> None:
+    """Refuse (UsageError) an (i, l) grid that cannot be drawn: it needs 2+ values of i or of l.
+    Cheap: the CLI calls it before doing any work."""
+    from wormgear_cli.errors import UsageError
+
+    if n_i < 2 and n_l < 2:
+        raise UsageError("--plot needs at least 2 values of i or of l (a single point has no curve to draw)")
+
+
+def check_param_plot(counts: list) -> None:
+    """Refuse (UsageError) a --param grid that cannot be drawn: one or two keys, and 2+ values of
+    at least one of them (``counts``: the number of values of each key)."""
+    from wormgear_cli.errors import UsageError
+
+    if len(counts) > 2:
+        raise UsageError(f"--plot draws one or two --param keys, got {len(counts)}")
+    if max(counts, default=0) < 2:
+        raise UsageError("--plot needs at least 2 values of a --param key (a single point has no curve to draw)")
+
+
 def plot_ratio_distance(path: Path, sweep, data: dict, unit: str) -> None:
     """Contour map of the gear TE over (l, i) plus cuts: TE vs l at fixed i, TE vs i at fixed l.
     Gear TE solid, total TE at the output dashed.  Skipped (snapped) points are gaps."""
-    from wormgear_cli.errors import UsageError
-
     iv, lv = sweep.i_values, sweep.l_values
-    if iv.size < 2 and lv.size < 2:
-        raise UsageError("--plot needs at least 2 values of i or of l")
+    check_ratio_distance_plot(iv.size, lv.size)
     plt = pyplot()
     gear = _grid(sweep, data, "gear_transmission_error", unit)
     total = _grid(sweep, data, "total_transmission_error", unit)
@@ -93,6 +110,7 @@ def plot_params(path: Path, drive: str, axes: list, columns: list, rows: list, u
     total TE over both, with cuts of the total TE against the first key."""
     from wormgear_cli.errors import UsageError
 
+    check_param_plot([len(ax.values) for ax in axes])
     if not rows:
         raise UsageError("--plot: no points to draw")
     plt = pyplot()
