@@ -250,3 +250,10 @@ def test_load_share_is_undefined_without_eccentricity(runner, tmp_path):
     assert "load adds n/a (no eccentric part)" in table
     row = next(csv.DictReader(io.StringIO(runner.invoke(app, ["analyze", str(drive), "-f", "csv"]).stdout)))
     assert row["gear_load_share_pct"] == ""
+
+
+def test_version(runner):
+    from wormgear_cli import __version__
+
+    r = runner.invoke(app, ["--version"])
+    assert (r.exit_code, r.stdout) == (0, f"wormgear {__version__}\n")

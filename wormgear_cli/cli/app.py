@@ -52,6 +52,22 @@ SETTINGS = dict(
 app = typer.Typer(**SETTINGS)
 
 
+def _version(value: bool) -> None:
+    if value:
+        from wormgear_cli import __version__
+
+        typer.echo(f"wormgear {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: bool = typer.Option(False, "--version", help="Print the version and exit.", callback=_version,
+                                 is_eager=True),
+) -> None:
+    """Transmission error and backlash of two-stage worm + spur gear precision drives."""
+
+
 def single_command_app(name: str):
     """An app holding only command ``name`` (registered on :data:`app`), or None if
     there is no such command.  typer then builds one command instead of all of
