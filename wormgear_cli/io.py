@@ -62,10 +62,7 @@ class _Transaction:
 
     def discard(self) -> None:
         for tmp, _ in self.staged:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
+            _unlink_quietly(tmp)
         self.staged, self.direct = [], []
 
 
@@ -95,9 +92,23 @@ def output_transaction():
     tx.commit()
 
 
+def _open_for(target, data: str | bytes):
+    """Open a path or file descriptor for writing ``data``: bytes as they are, text as UTF-8
+    with its newlines untouched."""
+    if isinstance(data, bytes):
+        return open(target, "wb")
+    return open(target, "w", encoding="utf-8", newline="")
+
+
+def _unlink_quietly(path) -> None:
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
+
+
 def _write_direct(path: Path, data: str | bytes) -> None:
-    mode = "wb" if isinstance(data, bytes) else "w"
-    with open(path, mode, **({} if mode == "wb" else {"encoding": "utf-8", "newline": ""})) as fh:
+    with _open_for(path, data) as fh:
         fh.write(data)
 
 
@@ -126,28 +137,19 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = ()) -> Non
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise UsageError(f"{path}: folder {folder} does not exist")
-    mode = "wb" if isinstance(data, bytes) else "w"
     tmp = None
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        with os.fdopen(fd, mode, **({} if mode == "wb" else {"encoding": "utf-8", "newline": ""})) as fh:
+        with _open_for(fd, data) as fh:
             fh.write(data)
         os.chmod(tmp, 0o644)
         if _CURRENT is not None:
             _CURRENT.staged.append((tmp, path))
         else:
             os.replace(tmp, path)
-    except OSError as exc:
+    except BaseException as exc:
         if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-        raise UsageError(f"{path}: cannot write ({exc.strerror})") from None
-    except BaseException:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
+            _unlink_quietly(tmp)
+        if isinstance(exc, OSError):
+            raise UsageError(f"{path}: cannot write ({exc.strerror})") from None
         raise

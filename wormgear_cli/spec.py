@@ -617,20 +617,6 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
     return Spec(**top, effects=MappingProxyType(effects), source=source, raw=_freeze(data))
 
 
-def field_value_in_key_unit(spec: Spec, path: str):
-    """The value of ``path`` in ``spec``, converted back to the key's unit."""
-    f = FIELD_BY_PATH[path]
-    node: Any = spec
-    for part in f.section.split("."):
-        node = getattr(node, part)
-    val = getattr(node, f.attr)
-    if val is None or f.kind in ("str", "int"):
-        return val
-    if f.kind == "floats":
-        return tuple(x / UNIT_SCALE[f.unit] for x in val)
-    return val / UNIT_SCALE[f.unit]
-
-
 def with_values(spec: Spec, changes: dict[str, Any]) -> Spec:
     """A new spec with TOML ``path -> value`` changes applied (key units), re-validated."""
     data = raw_copy(spec)

@@ -112,10 +112,6 @@ def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) 
     return buf.getvalue()
 
 
-def use_color() -> bool:
-    return "NO_COLOR" not in os.environ and sys.stdout.isatty()
-
-
 def text_width() -> int:
     """Width for tables written to a file or a pipe: $COLUMNS when it is a sane
     number (40..1000), else 100."""
