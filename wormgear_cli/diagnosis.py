@@ -1992,18 +1992,19 @@ def _same_order_range(f: Found, y, sig, groups, base, sources, state: ModelFit, 
         c = cost(a)
         return c <= min(costs.values()) * factor
 
-    cost(a_fit)
-    if fits(0.0):
-        lo = 0.0
-    else:
-        a, b = 0.0, a_fit
+    def edge(inside: float, outside: float) -> float:
+        """Bisect towards the boundary between a size that fits and one that does not;
+        returns the last size found to fit."""
         for _ in range(steps):
-            m = 0.5 * (a + b)
+            m = 0.5 * (inside + outside)
             if fits(m):
-                b = m
+                inside = m
             else:
-                a = m
-        lo = b
+                outside = m
+        return inside
+
+    cost(a_fit)
+    lo = 0.0 if fits(0.0) else edge(a_fit, 0.0)
     a, b = a_fit, a_fit + span
     open_ended = False
     for _ in range(3):
@@ -2012,14 +2013,7 @@ def _same_order_range(f: Found, y, sig, groups, base, sources, state: ModelFit, 
         a, b = b, b + span
     else:
         open_ended = True
-    if not open_ended:
-        for _ in range(steps):
-            m = 0.5 * (a + b)
-            if fits(m):
-                a = m
-            else:
-                b = m
-    hi = b if open_ended else a
+    hi = b if open_ended else edge(a, b)
     amp_key = next(p.key for p in eff.params if p.name == eff.amplitude)
     amp_p = eff.param(amp_key)
     f.intervals = {amp_key: (lo / amp_p.scale, hi / amp_p.scale)}
