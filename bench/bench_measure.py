@@ -17,10 +17,11 @@ from __future__ import annotations
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+
+from _timing import best_of
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVE = ROOT / "configs" / "mch50.toml"
@@ -51,15 +52,6 @@ def _write(path: Path, ang, d, run, rng) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def best(fn, repeat=3) -> float:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
-
-
 def main() -> None:
     from wormgear_cli.analysis import geometry
     from wormgear_cli.harmonics import analyse_orders, physical_orders, physical_priority
@@ -76,12 +68,12 @@ def main() -> None:
             path = Path(tmp) / f"{name}.csv"
             writer(path, rng)
             m = read_measurement(path)
-            t_read = best(lambda: read_measurement(path))
-            t_iso = best(lambda: measurement_figures(m))
-            t_ord = best(lambda: analyse_orders(m.angle, m.error, m.direction, orders, None, prio))
+            t_read = best_of(lambda: read_measurement(path))
+            t_iso = best_of(lambda: measurement_figures(m))
+            t_ord = best_of(lambda: analyse_orders(m.angle, m.error, m.direction, orders, None, prio))
             cmd = [sys.executable, "-m", "wormgear_cli", "measure", str(path), "--drive", str(DRIVE), "-f", "json",
                    "-o", str(Path(tmp) / f"{name}.json")]
-            t_cli = best(lambda: subprocess.run(cmd, check=True, capture_output=True))
+            t_cli = best_of(lambda: subprocess.run(cmd, check=True, capture_output=True))
             print(f"{name:5s} {len(m):6d} rows: read {t_read:.3f} s, ISO 230-2 {t_iso:.3f} s, "
                   f"orders ({len(orders)}) {t_ord:.3f} s, whole command {t_cli:.3f} s "
                   f"({'under' if t_cli < 2 else 'OVER'} 2 s)")
