@@ -13,7 +13,7 @@ import pytest
 
 from wormgear_cli.cli import app
 
-from conftest import CONFIGS, MCH50
+from tests.conftest import CONFIGS, MCH50
 
 CONTRACT = [
     ("stages", "gear", "transmission_error"),

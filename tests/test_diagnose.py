@@ -14,7 +14,7 @@ from wormgear_cli.cli import app
 from wormgear_cli.models.effects import EFFECTS
 from wormgear_cli.spec import load_spec
 
-from conftest import CONFIGS
+from tests.conftest import CONFIGS
 
 DEMO = CONFIGS / "mch50-warm.csv"
 TRUTH = CONFIGS / "mch50-warm.truth.json"

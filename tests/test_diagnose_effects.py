@@ -7,7 +7,7 @@ import pytest
 from wormgear_cli.diagnosis import diagnose, report
 from wormgear_cli.spec import with_values
 
-from test_diagnose_data import NO_ORDER_8, NO_ORDER_240, R_B1, Plan, make_measurement
+from tests.test_diagnose_data import NO_ORDER_8, NO_ORDER_240, R_B1, Plan, make_measurement
 
 WARM = (20.0, 35.0, 1200.0)
 STEPS = (0.0, 250.0, -250.0)

@@ -26,8 +26,8 @@ from wormgear_cli.cli import app
 from wormgear_cli.diagnosis import diagnose, report
 from wormgear_cli.measurement import parse_measurement
 
-from conftest import CONFIGS, ROOT
-from test_diagnose_data import Plan, make_csv
+from tests.conftest import CONFIGS, ROOT
+from tests.test_diagnose_data import Plan, make_csv
 
 WARM = (20.0, 34.0, 1500.0)
 TB = {"thermal_backlash": {"centre_distance_um_per_K": -0.3225}}

@@ -11,7 +11,7 @@ from wormgear_cli.cli import app
 from wormgear_cli.models.effects import EFFECTS
 from wormgear_cli.spec import FIELDS
 
-from conftest import ROOT
+from tests.conftest import ROOT
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 COMMANDS = get_command(app).commands
@@ -45,5 +45,5 @@ def test_every_effect_is_documented_with_its_keys(name):
 
 def test_readme_commands_for_setup_match_ci():
     ci = (ROOT / ".ci" / "run").read_text()
-    assert "pip install -e '.[test,plot]' && python -m pytest" in README
-    assert "-e '.[test,plot]'" in ci and "pytest" in ci
+    assert "pip install -e '.[test,plot,docs]' && python -m pytest" in README
+    assert "-e '.[test,plot,docs]'" in ci and "pytest" in ci

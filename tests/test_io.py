@@ -11,7 +11,7 @@ from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
 from wormgear_cli.io import atomic_write, output_transaction
 
-from conftest import MCH50
+from tests.conftest import MCH50
 
 
 def test_failed_second_output_leaves_no_first_output(runner, tmp_path):

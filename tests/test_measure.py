@@ -311,7 +311,7 @@ def test_help_has_an_example(runner):
 
 
 def test_absurd_orders_are_refused(runner):
-    from conftest import CONFIGS
+    from tests.conftest import CONFIGS
 
     r = runner.invoke(app, ["measure", str(CONFIGS / "mch50-warm.csv"), "--orders", "1,1e9"])
     assert r.exit_code == 2

@@ -19,7 +19,7 @@ from wormgear_cli.analysis import analyze
 from wormgear_cli.cli import app
 from wormgear_cli.spec import with_values
 
-from conftest import ROOT
+from tests.conftest import ROOT
 
 PAPER_DEG = {
     ("gear", "transmission_error"): 0.0089,

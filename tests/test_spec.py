@@ -14,7 +14,7 @@ from wormgear_cli.errors import SpecError
 from wormgear_cli.spec import FIELDS, load_spec, loads_spec, raw_copy, spec_from_dict, with_values
 from wormgear_cli.template import template
 
-from conftest import MCH50
+from tests.conftest import MCH50
 
 
 def minimal() -> dict:

@@ -161,7 +161,7 @@ def mch50_grid():
     from wormgear_cli.spec import load_spec
     from wormgear_cli.sweep import RatioDistanceSweep
 
-    from conftest import MCH50
+    from tests.conftest import MCH50
 
     i, l = np.linspace(2, 10, 9), np.linspace(100, 300, 21)
     data = RatioDistanceSweep(load_spec(MCH50), i, l).collect()
@@ -437,7 +437,7 @@ def _drive_with(tmp_path, name, **keys):
     """The MCH50 drive file with top-level-in-section keys replaced (like sed on the file)."""
     import re
 
-    from conftest import MCH50
+    from tests.conftest import MCH50
 
     text = MCH50.read_text()
     for key, value in keys.items():

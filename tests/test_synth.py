@@ -317,7 +317,7 @@ def test_shipped_demo_is_exactly_what_its_documented_command_makes(runner, tmp_p
     import json
     import shlex
 
-    from conftest import CONFIGS, ROOT
+    from tests.conftest import CONFIGS, ROOT
 
     truth = json.loads((CONFIGS / "mch50-warm.truth.json").read_text())
     args = shlex.split(truth["command"])[1:]
