@@ -14,15 +14,20 @@ when a committed page differs):
 Output is deterministic: commands and effects are sorted by name, spec keys
 keep the schema's order (the order of the template ``wormgear new`` writes).
 
+The worked session of ``docs/tutorial.md`` is hand-written prose whose
+command outputs are filled in by running the commands (:func:`refresh_session`).
+
 Run from the project root::
 
-    python -m wormgear_cli._docgen            # rewrite the pages
-    python -m wormgear_cli._docgen --check    # exit 1 if a page is stale
+    python -m wormgear_cli._docgen                    # rewrite the reference pages
+    python -m wormgear_cli._docgen --session          # ... and the tutorial's outputs
+    python -m wormgear_cli._docgen --session --check  # exit 1 if a page is stale
 """
 
 from __future__ import annotations
 
 import argparse
+import re
 import inspect
 import sys
 from pathlib import Path
@@ -218,6 +223,74 @@ def _key_of(effect, internal_name: str) -> str:
     return next(p.key for p in effect.params if p.name == internal_name)
 
 
+# --- docs/tutorial.md: outputs of the worked session --------------------------------------------------------------
+
+#: ``<!-- run: ARGS -->``, ``<!-- run(head=N): ARGS -->``, ``<!-- show(head=N): FILE -->`` or
+#: ``<!-- write: FILE -->``, each followed by a fenced block.
+_DIRECTIVE = re.compile(r"<!-- (run|show|write)(?:\(head=(\d+)\))?: (.+?) -->\n(```[^\n]*\n)(.*?)(^```$)",
+                        flags=re.S | re.M)
+
+
+def refresh_session(text: str, root: Path) -> str:
+    """Re-run the commands of a worked-session page and put their output in its blocks.
+
+    Parameters
+    ----------
+    text : str
+        The page. ``<!-- run: ARGS -->`` runs ``wormgear ARGS`` (in a scratch
+        directory holding a copy of ``configs/``, in page order, at 80 columns,
+        without colour) and fills the next fenced block with ``$ wormgear ARGS``,
+        the output (stdout and stderr as a terminal shows them) and the exit code
+        when it is not 0; ``run(head=N)`` keeps the first N lines of the output.
+        ``<!-- show(head=N): FILE -->`` fills the block with a file of the
+        scratch directory; ``<!-- write: FILE -->`` writes the block into it.
+    root : pathlib.Path
+        Project root (its ``configs/`` is copied).
+
+    Returns
+    -------
+    str
+        The page with every run/show block refreshed; the same text when
+        nothing changed.
+    """
+    import contextlib
+    import shlex
+    import shutil
+    import tempfile
+
+    from typer.testing import CliRunner
+
+    from wormgear_cli.cli import app
+
+    env = {"COLUMNS": "80", "NO_COLOR": "1", "TERM": "dumb"}
+    out, pos = [], 0
+    with tempfile.TemporaryDirectory() as tmp, contextlib.chdir(tmp):
+        shutil.copytree(root / "configs", Path(tmp) / "configs")
+        for m in _DIRECTIVE.finditer(text):
+            kind, head, arg, fence, body = m.group(1), m.group(2), m.group(3), m.group(4), m.group(5)
+            if kind == "write":
+                Path(arg).write_text(body, encoding="utf-8")
+                continue
+            if kind == "run":
+                result = CliRunner().invoke(app, shlex.split(arg), env=env, prog_name="wormgear",
+                                            catch_exceptions=False)
+                shown, lines = f"$ wormgear {arg}\n", result.output.splitlines()
+            else:
+                shown, lines = "", Path(arg).read_text(encoding="utf-8").splitlines()
+            if head and len(lines) > int(head):
+                lines = lines[:int(head)] + ["..."]
+            shown += "".join(line.rstrip() + "\n" for line in lines)
+            if kind == "run" and result.exit_code != 0:
+                shown += f"[exit code {result.exit_code}]\n"
+            out += [text[pos:m.start(5)], shown]
+            pos = m.start(6)
+    return "".join(out) + text[pos:]
+
+
+#: Hand-written pages whose command outputs :func:`refresh_session` fills in.
+SESSION_PAGES = ("tutorial.md",)
+
+
 # --- driver ---------------------------------------------------------------------------------------------------------
 
 #: Page path (relative to ``docs/``) -> renderer.
@@ -260,7 +333,22 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m wormgear_cli._docgen", description=__doc__.split("\n\n")[0])
     parser.add_argument("--docs", type=Path, default=Path("docs"), help="docs directory (default: ./docs)")
     parser.add_argument("--check", action="store_true", help="only check; exit 1 if a page is stale")
+    parser.add_argument("--session", action="store_true",
+                        help="also re-run the commands of the worked sessions (" + ", ".join(SESSION_PAGES) + ")")
     args = parser.parse_args(argv)
+    if args.session:
+        root = args.docs.resolve().parent
+        for name in SESSION_PAGES:
+            page = args.docs / name
+            old = page.read_text(encoding="utf-8")
+            new = refresh_session(old, root)
+            if new == old:
+                continue
+            if args.check:
+                print(f"stale: {page} (run: python -m wormgear_cli._docgen --session)", file=sys.stderr)
+                return 1
+            page.write_text(new, encoding="utf-8", newline="\n")
+            print(f"wrote {page}", file=sys.stderr)
     if args.check:
         stale = stale_pages(args.docs)
         for path in stale:
