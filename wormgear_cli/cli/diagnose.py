@@ -77,16 +77,10 @@ def diagnose(
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
     inputs = (drive, data)
+    from wormgear_cli.io import refuse_input
+
     for target, what in ((output, "-o"), (plot, "--plot")):
-        if target is None:
-            continue
-        for src in inputs:
-            try:
-                same = Path(target).resolve() == Path(src).resolve()
-            except OSError:
-                same = False
-            if same:
-                raise UsageError(f"{target}: refusing to overwrite the input file; choose another {what}")
+        refuse_input(target, inputs, what)
     if output is not None and plot is not None and Path(output).resolve() == Path(plot).resolve():
         raise UsageError(f"{plot}: -o and --plot name the same file")
     if plot is not None:

@@ -95,7 +95,6 @@ def measure(
 
     Example: wormgear measure test.csv --drive configs/mch50.toml --format json
     """
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.harmonics import analyse_orders, physical_orders, physical_priority
     from wormgear_cli.iso230 import measurement_figures
     from wormgear_cli.measurement import read_measurement
@@ -107,9 +106,9 @@ def measure(
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-        for src in inputs:
-            if Path(plot).resolve() == Path(src).resolve():
-                raise UsageError(f"{plot}: refusing to overwrite the input file; choose another --plot")
+        from wormgear_cli.io import refuse_input
+
+        refuse_input(plot, inputs, "--plot")
     spec = None
     physical: list[tuple[float, str]] = []
     priority = None

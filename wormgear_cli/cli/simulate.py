@@ -123,9 +123,9 @@ def simulate(
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_simulation
 
-        for p in inputs:
-            if Path(plot).resolve() == Path(p).resolve():
-                raise UsageError(f"{plot}: refusing to overwrite the input file; choose another --plot")
+        from wormgear_cli.io import refuse_input
+
+        refuse_input(plot, inputs, "--plot")
         plot_simulation(curves, plot)
     emit(text, output, inputs)
 
@@ -339,9 +339,10 @@ def synth(
     outs = [p for p in (output, truth, plot) if p is not None]
     if len({Path(p).resolve() for p in outs}) < len(outs):
         raise UsageError("-o, --truth and --plot must name different files")
+    from wormgear_cli.io import refuse_input
+
     for p in outs:
-        if Path(p).resolve() == Path(drive).resolve():
-            raise UsageError(f"{p}: refusing to overwrite the input file; choose another name")
+        refuse_input(p, [drive], "name")
     spec = load_spec(drive)
     result = synthesize(
         spec,
