@@ -370,20 +370,21 @@ class _Transaction:
         discards what is left and raises UsageError; nothing is renamed before every
         output has been written."""
         dest = None
-        with signals_deferred():
-            try:
-                for dest, data in self.direct:
-                    _write_direct(dest, data)
-                for tmp, dest in self.staged:
+        try:
+            # special files first, interruptible (opening a FIFO waits for its reader)
+            for dest, data in self.direct:
+                _write_direct(dest, data)
+            with signals_deferred():  # the renames are quick and never cut in half
+                for tmp, dest in list(self.staged):
                     os.replace(tmp, dest)
-                    self.staged = self.staged[1:]
-            except BaseException as exc:
-                self.discard()
-                if isinstance(exc, OSError):
-                    if exc.errno == errno.EPIPE:
-                        raise StdoutClosed() from None
-                    raise UsageError(f"{dest}: cannot write ({exc.strerror})") from None
-                raise
+                    self.staged.pop(0)
+        except BaseException as exc:
+            self.discard()
+            if isinstance(exc, OSError):
+                if exc.errno == errno.EPIPE:
+                    raise StdoutClosed() from None
+                raise UsageError(f"{dest}: cannot write ({exc.strerror})") from None
+            raise
         self.staged, self.direct = [], []
 
     def discard(self) -> None:
