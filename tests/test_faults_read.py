@@ -36,7 +36,7 @@ def test_a_regular_file_over_the_limit_is_refused_from_its_size_without_reading(
 
 
 def test_the_default_limit_is_the_documented_constant():
-    assert MAX_INPUT_BYTES == 64 * 1024 * 1024
+    assert MAX_INPUT_BYTES == 16 * 1024 * 1024
     assert read_text_file.__defaults__[-1] == MAX_INPUT_BYTES
 
 

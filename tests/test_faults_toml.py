@@ -43,8 +43,8 @@ HOSTILE = {
     "arrays_500": ("x = " + "[" * 500 + "]" * 500 + "\n", f"1: arrays or tables nested more than {MAX_NESTING}"),
     "inline_500": ("x = " + "{a = " * 500 + "1" + "}" * 500 + "\n", f"1: arrays or tables nested more than "
                                                                      f"{MAX_NESTING}"),
-    "mixed_deep": ("# c\n\nx = [\n" + "[{a = [" * 200 + "]}]" * 200 + "]\n", f"4: arrays or tables nested more"),
-    "int_4301": ("[drive]\nname = \"x\"\nn = " + "7" * 4301 + "\n", f"3: a key or value of 4301 characters"),
+    "mixed_deep": ("# c\n\nx = [\n" + "[{a = [" * 200 + "]}]" * 200 + "]\n", "4: arrays or tables nested more"),
+    "int_4301": ("[drive]\nname = \"x\"\nn = " + "7" * 4301 + "\n", "3: a key or value of 4301 characters"),
     "long_key": ("k" * 5000 + " = 1\n", "1: a key or value of 5000 characters"),
     "long_quoted_key": ('"' + "k" * 5000 + '" = 1\n', "1: a key of 5000 characters"),
     "oversized": ("# " + "x" * MAX_SPEC_BYTES + "\n", ""),

@@ -36,7 +36,7 @@ from wormgear_cli.errors import UsageError
 
 #: largest input file (drive spec or measurement CSV) any command reads [bytes]; the TOML
 #: guard (:mod:`wormgear_cli.tomlguard`) has a smaller limit of its own for drive files
-MAX_INPUT_BYTES = 64 * 1024 * 1024
+MAX_INPUT_BYTES = 16 * 1024 * 1024
 
 #: bytes read per step by :func:`read_text_file` (binary content is refused after the first one)
 _READ_CHUNK = 1024 * 1024

@@ -94,7 +94,7 @@ class WormgearGroup(TyperGroup):
         except StdoutClosed:
             raise typer.Exit(BROKEN_PIPE_EXIT) from None
         except KeyboardInterrupt:
-            typer.echo("interrupted", err=True)
+            typer.echo("interrupted; no output written", err=True)
             raise typer.Exit(130) from None
         except RunStopped as exc:
             typer.echo(f"stopped by {_signal_name(exc.signum)}; no output written", err=True)
