@@ -45,7 +45,7 @@ def run(args: list[str], limit: float) -> tuple[float, float, int]:
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     t0 = time.perf_counter()
     proc = subprocess.Popen([sys.executable, "-m", "wormgear_cli", *args], stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, env=env)
+                            stderr=subprocess.DEVNULL, env=env)
     deadline = t0 + limit
     while True:
         pid, status, usage = os.wait4(proc.pid, os.WNOHANG)

@@ -276,12 +276,14 @@ def _as_bytes(data: str | bytes) -> bytes:
 def _stdout_failed(exc: OSError):
     # fd 1 is useless now; point it at /dev/null so the interpreter's final flush of
     # sys.stdout cannot fail again (no "Exception ignored" message, no exit code 120)
-    try:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.__stdout__.fileno() if sys.__stdout__ else 1)
-        os.close(devnull)
-    except (OSError, ValueError, AttributeError):
-        pass
+    fd = _stdout_fd()
+    if fd is not None:
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, fd)
+            os.close(devnull)
+        except OSError:
+            pass
     if isinstance(exc, BrokenPipeError) or exc.errno == errno.EPIPE:
         raise StdoutClosed() from None
     raise UsageError(f"stdout: cannot write ({exc.strerror or exc}); is the disk full or the "

@@ -53,6 +53,15 @@ def _install_stop_handlers():
     return restore
 
 
+def _say(line: str) -> None:
+    """One line on stderr; a stderr that is gone (the terminal closed: SIGHUP) is not an error
+    of its own, the exit code still tells."""
+    try:
+        typer.echo(line, err=True)
+    except (OSError, ValueError):
+        pass
+
+
 def _signal_name(signum: int) -> str:
     import signal
 
@@ -89,15 +98,15 @@ class WormgearGroup(TyperGroup):
                     raise
         except WormgearError as exc:
             for line in exc.problems:
-                typer.echo(f"error: {line}", err=True)
+                _say(f"error: {line}")
             raise typer.Exit(exc.exit_code) from None
         except StdoutClosed:
             raise typer.Exit(BROKEN_PIPE_EXIT) from None
         except KeyboardInterrupt:
-            typer.echo("interrupted; no output written", err=True)
+            _say("interrupted; no output written")
             raise typer.Exit(130) from None
         except RunStopped as exc:
-            typer.echo(f"stopped by {_signal_name(exc.signum)}; no output written", err=True)
+            _say(f"stopped by {_signal_name(exc.signum)}; no output written")
             raise typer.Exit(128 + exc.signum) from None
         except OSError as exc:  # stdout written outside write_stdout (help text, a terminal)
             code = _output_error_exit(exc)
@@ -133,7 +142,7 @@ def _output_error_exit(exc: OSError):
         return BROKEN_PIPE_EXIT
     except UsageError as err:
         for line in err.problems:
-            typer.echo(f"error: {line}", err=True)
+            _say(f"error: {line}")
         return err.exit_code
     return None
 
