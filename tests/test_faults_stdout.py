@@ -173,3 +173,32 @@ def test_a_failing_staged_write_leaves_no_file(tmp_path, monkeypatch):
         wio.atomic_write(tmp_path / "o.csv", "y" * 1000)
     monkeypatch.undo()
     assert list(tmp_path.iterdir()) == []
+
+
+def _small_file_limit():
+    """A file-size limit of 12 kB (as a nearly full disk): the kernel writes up to the limit
+    (a short write), then fails with EFBIG.  SIGXFSZ ignored so the failure is an error code."""
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (12 * 1024, 12 * 1024))
+
+
+@pytest.mark.parametrize("where", ["redirect", "-o"])
+def test_real_short_write_on_a_regular_file_is_exit_2_and_leaves_no_result(tmp_path, where):
+    out = tmp_path / "o.csv"
+    args = [sys.executable, "-m", "wormgear_cli", "simulate", str(MCH50), "--points", "200000", "-f", "csv"]
+    if where == "-o":
+        args += ["-o", str(out)]
+    with open(tmp_path / "stdout.txt" if where == "-o" else out, "wb") as fh:
+        r = subprocess.run(args, stdout=fh, stderr=subprocess.PIPE, env=_env(), timeout=300,
+                           preexec_fn=_small_file_limit)
+    err = r.stderr.decode()
+    assert r.returncode == 2, err
+    assert len(err.splitlines()) == 1 and "File too large" in err, err
+    if where == "-o":
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["stdout.txt"]  # no o.csv, no staged file
+        assert err == f"error: {out}: cannot write (File too large)\n"
+    else:
+        assert err.startswith("error: stdout: cannot write (File too large)")
