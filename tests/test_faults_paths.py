@@ -95,7 +95,7 @@ def test_output_naming_a_directory_is_one_error_line(tmp_path, runner, make):
 
 
 def test_output_in_a_missing_folder_is_refused_before_any_work(tmp_path):
-    with pytest.raises(UsageError, match=r"folder .*nope does not exist \(for -o\)"):
+    with pytest.raises(UsageError, match=r"folder .*nope does not exist for -o$"):
         check_output_path(tmp_path / "nope" / "x.csv")
 
 
@@ -139,3 +139,19 @@ def test_long_output_name_still_stages(tmp_path):
     name = "r" * 250 + ".csv"  # the staged name must stay within NAME_MAX
     atomic_write(tmp_path / name, "x")
     assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+@pytest.mark.parametrize("args", [
+    ["simulate", str(MCH50), "--points", "100", "--plot", "{d}.png"],
+    ["synth", str(MCH50), "--seed", "1", "-o", "{tmp}/x.csv", "--truth", "{d}"],
+    ["new", "{d}/"],
+])
+def test_every_output_option_naming_a_directory_is_one_error_line(tmp_path, runner, args):
+    d = tmp_path / "d"
+    d.mkdir()
+    (tmp_path / "d.png").mkdir()
+    args = [a.format(d=d, tmp=tmp_path) for a in args]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 2
+    assert len(r.stderr.splitlines()) == 1 and r.stderr.startswith("error: ") and "Usage" not in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "d.png"]

@@ -205,7 +205,7 @@ def check_output_path(path: str | Path | None, option: str = "-o") -> None:
     _destination(Path(path), option)
 
 
-def _destination(path: Path, option: str = "-o") -> tuple[str, Path]:
+def _destination(path: Path, option: str | None = None) -> tuple[str, Path]:
     """``("file", where to rename to)`` for a new or regular file, ``("special", path)`` for a
     file written in place.  Decided from the path itself (``os.lstat``), then from what a
     symlink points at (``os.stat``): a symlink is never renamed over."""
@@ -216,7 +216,7 @@ def _destination(path: Path, option: str = "-o") -> tuple[str, Path]:
     except OSError as exc:
         raise UsageError(f"{path}: cannot write ({exc.strerror})") from None
     if stat.S_ISDIR(st.st_mode):
-        raise UsageError(f"{path}: is a directory, expected a file name for {option}")
+        raise UsageError(f"{path}: is a directory, expected a file name{_for(option)}")
     if stat.S_ISREG(st.st_mode):
         return "file", path
     if not stat.S_ISLNK(st.st_mode):
@@ -229,7 +229,7 @@ def _destination(path: Path, option: str = "-o") -> tuple[str, Path]:
     except OSError as exc:
         raise UsageError(f"{path}: cannot write ({exc.strerror})") from None
     if stat.S_ISDIR(target.st_mode):
-        raise UsageError(f"{path}: is a directory, expected a file name for {option}")
+        raise UsageError(f"{path}: is a directory, expected a file name{_for(option)}")
     if stat.S_ISREG(target.st_mode):
         try:
             same = os.stat(real)
@@ -242,10 +242,14 @@ def _destination(path: Path, option: str = "-o") -> tuple[str, Path]:
     return "special", path
 
 
-def _in_existing_folder(path: Path, option: str) -> Path:
+def _for(option: str | None) -> str:
+    return f" for {option}" if option else ""
+
+
+def _in_existing_folder(path: Path, option: str | None) -> Path:
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
-        raise UsageError(f"{path}: folder {folder} does not exist (for {option})")
+        raise UsageError(f"{path}: folder {folder} does not exist{_for(option)}")
     return path
 
 
@@ -510,7 +514,7 @@ def _sweep_once(folder: Path) -> None:
         remove_stale_staged(folder)
 
 
-def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option: str = "-o") -> None:
+def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option: str | None = None) -> None:
     """Write ``data`` to ``path`` so that readers never see a half-written file and a
     failed run leaves nothing behind.
 
@@ -530,7 +534,7 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
         ``path`` is a pipe whose reader went away.
     """
     path = Path(path)
-    refuse_input(path, inputs, option)
+    refuse_input(path, inputs, option or "-o")
     kind, dest = _destination(path, option)
     blob = _as_bytes(data)
     if kind == "special":

@@ -37,14 +37,14 @@ def diagnose(
     output: Annotated[Optional[Path], typer.Option(
         "--output", "-o", help="Write the augmented drive spec to FILE (TOML written from the parsed spec: the "
         "fitted phases and an [effects.NAME] table per named effect; the input's comments are not kept); never "
-        "the input files.", dir_okay=False,
+        "the input files.",
         show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
                                                     case_sensitive=False)] = "table",
     unit: DiagnoseUnitOption = "arcsec",
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
+        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
     alpha: Annotated[float, typer.Option(
         "--alpha", help="Family-wise significance level of each selection step (Bonferroni over the "
         "candidates tested), 0 < alpha < 0.5.")] = 0.01,

@@ -69,7 +69,7 @@ def measure(
     data: DataArgument,
     drive: Annotated[Optional[Path], typer.Option(
         "--drive", "-d", help="Drive spec (TOML): default orders are its shafts and meshes, labelled.",
-        dir_okay=False, show_default=False)] = None,
+        show_default=False)] = None,
     orders: Annotated[Optional[str], typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,8,240 "
         "(default: the drive's physical orders with --drive, else 1,2,3,4).", show_default=False)] = None,
@@ -81,7 +81,7 @@ def measure(
     output: OutputOption = None,
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs the "
-        "'plot' extra).", dir_okay=False, show_default=False)] = None,
+        "'plot' extra).", show_default=False)] = None,
 ):
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 
