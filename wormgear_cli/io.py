@@ -307,6 +307,11 @@ def write_stdout(data: str | bytes) -> None:
     Text is written as UTF-8 (the same bytes as ``-o FILE``).  Anything
     already buffered in ``sys.stdout`` goes first.  Short writes are resumed.
 
+    Parameters
+    ----------
+    data : str or bytes
+        The whole result (text is encoded as UTF-8, newlines untouched).
+
     Raises
     ------
     StdoutClosed
@@ -524,6 +529,17 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
     keeps the link; its final target is replaced.  A special file (FIFO,
     device such as /dev/null) or a symlink to one is written in place, at
     commit.  Text is written as UTF-8, bytes as they are.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output named by the user.
+    data : str or bytes
+        The whole content.
+    inputs : tuple of str or Path
+        Input files of the run that ``path`` must not be (see :func:`refuse_input`).
+    option : str or None
+        The option that named ``path`` ("-o", "--plot"), for messages.
 
     Raises
     ------
