@@ -51,14 +51,44 @@ HOSTILE = {
 }
 
 
+_CHILD = """
+import json, sys
+from typer.testing import CliRunner
+from wormgear_cli.cli import app
+runner = CliRunner()
+out = {}
+for path in sys.argv[1:]:
+    r = runner.invoke(app, ["analyze", path])
+    out[path] = [r.exit_code, r.stderr, repr(r.exception) if r.exit_code not in (0, 1, 2) else None]
+print(json.dumps(out))
+"""
+
+
+@pytest.fixture(scope="module")
+def hostile_results(tmp_path_factory):
+    """Every hostile file through ``wormgear analyze`` in one child process under the memory
+    and time limits (one start-up for all of them)."""
+    folder = tmp_path_factory.mktemp("hostile")
+    paths = {}
+    for name, (text, _) in HOSTILE.items():
+        paths[name] = folder / f"{name}.toml"
+        paths[name].write_text(text)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    r = subprocess.run([sys.executable, "-c", _CHILD, *map(str, paths.values())], stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, env=env, timeout=TIME_LIMIT_S, preexec_fn=_limited)
+    assert r.returncode == 0, r.stderr.decode()[-3000:]
+    import json
+
+    got = json.loads(r.stdout)
+    return {name: (path, got[str(path)]) for name, path in paths.items()}
+
+
 @pytest.mark.parametrize("name", sorted(HOSTILE))
-def test_hostile_drive_file_is_refused_within_the_runner_limits(tmp_path, name):
-    text, expected = HOSTILE[name]
-    path = tmp_path / f"{name}.toml"
-    path.write_text(text)
-    r = _analyze(path)
-    err = r.stderr.decode()
-    assert r.returncode == 2, err[-2000:]
+def test_hostile_drive_file_is_refused_within_the_runner_limits(hostile_results, name):
+    path, (code, err, exc) = hostile_results[name]
+    expected = HOSTILE[name][1]
+    assert code == 2, (err, exc)
     assert len(err.splitlines()) == 1 and "Traceback" not in err
     assert err.startswith(f"error: {path}:{expected}")
     if name == "oversized":
