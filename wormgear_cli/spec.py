@@ -18,7 +18,6 @@ from __future__ import annotations
 import copy
 import difflib
 import math
-import tomllib
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
@@ -332,34 +331,22 @@ def load_spec(path: str | Path) -> Spec:
 
     path = Path(path)
     name = str(path)
-    text = read_text_file(path, "a TOML drive file", SpecError, encoding="utf-8-sig")  # a BOM is tolerated
+    from wormgear_cli.tomlguard import MAX_SPEC_BYTES
+
+    text = read_text_file(path, "a TOML drive file", SpecError, encoding="utf-8-sig",  # a BOM is tolerated
+                          max_bytes=MAX_SPEC_BYTES)
     if not text.strip():
         raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
     return loads_spec(text, name, default_name=path.stem)
 
 
 def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:
-    """Parse TOML text and validate it (see :func:`load_spec`)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise SpecError(_syntax_message(str(exc), text, source)) from None
+    """Parse TOML text (bounded, see :mod:`wormgear_cli.tomlguard`) and validate it (see
+    :func:`load_spec`)."""
+    from wormgear_cli.tomlguard import parse_toml
+
+    data = parse_toml(text, source)
     return spec_from_dict(data, source, default_name)
-
-
-def _syntax_message(msg: str, text: str, source: str) -> str:
-    """``FILE:LINE:COL: TOML syntax error: WHAT`` from tomllib's message."""
-    import re
-
-    m = re.search(r"\s*\(at line (\d+), column (\d+)\)\s*$", msg)
-    if m:
-        return f"{source}:{m.group(1)}:{m.group(2)}: TOML syntax error: {msg[:m.start()]}"
-    m = re.search(r"\s*\(at end of document\)\s*$", msg)
-    if m:
-        lines = text.splitlines() or [""]
-        return (f"{source}:{len(lines)}:{len(lines[-1]) + 1}: TOML syntax error: "
-                f"{msg[:m.start()]} (at end of file)")
-    return f"{source}: TOML syntax error: {msg}"
 
 
 def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "drive") -> Spec:

@@ -159,8 +159,7 @@ def check(
 
 @app.command()
 def new(
-    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
-                                         dir_okay=False)],
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False)],
     name: Annotated[Optional[str], typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
     """Write a complete, commented drive template to start from.

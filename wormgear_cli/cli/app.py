@@ -12,29 +12,139 @@ from typer.core import TyperGroup
 from wormgear_cli.errors import WormgearError
 
 
+class RunStopped(BaseException):
+    """SIGTERM or SIGHUP arrived: the run stops like Ctrl-C (outputs discarded).
+
+    A BaseException, so ``except Exception`` in command code cannot swallow it."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_stopped(signum, frame):
+    raise RunStopped(signum)
+
+
+def _install_stop_handlers():
+    """Make SIGTERM and SIGHUP raise :class:`RunStopped` (main thread only; a signal the
+    parent set to be ignored, as ``nohup`` does for SIGHUP, stays ignored).  Returns a
+    function restoring the previous handlers."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+    old = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is None:
+            continue
+        previous = signal.getsignal(signum)
+        if previous == signal.SIG_IGN:
+            continue
+        old[signum] = previous
+        signal.signal(signum, _raise_stopped)
+
+    def restore():
+        for signum, handler in old.items():
+            signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
+
+    return restore
+
+
+def _say(line: str) -> None:
+    """One line on stderr; a stderr that is gone (the terminal closed: SIGHUP) is not an error
+    of its own, the exit code still tells."""
+    try:
+        typer.echo(line, err=True)
+    except (OSError, ValueError):
+        pass
+
+
+def _signal_name(signum: int) -> str:
+    import signal
+
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
 class WormgearGroup(TyperGroup):
-    """Runs a command; a user mistake becomes messages + exit code, never a traceback."""
+    """Runs a command; a user mistake becomes messages + exit code, never a traceback.
+
+    Exit codes: 0 ok, 1 a check ran and failed, 2 bad usage/input or an output that
+    cannot be written, 128 + N stopped by signal N (130 Ctrl-C, 129 SIGHUP, 143
+    SIGTERM, 141 stdout closed by its reader).  A stopped run leaves no output file.
+    """
 
     def invoke(self, ctx):
-        from wormgear_cli.io import output_transaction
+        from wormgear_cli.io import BROKEN_PIPE_EXIT, StdoutClosed, flush_stdout, output_transaction
 
+        restore = _install_stop_handlers()
         try:
             # every file a command writes is committed together at its end: a failed
-            # run (user error, bug, Ctrl-C) leaves no output; a clean exit (also
-            # exit code 1 of a failed check) writes them
+            # run (user error, bug, Ctrl-C, SIGTERM, SIGHUP, closed stdout) leaves no
+            # output; a clean exit (also exit code 1 of a failed check) writes them
             with output_transaction() as tx:
                 try:
-                    return super().invoke(ctx)
+                    result = super().invoke(ctx)
+                    flush_stdout()
+                    return result
                 except typer.Exit:
+                    flush_stdout()
                     tx.commit()
                     raise
         except WormgearError as exc:
             for line in exc.problems:
-                typer.echo(f"error: {line}", err=True)
+                _say(f"error: {line}")
             raise typer.Exit(exc.exit_code) from None
+        except StdoutClosed:
+            raise typer.Exit(BROKEN_PIPE_EXIT) from None
         except KeyboardInterrupt:
-            typer.echo("interrupted", err=True)
+            _say("interrupted; no output written")
             raise typer.Exit(130) from None
+        except RunStopped as exc:
+            _say(f"stopped by {_signal_name(exc.signum)}; no output written")
+            raise typer.Exit(128 + exc.signum) from None
+        except OSError as exc:  # stdout written outside write_stdout (help text, a terminal)
+            code = _output_error_exit(exc)
+            if code is None:
+                raise
+            raise typer.Exit(code) from None
+        finally:
+            restore()
+
+    def main(self, *args, **kwargs):
+        try:
+            return super().main(*args, **kwargs)
+        except OSError as exc:  # --help / --version text to a full or closed stdout
+            code = _output_error_exit(exc)
+            if code is None:
+                raise
+            raise SystemExit(code) from None
+
+
+def _output_error_exit(exc: OSError):
+    """Exit code for a failed write to stdout (after one stderr line), None if ``exc`` is
+    not an output error."""
+    import errno
+
+    from wormgear_cli.io import BROKEN_PIPE_EXIT, StdoutClosed, UsageError, _stdout_failed
+
+    if exc.errno not in (errno.EPIPE, errno.ENOSPC, errno.EIO, errno.EFBIG,
+                         getattr(errno, "EDQUOT", -1)):
+        return None
+    try:
+        _stdout_failed(exc)
+    except StdoutClosed:
+        return BROKEN_PIPE_EXIT
+    except UsageError as err:
+        for line in err.problems:
+            _say(f"error: {line}")
+        return err.exit_code
+    return None
 
 
 SETTINGS = dict(

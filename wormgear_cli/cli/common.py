@@ -51,19 +51,27 @@ FormatOption = Annotated[TableFormat, typer.Option("--format", "-f", help="Outpu
 UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the angular errors in the "
                                                "output (positions such as target angles stay in deg).",
                                                case_sensitive=False)]
+def _check_output(value: Optional[Path]) -> Optional[Path]:
+    """-o: a directory or a missing folder is the project's one-line error, before any work."""
+    from wormgear_cli.io import check_output_path
+
+    check_output_path(value, "-o")
+    return value
+
+
 OutputOption = Annotated[Optional[Path], typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
-                                                      dir_okay=False)]
+                                                      callback=_check_output)]
 DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False)]
 
 
 def emit(text: str, output: Optional[Path], inputs: Iterable = ()) -> None:
     """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``."""
+    from wormgear_cli.io import atomic_write, write_stdout
+
     if output is None or str(output) == "-":
-        sys.stdout.write(text)
-        sys.stdout.flush()
+        write_stdout(text)  # checked and completed: a full disk is exit 2, a closed pipe a quiet stop
         return
-    from wormgear_cli.io import atomic_write
 
     atomic_write(output, text, tuple(inputs))
 

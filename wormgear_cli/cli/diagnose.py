@@ -37,14 +37,14 @@ def diagnose(
     output: Annotated[Optional[Path], typer.Option(
         "--output", "-o", help="Write the augmented drive spec to FILE (TOML written from the parsed spec: the "
         "fitted phases and an [effects.NAME] table per named effect; the input's comments are not kept); never "
-        "the input files.", dir_okay=False,
+        "the input files.",
         show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
                                                     case_sensitive=False)] = "table",
     unit: DiagnoseUnitOption = "arcsec",
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
+        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
     alpha: Annotated[float, typer.Option(
         "--alpha", help="Family-wise significance level of each selection step (Bonferroni over the "
         "candidates tested), 0 < alpha < 0.5.")] = 0.01,
@@ -77,16 +77,10 @@ def diagnose(
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
     inputs = (drive, data)
+    from wormgear_cli.io import refuse_input
+
     for target, what in ((output, "-o"), (plot, "--plot")):
-        if target is None:
-            continue
-        for src in inputs:
-            try:
-                same = Path(target).resolve() == Path(src).resolve()
-            except OSError:
-                same = False
-            if same:
-                raise UsageError(f"{target}: refusing to overwrite the input file; choose another {what}")
+        refuse_input(target, inputs, what)
     if output is not None and plot is not None and Path(output).resolve() == Path(plot).resolve():
         raise UsageError(f"{plot}: -o and --plot name the same file")
     if plot is not None:

@@ -69,7 +69,7 @@ def measure(
     data: DataArgument,
     drive: Annotated[Optional[Path], typer.Option(
         "--drive", "-d", help="Drive spec (TOML): default orders are its shafts and meshes, labelled.",
-        dir_okay=False, show_default=False)] = None,
+        show_default=False)] = None,
     orders: Annotated[Optional[str], typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,8,240 "
         "(default: the drive's physical orders with --drive, else 1,2,3,4).", show_default=False)] = None,
@@ -81,7 +81,7 @@ def measure(
     output: OutputOption = None,
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs the "
-        "'plot' extra).", dir_okay=False, show_default=False)] = None,
+        "'plot' extra).", show_default=False)] = None,
 ):
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 
@@ -95,7 +95,6 @@ def measure(
 
     Example: wormgear measure test.csv --drive configs/mch50.toml --format json
     """
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.harmonics import analyse_orders, physical_orders, physical_priority
     from wormgear_cli.iso230 import measurement_figures
     from wormgear_cli.measurement import read_measurement
@@ -107,9 +106,9 @@ def measure(
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-        for src in inputs:
-            if Path(plot).resolve() == Path(src).resolve():
-                raise UsageError(f"{plot}: refusing to overwrite the input file; choose another --plot")
+        from wormgear_cli.io import refuse_input
+
+        refuse_input(plot, inputs, "--plot")
     spec = None
     physical: list[tuple[float, str]] = []
     priority = None

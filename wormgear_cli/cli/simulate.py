@@ -37,7 +37,7 @@ class RunNoiseKind(str, Enum):
 
 PlotOption = Annotated[Optional[Path], typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
-    dir_okay=False, show_default=False)]
+    show_default=False)]
 
 
 @app.command()
@@ -50,7 +50,7 @@ def simulate(
     at: Annotated[Optional[Path], typer.Option(
         "--at", help="Evaluate at every row of this CSV (angle_deg; optional direction, load_Nm, "
         "temperature_C, time_s) and write the rows back with a simulated_error_<unit> column.",
-        dir_okay=False, show_default=False)] = None,
+        show_default=False)] = None,
     temperature_c: Annotated[float, typer.Option(
         "--temperature-C", help="Drive temperature [degC] for the dense scan, and for --at rows when the "
         "file has no temperature_C column.")] = 20.0,
@@ -123,9 +123,9 @@ def simulate(
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_simulation
 
-        for p in inputs:
-            if Path(plot).resolve() == Path(p).resolve():
-                raise UsageError(f"{plot}: refusing to overwrite the input file; choose another --plot")
+        from wormgear_cli.io import refuse_input
+
+        refuse_input(plot, inputs, "--plot")
         plot_simulation(curves, plot)
     emit(text, output, inputs)
 
@@ -267,7 +267,7 @@ def synth(
     output: OutputOption = None,
     truth: Annotated[Optional[Path], typer.Option(
         "--truth", help="Write the truth (phases, effects with parameters, noise, seed, plan) to this JSON "
-        "file; it never goes into the data.", dir_okay=False, show_default=False)] = None,
+        "file; it never goes into the data.", show_default=False)] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same bytes).",
                                       min=0)] = 0,
     plan: Annotated[PlanKind, typer.Option("--plan", help="iso: irregularly spaced targets; dense: an even "
@@ -339,9 +339,10 @@ def synth(
     outs = [p for p in (output, truth, plot) if p is not None]
     if len({Path(p).resolve() for p in outs}) < len(outs):
         raise UsageError("-o, --truth and --plot must name different files")
+    from wormgear_cli.io import refuse_input
+
     for p in outs:
-        if Path(p).resolve() == Path(drive).resolve():
-            raise UsageError(f"{p}: refusing to overwrite the input file; choose another name")
+        refuse_input(p, [drive], "name")
     spec = load_spec(drive)
     result = synthesize(
         spec,

@@ -76,7 +76,7 @@ def sweep(
                                        "(csv/json); parts concatenate to the full CSV.", show_default=False)] = None,
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs the 'plot' "
-                       "extra).", dir_okay=False, show_default=False)] = None,
+                       "extra).", show_default=False)] = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,

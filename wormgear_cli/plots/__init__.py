@@ -1,6 +1,9 @@
 """Plots (optional extra ``plot``): matplotlib is imported only here, only when plotting.
 
-Each command has its own module in this package; all use :func:`pyplot`.
+Each command has its own module in this package; all draw with :func:`pyplot` and save
+with :func:`save_figure`, the one plotting set-up: the non-interactive Agg backend, fixed
+style settings, and byte-reproducible files (the same input gives the same bytes in PNG,
+SVG and PDF: a fixed SVG id salt, no dates or software versions in the metadata).
 """
 
 from __future__ import annotations
@@ -12,6 +15,20 @@ from wormgear_cli.errors import UsageError
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 INSTALL_HINT = "plotting needs matplotlib: pip install 'wormgear-cli[plot]'"
 
+#: resolution of PNG files [dots per inch]
+DPI = 120
+
+#: settings applied while a figure is saved: SVG element ids derive from this salt instead
+#: of a random one; fonts are drawn as paths (no dependence on the viewer's fonts)
+SAVE_RC = {"svg.hashsalt": "wormgear", "svg.fonttype": "path", "pdf.fonttype": 42}
+
+#: metadata of each format: keys set to None are left out (dates, the matplotlib version)
+METADATA = {
+    "png": {"Software": None},
+    "svg": {"Date": None, "Creator": None},
+    "pdf": {"CreationDate": None, "ModDate": None, "Creator": None, "Producer": None},
+}
+
 
 def pyplot():
     """matplotlib.pyplot with the non-interactive Agg backend, or a UsageError with the install hint."""
@@ -19,7 +36,7 @@ def pyplot():
         import matplotlib
     except ImportError:
         raise UsageError(INSTALL_HINT) from None
-    matplotlib.use("Agg")
+    matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
 
     return plt
@@ -31,15 +48,29 @@ def check_plot_path(path: Path) -> None:
         raise UsageError(f"{path}: --plot expects a file ending in {', '.join(PLOT_SUFFIXES)}")
 
 
-def save_figure(fig, path: Path) -> None:
-    """Save atomically (temporary file + rename) with deterministic metadata."""
+def figure_bytes(fig, fmt: str) -> bytes:
+    """The file content of ``fig`` in ``fmt`` ("png", "svg", "pdf"): the same figure gives
+    the same bytes on every run (:data:`SAVE_RC`, :data:`METADATA`)."""
     import io
 
+    plt = pyplot()
+    buf = io.BytesIO()
+    with plt.rc_context(SAVE_RC):
+        fig.savefig(buf, format=fmt, dpi=DPI, metadata=METADATA[fmt])
+    return buf.getvalue()
+
+
+def save_figure(fig, path: Path) -> None:
+    """Save ``fig`` to ``path`` as one output of the run (atomic, committed with the
+    others; see :func:`wormgear_cli.io.atomic_write`).
+
+    Raises
+    ------
+    UsageError
+        Unsupported suffix, or the file cannot be written.
+    """
     from wormgear_cli.io import atomic_write
 
     check_plot_path(path)
-    buf = io.BytesIO()
     fmt = Path(path).suffix.lower().lstrip(".")
-    meta = {"Software": None} if fmt == "png" else ({"Date": None} if fmt == "svg" else {"CreationDate": None})
-    fig.savefig(buf, format=fmt, dpi=120, metadata=meta)
-    atomic_write(path, buf.getvalue())
+    atomic_write(path, figure_bytes(fig, fmt), option="--plot")
