@@ -41,9 +41,10 @@ MAX_INPUT_BYTES = 16 * 1024 * 1024
 #: bytes read per step by :func:`read_text_file` (binary content is refused after the first one)
 _READ_CHUNK = 1024 * 1024
 
-#: exit code of a run whose stdout was closed by its reader (``| head -1``): 128 + SIGPIPE,
-#: what a shell reports for any program stopped by a closed pipe; never 1 ("a check failed")
-BROKEN_PIPE_EXIT = 128 + int(getattr(signal, "SIGPIPE", 13))
+#: exit code of a run whose stdout was closed by its reader (``| head -1``): 0.  A reader that
+#: has read what it wanted is normal use, not a failure (so ``set -o pipefail`` scripts keep
+#: working); never 1 ("a check failed").  Outputs to files are still discarded.
+BROKEN_PIPE_EXIT = 0
 
 #: signals that stop a run like Ctrl-C (outputs discarded, exit 128 + signal number)
 STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
