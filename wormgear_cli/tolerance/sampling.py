@@ -20,7 +20,7 @@ inspection, so no value lies beyond its tolerance):
 * ``uniform`` on [L, U].
 
 Random streams: sample j belongs to block b = j // :data:`BLOCK`; each block
-has its own Philox generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
+has its own PCG64 generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
 and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms, one row per
 registry column and phase in registry order.  So sample j is the same
 whatever the block size used for the computation or the shard it falls in.
@@ -115,7 +115,7 @@ def sample_values(varied: Varied, u: np.ndarray, element: int = 0) -> np.ndarray
 def block_uniforms(seed: int, block: int) -> np.ndarray:
     """The (:data:`STREAM_COLUMNS`, :data:`BLOCK`) uniforms in [0, 1) of block ``block``."""
     ss = np.random.SeedSequence(int(seed), spawn_key=(int(block),))
-    return np.random.Generator(np.random.Philox(ss)).random((STREAM_COLUMNS, BLOCK))
+    return np.random.Generator(np.random.PCG64(ss)).random((STREAM_COLUMNS, BLOCK))
 
 
 @dataclass(frozen=True)
