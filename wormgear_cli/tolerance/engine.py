@@ -202,7 +202,7 @@ def limits(s: Setup) -> dict[str, tuple[str, float]]:
 class Summary:
     """The statistics of a run: ``samples``, per-metric ``describe`` dicts, ``corner``
     and ``rss`` [unit], ``yields`` (requirement key or "all" -> :class:`~.statistics.Yield`),
-    ``sensitivity`` (metric -> (column -> index, remainder) or None)."""
+    ``sensitivity`` (metric -> (column -> index, remainder) or None), ``values`` the samples."""
 
     samples: int
     described: dict
@@ -210,6 +210,7 @@ class Summary:
     rss: dict
     yields: dict
     sensitivity: dict
+    values: dict = field(default=None, repr=False, compare=False)  # metric -> values [unit] (plots)
 
 
 def summarize(s: Setup, collector: Collector) -> Summary:
@@ -227,7 +228,7 @@ def summarize(s: Setup, collector: Collector) -> Summary:
     if lim:
         yields["all"] = stats.binomial_yield(int(np.count_nonzero(passing_all)), collector.n)
     sens = {m: stats.first_order_indices(bins, values[m]) for m in s.metrics}
-    return Summary(collector.n, described, corner, rss, yields, sens)
+    return Summary(collector.n, described, corner, rss, yields, sens, values)
 
 
 def run(s: Setup, on_block: Callable[[Block], None] | None = None,
