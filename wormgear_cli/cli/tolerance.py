@@ -127,9 +127,9 @@ def tolerance(
     if target_yield is not None and not 0.0 < target_yield < 1.0:
         raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
     spec = load_spec(drive)
+    n_rows = None
     if summarize is not None:
         _, metric_set = report.read_header(summarize)
-        n_rows = None
     options = engine.Options(samples=samples, seed=seed, metrics=metric_set, plan=getattr(plan, "value", plan),
                              targets=targets, points=points, unit=unit, shard=k_n)
     if summarize is not None:
@@ -235,9 +235,9 @@ def _tables(doc: dict, target) -> list:
         out.append(t3)
     sens = {m: v for m, v in doc["sensitivity"].items() if v is not None}
     if sens:
-        t4 = Table(title="share of each metric's variance (first-order sensitivity index)", pad_edge=False,
-                   **kw)
-        t4.add_column("key")
+        t4 = Table(title="share of each metric's variance (first-order sensitivity index)",
+                   **{**kw, "padding": (0, 0)})
+        t4.add_column("key ", no_wrap=True)
         for m in sens:
             t4.add_column(SHORT[m], justify="right")
         keys = [k for k in next(iter(sens.values())) if k != "remainder"]
@@ -260,8 +260,8 @@ def _tables(doc: dict, target) -> list:
     if doc.get("shard"):
         notes.append(f"shard {doc['shard']['part']}: samples {doc['shard']['first_sample']} to "
                      f"{doc['shard']['stop_sample'] - 1}")
-    notes.append("corner: every tolerance at its limit (analyze; ISO figures with aligned phases); "
-                 "RSS: root-sum-square of the single contributions")
+    notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
+    notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]
     return out
 

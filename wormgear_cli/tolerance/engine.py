@@ -315,3 +315,53 @@ def metrics_for_limits(spec) -> str | None:
     if any(getattr(spec.requirements, a) is not None for a in YIELD_REQUIREMENTS):
         return "paper"
     return None
+
+
+# --- the yield requirement of ``check`` --------------------------------------------------------
+
+#: samples ``check`` draws for a ``min_yield`` requirement (seed 0)
+CHECK_SAMPLES = 100_000
+
+
+@dataclass(frozen=True)
+class YieldCheck:
+    """``requirements.min_yield`` against the estimated joint yield: ``target``, the
+    :class:`~.statistics.Yield` and the verdict ("pass", "fail", "undecided")."""
+
+    target: float
+    estimate: stats.Yield
+    verdict: str
+
+    @property
+    def passed(self) -> bool:
+        return self.verdict == "pass"
+
+    def line(self) -> str:
+        y = self.estimate
+        shown = f"yield {100 * y.value:.2f} % (95 % interval {100 * y.low:.2f} - {100 * y.high:.2f} %, {y.n} samples)"
+        if self.verdict == "undecided":
+            return (f"UNDECIDED requirements.min_yield: target {100 * self.target:g} % lies inside the interval of "
+                    f"the {shown}; run wormgear tolerance with more --samples")
+        return f"{'ok' if self.passed else 'FAIL'} requirements.min_yield: target {100 * self.target:g} %, {shown}"
+
+    def to_dict(self) -> dict:
+        y = self.estimate
+        return {"key": "requirements.min_yield", "target": self.target, "value": y.value, "low": y.low,
+                "high": y.high, "samples": y.n, "verdict": self.verdict, "passed": self.passed}
+
+
+def check_yield(spec, samples: int = CHECK_SAMPLES, seed: int = 0) -> YieldCheck | None:
+    """The ``min_yield`` requirement of ``spec`` (None when absent): the joint yield of the
+    limits on the paper's totals from ``samples`` drives.  A target inside the 95 %
+    interval is undecided (and fails).  Raises SpecError when there is no limit to count
+    against, or for a bad ``[statistics]`` table."""
+    from wormgear_cli.errors import SpecError
+
+    target = spec.requirements.min_yield
+    if target is None:
+        return None
+    if metrics_for_limits(spec) is None:
+        raise SpecError(f"{spec.source}: requirements.min_yield: needs a limit to count the yield against "
+                        "(max_transmission_error_arcsec or max_backlash_arcsec)")
+    est = joint_yield(setup(spec, Options(samples=samples, seed=seed, metrics="paper")))
+    return YieldCheck(float(target), est, est.verdict(float(target)))
