@@ -89,7 +89,7 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
             want = np.arange(first, first + len(sample))
             if not np.array_equal(sample, want):
                 bad = int(np.argmax(sample != want))
-                raise DataError(f"{name}: line {line_no + 2 + bad}: sample {sample[bad]:g}, expected {want[bad]} "
+                raise DataError(f"{name}: line {line_no + 1 + bad}: sample {sample[bad]:g}, expected {want[bad]} "
                                 "(samples must be consecutive: a shard missing, repeated or out of order?)")
             expected_next = first + len(sample)
             cols = {c: data[:, 1 + i] for i, c in enumerate(s.columns)}
