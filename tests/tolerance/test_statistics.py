@@ -63,3 +63,41 @@ def test_first_order_indices_leave_the_interaction_in_the_remainder():
 
 def test_constant_metric_has_no_indices():
     assert first_order_indices({"x": np.zeros(10, np.uint8)}, np.ones(10)) is None
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_second_pass_percentiles_equal_the_in_memory_ones(monkeypatch, seed):
+    # beyond IN_MEMORY_SAMPLES only a histogram is kept and a second pass collects the order
+    # statistics: same numbers as holding every value (and as numpy's percentile, to rounding)
+    from wormgear_cli.tolerance import statistics
+
+    rng = np.random.default_rng(seed)
+    blocks = [rng.normal(5.0, 2.0, 1000) for _ in range(7)] + [np.array([-3.0, 0.0, 12.5])]
+    full = np.concatenate(blocks)
+    held = statistics.OrderStatistics()
+    for b in blocks:
+        held.add(b)
+    monkeypatch.setattr(statistics, "IN_MEMORY_SAMPLES", 1500)
+    streamed = statistics.OrderStatistics()
+    for b in blocks:
+        streamed.add(b)
+    assert streamed.needs_second_pass and not held.needs_second_pass
+    streamed.start_second_pass()
+    for b in blocks:
+        streamed.collect(b)
+    assert streamed.percentiles() == held.percentiles()
+    ref = np.percentile(full, [50, 90, 95, 99, 99.73])
+    assert list(held.percentiles().values())[:-1] == pytest.approx(ref, rel=1e-14)
+    assert held.percentiles()["max"] == 12.5
+
+
+def test_large_run_second_pass_gives_the_same_report(monkeypatch):
+    from tests.conftest import MCH50
+    from wormgear_cli.spec import load_spec
+    from wormgear_cli.tolerance import engine, statistics
+
+    s = engine.setup(load_spec(MCH50), engine.Options(samples=3000, seed=9, metrics="all"))
+    held = engine.run(s)
+    monkeypatch.setattr(statistics, "IN_MEMORY_SAMPLES", 1000)
+    streamed = engine.run(s)
+    assert streamed.described == held.described

@@ -139,11 +139,8 @@ def tolerance(
     inputs = [drive] + ([summarize] if summarize is not None else [])
 
     if summarize is not None:
-        col = engine.Collector(s)
-        for block in report.read_samples(summarize, s):
-            col.add(block)
-        n_rows = col.n
-        summary = engine.summarize(s, col)
+        summary = engine.summarize(s, lambda: report.read_samples(summarize, s))
+        n_rows = summary.samples
     elif fmt == "csv":
         summary = _csv_run(s, output, inputs)
     else:
@@ -164,7 +161,7 @@ def tolerance(
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
 
-        draw(doc, summary.values, engine.limits(s), plot, LABELS)
+        draw(doc, summary.plot_values, engine.limits(s), plot, LABELS)
     if fmt == "json":
         emit(json_text(doc), output, inputs)
     elif fmt == "table":

@@ -165,29 +165,6 @@ def blocks(s: Setup, progress: Callable[[int], None] | None = None) -> Iterator[
             progress(hi - lo)
 
 
-class Collector:
-    """Keeps what the summary needs from each block: the metric values and the
-    sensitivity bin of every varied column."""
-
-    def __init__(self, s: Setup):
-        self.setup = s
-        self.metric_parts = {m: [] for m in s.metrics}
-        self.bin_parts = {c: [] for c in s.columns}
-        self.n = 0
-
-    def add(self, block: Block) -> None:
-        for m in self.setup.metrics:
-            self.metric_parts[m].append(np.asarray(block.metrics[m], dtype=float))
-        for c in self.setup.columns:
-            lo, hi = self.setup.bounds[c]
-            self.bin_parts[c].append(stats.bin_index(block.columns[c], lo, hi))
-        self.n += block.stop - block.start
-
-    def arrays(self) -> tuple[dict, dict]:
-        cat = lambda parts: parts[0] if len(parts) == 1 else np.concatenate(parts)  # noqa: E731
-        return ({m: cat(p) for m, p in self.metric_parts.items()}, {c: cat(p) for c, p in self.bin_parts.items()})
-
-
 def limits(s: Setup) -> dict[str, tuple[str, float]]:
     """Requirement key -> (metric, limit [the run's unit]) for the limits on computed metrics."""
     out = {}
@@ -198,11 +175,52 @@ def limits(s: Setup) -> dict[str, tuple[str, float]]:
     return out
 
 
+#: samples per metric kept for the histograms of ``--plot`` (the first ones)
+PLOT_SAMPLES = 200_000
+
+
+class Accumulator:
+    """Streaming statistics of the blocks: moments, exact order statistics (bounded memory),
+    yield counts and the sensitivity sums; nothing per sample beyond
+    :data:`~.statistics.IN_MEMORY_SAMPLES` values per metric and :data:`PLOT_SAMPLES` for plots."""
+
+    def __init__(self, s: Setup, centres: dict):
+        self.setup, self.centres = s, centres
+        self.moments = {m: stats.Moments(centres[m]) for m in s.metrics}
+        self.order = {m: stats.OrderStatistics() for m in s.metrics}
+        self.bins = stats.BinSums(s.columns, s.metrics)
+        self.limits = limits(s)
+        self.passing = {k: 0 for k in self.limits}
+        self.passing_all = 0
+        self.plot = {m: [] for m in s.metrics}
+        self.n = 0
+
+    def add(self, block: Block) -> None:
+        s = self.setup
+        n = block.stop - block.start
+        for m in s.metrics:
+            y = np.asarray(block.metrics[m], dtype=float)
+            self.moments[m].add(y)
+            self.order[m].add(y)
+            if self.n < PLOT_SAMPLES:
+                self.plot[m].append(y[:PLOT_SAMPLES - self.n])
+        self.bins.add({c: stats.bin_index(block.columns[c], *s.bounds[c]) for c in s.columns},
+                      {m: np.asarray(block.metrics[m], dtype=float) - self.centres[m] for m in s.metrics})
+        ok_all = np.ones(n, dtype=bool)
+        for key, (metric, limit) in self.limits.items():
+            ok = np.asarray(block.metrics[metric]) <= limit
+            self.passing[key] += int(np.count_nonzero(ok))
+            ok_all &= ok
+        self.passing_all += int(np.count_nonzero(ok_all))
+        self.n += n
+
+
 @dataclass(frozen=True)
 class Summary:
-    """The statistics of a run: ``samples``, per-metric ``describe`` dicts, ``corner``
-    and ``rss`` [unit], ``yields`` (requirement key or "all" -> :class:`~.statistics.Yield`),
-    ``sensitivity`` (metric -> (column -> index, remainder) or None), ``values`` the samples."""
+    """The statistics of a run: ``samples``, per-metric ``described`` (mean, std, percentiles),
+    ``corner`` and ``rss`` [unit], ``yields`` (requirement key or "all" -> :class:`~.statistics.Yield`),
+    ``sensitivity`` (metric -> (column -> index, remainder) or None), ``plot_values`` (the first
+    :data:`PLOT_SAMPLES` values per metric, for histograms)."""
 
     samples: int
     described: dict
@@ -210,36 +228,49 @@ class Summary:
     rss: dict
     yields: dict
     sensitivity: dict
-    values: dict = field(default=None, repr=False, compare=False)  # metric -> values [unit] (plots)
+    plot_values: dict = field(default=None, repr=False, compare=False)
 
 
-def summarize(s: Setup, collector: Collector) -> Summary:
-    """The summary of the collected samples (see :class:`Summary`)."""
-    values, bins = collector.arrays()
-    described = {m: stats.describe(values[m]) for m in s.metrics}
+def summarize(s: Setup, source: Callable[[], Iterator[Block]]) -> Summary:
+    """The summary of the blocks ``source()`` yields (called a second time, for the exact
+    percentiles, when more than :data:`~.statistics.IN_MEMORY_SAMPLES` samples are summarized)."""
     corner, rss = reference_values(s)
-    yields = {}
-    lim = limits(s)
-    passing_all = np.ones(collector.n, dtype=bool)
-    for key, (metric, limit) in lim.items():
-        ok = values[metric] <= limit
-        passing_all &= ok
-        yields[key] = stats.binomial_yield(int(np.count_nonzero(ok)), collector.n)
-    if lim:
-        yields["all"] = stats.binomial_yield(int(np.count_nonzero(passing_all)), collector.n)
-    sens = {m: stats.first_order_indices(bins, values[m]) for m in s.metrics}
-    return Summary(collector.n, described, corner, rss, yields, sens, values)
+    acc = Accumulator(s, corner)
+    for block in source():
+        acc.add(block)
+    if any(o.needs_second_pass for o in acc.order.values()):
+        for o in acc.order.values():
+            o.start_second_pass()
+        for block in source():
+            for m, o in acc.order.items():
+                o.collect(block.metrics[m])
+    described = {m: {"mean": acc.moments[m].mean, "std": acc.moments[m].std,
+                     "percentiles": acc.order[m].percentiles()} for m in s.metrics}
+    yields = {k: stats.binomial_yield(acc.passing[k], acc.n) for k in acc.limits}
+    if acc.limits:
+        yields["all"] = stats.binomial_yield(acc.passing_all, acc.n)
+    sens = {m: acc.bins.indices(m, acc.moments[m]) for m in s.metrics}
+    plot = {m: np.concatenate(p) if p else np.empty(0) for m, p in acc.plot.items()}
+    return Summary(acc.n, described, corner, rss, yields, sens, plot)
 
 
 def run(s: Setup, on_block: Callable[[Block], None] | None = None,
         progress: Callable[[int], None] | None = None) -> Summary:
-    """Draw and evaluate every sample of the setup; ``on_block`` sees each block (CSV writing)."""
-    col = Collector(s)
-    for block in blocks(s, progress):
-        col.add(block)
-        if on_block is not None:
-            on_block(block)
-    return summarize(s, col)
+    """Draw and evaluate every sample of the setup; ``on_block`` sees each block of the first
+    pass (CSV writing); a second pass (large runs) recomputes the same samples silently."""
+    first = [True]
+
+    def source():
+        if first[0]:
+            first[0] = False
+            for block in blocks(s, progress):
+                if on_block is not None:
+                    on_block(block)
+                yield block
+        else:
+            yield from blocks(s)
+
+    return summarize(s, source)
 
 
 # --- corner case and root-sum-square estimate ------------------------------------------------

@@ -17,12 +17,9 @@ import numpy as np
 
 from wormgear_cli.errors import DataError
 from wormgear_cli.tolerance.engine import Block, Setup, Summary
+from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.tolerance.metrics import METRIC_SETS
 from wormgear_cli.tolerance.statistics import PERCENTILES
-
-#: rows read from a samples CSV at once
-READ_ROWS = 65536
-
 
 def csv_header(s: Setup) -> str:
     return ",".join(("sample", *s.columns, *s.metrics)) + "\n"
@@ -73,8 +70,20 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
     line_no = 1
     with open(path, encoding="utf-8", newline="") as fh:
         fh.readline()
+        first_line = fh.readline()
+        if not first_line.strip():
+            raise DataError(f"{name}: no sample rows after the header")
+        try:
+            first = int(first_line.split(",", 1)[0])
+        except ValueError:
+            raise DataError(f"{name}: line 2: expected a sample number first, got {first_line.split(',', 1)[0]!r}") \
+                from None
+        # chunks end at the random-stream block boundaries, as the run's blocks do (same sums, same bytes)
+        pending = [first_line]
+        size = BLOCK - first % BLOCK
         while True:
-            lines = list(itertools.islice(fh, READ_ROWS))
+            lines = pending + list(itertools.islice(fh, size - len(pending)))
+            pending, size = [], BLOCK
             if not lines:
                 break
             try:
@@ -85,19 +94,17 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
             if data.shape[1] != width:
                 raise DataError(f"{name}: line {line_no + 1}: expected {width} values per row, got {data.shape[1]}")
             sample = data[:, 0]
-            first = int(sample[0]) if expected_next is None else expected_next
-            want = np.arange(first, first + len(sample))
+            start = first if expected_next is None else expected_next
+            want = np.arange(start, start + len(sample))
             if not np.array_equal(sample, want):
                 bad = int(np.argmax(sample != want))
                 raise DataError(f"{name}: line {line_no + 1 + bad}: sample {sample[bad]:g}, expected {want[bad]} "
                                 "(samples must be consecutive: a shard missing, repeated or out of order?)")
-            expected_next = first + len(sample)
+            expected_next = start + len(sample)
             cols = {c: data[:, 1 + i] for i, c in enumerate(s.columns)}
             mets = {m: data[:, 1 + len(s.columns) + i] for i, m in enumerate(s.metrics)}
-            yield Block(first, expected_next, cols, mets)
+            yield Block(start, expected_next, cols, mets)
             line_no += len(lines)
-    if expected_next is None:
-        raise DataError(f"{name}: no sample rows after the header")
 
 
 def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: str | None = None) -> dict:

@@ -1,0 +1,111 @@
+"""Speed and memory of ``wormgear tolerance`` (targets: 10^6 samples of the paper's metrics <= 2 s,
+of the ISO 230-2 figures at 24 targets <= 10 s, peak memory < 1 GB).
+
+Run: python bench/bench_tolerance.py [N]
+Prints, for N samples (default 10^6) of configs/mch50.toml, seed 0:
+  * the core run (draw, metrics, statistics; scipy imported beforehand) for --metrics paper, best of 2;
+  * the same for --metrics iso (24 targets of the iso plan), once;
+  * a plain numpy script that loops analyze's model functions sample by sample (scalar calls, timed on
+    2000 samples and scaled to N), and the ratio to the vectorised run;
+  * the whole command in a new process (start-up included) for --metrics paper, and its peak memory
+    (ru_maxrss of the child) for N and 4 N samples;
+No assertions: this is a measurement, not a test.
+"""
+
+from __future__ import annotations
+
+import resource
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from _timing import best_of
+
+ROOT = Path(__file__).resolve().parent.parent
+DRIVE = ROOT / "configs" / "mch50.toml"
+
+
+def command(*args):
+    exe = shutil.which("wormgear")
+    return [exe, *args] if exe else [sys.executable, "-m", "wormgear_cli", *args]
+
+
+def plain_loop(spec, draw, n: int) -> float:
+    """Seconds for n samples, one scalar call of each of analyze's model functions per sample."""
+    from wormgear_cli.analysis import deflections
+    from wormgear_cli.models import gear, worm
+
+    gp, wp = spec.gear_pair, spec.worm_pair
+    z1, z2, m, a = gp.output_gear.teeth, gp.pinion.teeth, gp.module, gp.pressure_angle
+    lam, a2, m2, z3 = wp.lead_angle, wp.transverse_pressure_angle, wp.module, wp.wheel.teeth
+    i_c = z1 / z2
+    v = {k: x.tolist() for k, x in draw.values.items()}
+    t0 = time.perf_counter()
+    d = deflections(spec)
+    for j in range(n):
+        de = v["assembly.gear_eccentricity_mm"][j]
+        te, _ = gear.gear_te_max_fast(m * z2 / 2, m * z1 / 2, de, a, d.gear)
+        bl = gear.gear_backlash_max(m, z1, de, a, d.gear)
+        h = worm.worm_te_halfwidth(v["worm_pair.lead_error_mm"][j], v["assembly.worm_eccentricity_mm"][j],
+                                   v["assembly.worm_bearing_clearance_mm"][j],
+                                   v["worm_pair.wheel.radial_composite_error_mm"][j],
+                                   v["assembly.wheel_eccentricity_mm"][j], v["assembly.wheel_bearing_clearance_mm"][j],
+                                   lam, a2)
+        wte = worm.worm_te(d.worm, h, m2, z3)
+        c = worm.worm_backlash_central(d.worm, v["worm_pair.worm.profile_error_mm"][j],
+                                       v["worm_pair.wheel.profile_error_mm"][j],
+                                       v["worm_pair.worm.thickness_deviation_mm"][j],
+                                       v["worm_pair.wheel.thickness_deviation_mm"][j], lam)
+        hj = worm.worm_backlash_halfwidth(v["worm_pair.worm.profile_error_mm"][j],
+                                          v["worm_pair.wheel.profile_error_mm"][j],
+                                          v["worm_pair.worm.thickness_deviation_mm"][j],
+                                          v["worm_pair.wheel.thickness_deviation_mm"][j],
+                                          sum(v[f"assembly.worm_pair_errors_mm[{i}]"][j] ** 2 for i in range(6)),
+                                          v["worm_pair.lead_error_mm"][j],
+                                          v["assembly.worm_centre_distance_error_mm"][j],
+                                          v["worm_pair.wheel.radial_composite_error_mm"][j], lam, a2)
+        wbl = worm.worm_backlash(sum(c), hj, m2, z3)
+        _ = (te + wte / i_c, bl + wbl / i_c)
+    return time.perf_counter() - t0
+
+
+def peak_rss_mb(n: int) -> float:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    subprocess.run(command("tolerance", str(DRIVE), "-n", str(n), "--metrics", "paper", "--format", "json"),
+                   check=True, stdout=subprocess.DEVNULL)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    return max(after, before) / 1024.0  # kB -> MB (max over the children so far)
+
+
+def main() -> None:
+    import scipy.stats  # noqa: F401  (imported once, outside the timings)
+
+    from wormgear_cli.spec import load_spec
+    from wormgear_cli.tolerance import engine, sampling
+    from wormgear_cli.tolerance.quantities import varied_quantities
+
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
+    spec = load_spec(DRIVE)
+    paper = engine.setup(spec, engine.Options(samples=n, metrics="paper"))
+    t_paper = best_of(lambda: engine.run(paper), repeat=2)
+    print(f"core, {n} samples, paper metrics:              {t_paper:.2f} s   (target <= 2 s at 10^6)")
+    iso = engine.setup(spec, engine.Options(samples=n, metrics="iso", targets=24))
+    t_iso = best_of(lambda: engine.run(iso), repeat=1)
+    print(f"core, {n} samples, ISO 230-2 at 24 targets:    {t_iso:.2f} s   (target <= 10 s at 10^6)")
+    m = 2000
+    draw = sampling.draw(varied_quantities(spec), 0, 0, m)
+    t_loop = plain_loop(spec, draw, m) * n / m
+    print(f"plain loop of analyze's functions, scaled to {n}: {t_loop:.1f} s  "
+          f"(ratio loop / vectorised paper run: {t_loop / t_paper:.0f}x)")
+    t_cmd = best_of(lambda: subprocess.run(command("tolerance", str(DRIVE), "-n", str(n), "--metrics", "paper",
+                                                    "--format", "json"), check=True, stdout=subprocess.DEVNULL),
+                    repeat=1)
+    print(f"wormgear tolerance -n {n} --metrics paper:    {t_cmd:.2f} s (new process, start-up included)")
+    print(f"peak memory of that command (N = {n}):          {peak_rss_mb(n):.0f} MB")
+    print(f"peak memory of that command (N = {4 * n}):          {peak_rss_mb(4 * n):.0f} MB")
+
+
+if __name__ == "__main__":
+    main()
