@@ -14,7 +14,7 @@ No assertions: this is a measurement, not a test.
 
 from __future__ import annotations
 
-import resource
+import os
 import shutil
 import subprocess
 import sys
@@ -71,12 +71,22 @@ def plain_loop(spec, draw, n: int) -> float:
     return time.perf_counter() - t0
 
 
-def peak_rss_mb(n: int) -> float:
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    subprocess.run(command("tolerance", str(DRIVE), "-n", str(n), "--metrics", "paper", "--format", "json"),
-                   check=True, stdout=subprocess.DEVNULL)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    return max(after, before) / 1024.0  # kB -> MB (max over the children so far)
+_WRAPPER = ("import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL); "
+            "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)")
+
+
+def peak_rss_mb(*args: str) -> float:
+    """Peak resident memory [MB] of one ``wormgear`` process (measured by a fresh parent)."""
+    out = subprocess.run([sys.executable, "-c", _WRAPPER, *command(*args)], check=True, capture_output=True,
+                         text=True)
+    return int(out.stdout.split()[-1]) / 1024.0  # kB -> MB
+
+
+def timed(fn):
+    """(wall, cpu) seconds of one call; cpu counts every thread of this process."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    fn()
+    return time.perf_counter() - t0, time.process_time() - c0
 
 
 def main() -> None:
@@ -88,23 +98,25 @@ def main() -> None:
 
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1_000_000
     spec = load_spec(DRIVE)
+    print(f"machine load (1 min average): {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores "
+          "(wall times grow with it; cpu times much less)")
     paper = engine.setup(spec, engine.Options(samples=n, metrics="paper"))
-    t_paper = best_of(lambda: engine.run(paper), repeat=2)
-    print(f"core, {n} samples, paper metrics:              {t_paper:.2f} s   (target <= 2 s at 10^6)")
+    wall, cpu = min(timed(lambda: engine.run(paper)) for _ in range(2))
+    print(f"core, {n} samples, paper metrics:            wall {wall:6.2f} s, cpu {cpu:6.2f} s  (target 2 s)")
     iso = engine.setup(spec, engine.Options(samples=n, metrics="iso", targets=24))
-    t_iso = best_of(lambda: engine.run(iso), repeat=1)
-    print(f"core, {n} samples, ISO 230-2 at 24 targets:    {t_iso:.2f} s   (target <= 10 s at 10^6)")
+    wall_i, cpu_i = timed(lambda: engine.run(iso))
+    print(f"core, {n} samples, ISO 230-2 at 24 targets:  wall {wall_i:6.2f} s, cpu {cpu_i:6.2f} s  (target 10 s)")
     m = 2000
     draw = sampling.draw(varied_quantities(spec), 0, 0, m)
     t_loop = plain_loop(spec, draw, m) * n / m
-    print(f"plain loop of analyze's functions, scaled to {n}: {t_loop:.1f} s  "
-          f"(ratio loop / vectorised paper run: {t_loop / t_paper:.0f}x)")
-    t_cmd = best_of(lambda: subprocess.run(command("tolerance", str(DRIVE), "-n", str(n), "--metrics", "paper",
-                                                    "--format", "json"), check=True, stdout=subprocess.DEVNULL),
-                    repeat=1)
-    print(f"wormgear tolerance -n {n} --metrics paper:    {t_cmd:.2f} s (new process, start-up included)")
-    print(f"peak memory of that command (N = {n}):          {peak_rss_mb(n):.0f} MB")
-    print(f"peak memory of that command (N = {4 * n}):          {peak_rss_mb(4 * n):.0f} MB")
+    print(f"plain loop of analyze's functions per sample, scaled to {n}: {t_loop:.0f} s "
+          f"(ratio to the vectorised paper run: {t_loop / wall:.0f}x)")
+    args = ("tolerance", str(DRIVE), "-n", str(n), "--metrics", "paper", "--format", "json")
+    t_cmd = best_of(lambda: subprocess.run(command(*args), check=True, stdout=subprocess.DEVNULL), repeat=1)
+    print(f"wormgear {' '.join(args[:1] + args[2:])}: {t_cmd:.2f} s (new process, start-up included)")
+    for k in (n, 4 * n):
+        print(f"peak memory, wormgear tolerance -n {k} --metrics paper: {peak_rss_mb('tolerance', str(DRIVE), '-n', str(k), '--metrics', 'paper', '--format', 'json'):.0f} MB")
+    print(f"peak memory, wormgear tolerance -n {n // 4} --metrics all:   {peak_rss_mb('tolerance', str(DRIVE), '-n', str(n // 4), '--metrics', 'all', '--format', 'json'):.0f} MB")
 
 
 if __name__ == "__main__":

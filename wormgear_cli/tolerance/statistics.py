@@ -61,10 +61,10 @@ class OrderStatistics:
         self.n = 0
 
     def add(self, y: np.ndarray) -> None:
-        y = np.asarray(y, dtype=float)
+        y = np.ascontiguousarray(y, dtype=float)  # the blocks' arrays are fresh: kept without a copy
         self.n += y.size
         if self.parts is not None:
-            self.parts.append(y.copy())
+            self.parts.append(y)
             if self.n > IN_MEMORY_SAMPLES:
                 self.hist = np.zeros(1 << _KEY_BITS, np.int64)
                 for part in self.parts:
