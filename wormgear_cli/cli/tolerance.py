@@ -232,7 +232,7 @@ def _tables(doc: dict, target) -> list:
         out.append(t3)
     sens = {m: v for m, v in doc["sensitivity"].items() if v is not None}
     if sens:
-        t4 = Table(title="share of each metric's variance (first-order sensitivity index)",
+        t4 = Table(title="variance share (first-order index)",
                    **{**kw, "padding": (0, 0)})
         t4.add_column("key ", no_wrap=True)
         for m in sens:
