@@ -222,3 +222,23 @@ def test_table_fits_80_columns(runner):
     assert r.exit_code == 0, r.output
     assert max(len(line) for line in r.stdout.splitlines()) <= 80
     assert "worst case / RSS / Monte Carlo" in r.stdout
+
+
+def test_one_sample(runner):
+    r = _run(runner, MCH50, "-n", 1, "--format", "json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["samples"] == 1
+    m = doc["metrics"]["total_transmission_error"]
+    assert m["std"] is None and m["percentiles"]["50"] == m["percentiles"]["max"] == m["mean"]
+    assert all(v is None for v in doc["sensitivity"].values())
+
+
+def test_check_validates_statistics_without_min_yield(runner, tmp_path):
+    doc = mch50_doc()
+    doc["statistics"] = {"assembly.wheel_eccentricity_mm": {"distribution": "lognormal"}}
+    drive = write(tmp_path, doc)
+    r = runner.invoke(app, ["check", str(drive)])
+    assert r.exit_code == 2
+    assert r.stderr == (f'error: {drive}: statistics."assembly.wheel_eccentricity_mm".distribution: unknown '
+                        'distribution "lognormal" (did you mean "normal"?)\n')

@@ -148,3 +148,19 @@ def test_distribution_moments_replicated(seed):
     assert x.var() == pytest.approx(var, rel=0.005)
     y = _draw(_varied("assembly.wheel_eccentricity_mm", "uniform"), n, seed)
     assert y.var() == pytest.approx(T * T / 12, rel=0.005)
+
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=60)
+@given(cp=st.floats(0.05, 5.0), ratio=st.floats(0.01, 1.0), tol=st.floats(1e-6, 10.0),
+       signed=st.booleans(), seed=st.integers(0, 2**32))
+def test_truncation_holds_for_any_capability(cp, ratio, tol, signed, seed):
+    # whatever cp, cpk <= cp and tolerance, every normal draw stays inside its interval
+    path = "worm_pair.lead_error_mm" if signed else "assembly.wheel_eccentricity_mm"
+    v = _varied(path, "normal", cp, cp * ratio, tol)
+    x = sampling.sample_values(v, np.random.default_rng(seed).random(2000))
+    lo, hi = v.bounds()
+    assert np.all((x >= lo) & (x <= hi))

@@ -140,6 +140,10 @@ def check(
                 from wormgear_cli.tolerance.engine import check_yield
 
                 yc = check_yield(spec)
+            elif "statistics" in spec.raw:  # validated even when no yield is required
+                from wormgear_cli.tolerance.quantities import statistics_table
+
+                statistics_table(spec)
         except WormgearError as exc:
             invalid = True
             entry.update(valid=False, passed=False, problems=exc.problems)
