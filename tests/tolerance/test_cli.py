@@ -242,3 +242,11 @@ def test_check_validates_statistics_without_min_yield(runner, tmp_path):
     assert r.exit_code == 2
     assert r.stderr == (f'error: {drive}: statistics."assembly.wheel_eccentricity_mm".distribution: unknown '
                         'distribution "lognormal" (did you mean "normal"?)\n')
+
+
+def test_csv_file_size_limit(runner, tmp_path):
+    r = _run(runner, MCH50, "-n", 2_000_000, "--format", "csv", "-o", tmp_path / "x.csv")
+    assert r.exit_code == 2
+    assert r.stderr == ("error: --format csv -o: 2000000 samples are more than the limit of 500000 for a file "
+                        "written at once; write to stdout instead (it is streamed: > FILE) or use --shard K/N\n")
+    assert not (tmp_path / "x.csv").exists()

@@ -14,6 +14,9 @@ from wormgear_cli.cli.common import DriveArgument, FormatOption, OutputOption, U
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "iso": 1e-5, "all": 1.2e-5}
+#: most samples of one ``--format csv -o FILE`` run: the file is written at once (atomically), about
+#: 600 bytes per sample held in memory; stdout is streamed block by block (memory constant)
+MAX_CSV_FILE_SAMPLES = 500_000
 #: samples of each allocation rerun (at most)
 ALLOCATION_SAMPLES = 100_000
 
@@ -126,6 +129,12 @@ def tolerance(
         check_plot_path(plot)
     if target_yield is not None and not 0.0 < target_yield < 1.0:
         raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
+    if fmt == "csv" and output is not None and str(output) != "-" and summarize is None:
+        start, stop = engine.shard_range(samples, k_n) if samples >= 1 else (0, 0)
+        if stop - start > MAX_CSV_FILE_SAMPLES:
+            raise UsageError(f"--format csv -o: {stop - start} samples are more than the limit of "
+                             f"{MAX_CSV_FILE_SAMPLES} for a file written at once; write to stdout instead (it is "
+                             "streamed: > FILE) or use --shard K/N")
     spec = load_spec(drive)
     n_rows = None
     if summarize is not None:
