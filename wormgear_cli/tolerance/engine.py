@@ -1,11 +1,14 @@
 """The Monte Carlo run: samples in blocks, shards, and the summary of the samples.
 
 Samples are drawn and evaluated one random-stream block
-(:data:`~wormgear_cli.tolerance.sampling.BLOCK` samples) at a time, so memory
-per block is fixed; the run keeps only the metric values (8 bytes per metric
-per sample, for exact percentiles) and one byte per varied column and sample
-(its sensitivity bin).  ``--summarize`` feeds the rows of a samples CSV
-through the same summary, so its report equals the run's.
+(:data:`~wormgear_cli.tolerance.sampling.BLOCK` samples) at a time and their
+statistics accumulated block by block (:class:`Accumulator`): moments, yield
+counts and sensitivity sums need no per-sample storage; exact percentiles keep
+the metric values up to :data:`~wormgear_cli.tolerance.statistics.IN_MEMORY_SAMPLES`
+samples and beyond that run a second pass (the streams are counter-based, so
+the same samples come again).  ``--summarize`` feeds the rows of a samples CSV
+through the same summary, in the same block boundaries, so its report equals
+the run's byte for byte.
 """
 
 from __future__ import annotations
