@@ -164,3 +164,21 @@ def test_truncation_holds_for_any_capability(cp, ratio, tol, signed, seed):
     x = sampling.sample_values(v, np.random.default_rng(seed).random(2000))
     lo, hi = v.bounds()
     assert np.all((x >= lo) & (x <= hi))
+
+
+def test_appending_a_quantity_to_the_registry_keeps_every_sample(monkeypatch):
+    # the budget of the grades issue will append quantities: existing samples must not move
+    from wormgear_cli.tolerance import quantities
+    from wormgear_cli.tolerance.quantities import Kind, Quantity
+
+    varied = varied_quantities(spec_of(mch50_doc()))
+    before = sampling.draw(varied, 3, 100, 300)
+    extra = Varied(Quantity("x.new_mm", Kind.radial), (0.01,), "rayleigh")
+    monkeypatch.setattr(sampling, "STREAM_COLUMNS", sampling.STREAM_COLUMNS + 1)
+    monkeypatch.setattr(quantities, "QUANTITIES", quantities.QUANTITIES + (extra.quantity,))
+    after = sampling.draw(varied + (extra,), 3, 100, 300)
+    for k in before.values:
+        assert np.array_equal(before.values[k], after.values[k])
+    for k in before.phases:
+        assert np.array_equal(before.phases[k], after.phases[k])
+    assert after.values["x.new_mm"].max() <= 0.01

@@ -67,7 +67,8 @@ class Quantity:
 R, S, U = Kind.radial, Kind.signed, Kind.unknown
 
 #: The registry: every toleranced key the paper's model reads, in a fixed order
-#: (this order is also the order of the random streams; append, never reorder).
+#: (the order of the random streams' rows: append new quantities at the end, never reorder,
+#: and existing samples stay the same).
 QUANTITIES: tuple[Quantity, ...] = (
     Quantity("assembly.gear_eccentricity_mm", R, grade_driven=True),
     Quantity("worm_pair.lead_error_mm", S, grade_driven=True),

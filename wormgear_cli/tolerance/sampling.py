@@ -21,8 +21,9 @@ inspection, so no value lies beyond its tolerance):
 
 Random streams: sample j belongs to block b = j // :data:`BLOCK`; each block
 has its own PCG64 generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
-and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms, one row per
-registry column and phase in registry order.  So sample j is the same
+and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms (row-major, so
+a longer matrix starts with the same numbers): one row per phase, then one per
+registry column in registry order.  So sample j is the same
 whatever the block size used for the computation or the shard it falls in.
 """
 
@@ -38,7 +39,7 @@ from wormgear_cli.tolerance.quantities import PHASES, QUANTITIES, Kind, Varied
 
 #: samples per random-stream block (fixed: changing it changes every sample)
 BLOCK = 65536
-#: uniform rows per block: one per registry column (array keys one per element), then one per phase
+#: uniform rows per block: one per phase, then one per registry column (array keys one per element)
 STREAM_COLUMNS = sum(q.length for q in QUANTITIES) + len(PHASES)
 
 
@@ -139,10 +140,12 @@ def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int) -> Draw:
         hi = min(stop - b * BLOCK, BLOCK)
         parts.append(u[:, lo:hi])
     u = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
-    values, row = {}, 0
+    # rows: the phases first, then the registry columns in registry order, so a quantity appended
+    # to the registry adds a row at the end and leaves every existing sample unchanged
+    phases = {p: 2.0 * math.pi * u[k] for k, p in enumerate(PHASES)}
+    values, row = {}, len(PHASES)
     for v in varied:
         for e, col in enumerate(v.quantity.columns()):
             values[col] = sample_values(v, u[row], e)
             row += 1
-    phases = {p: 2.0 * math.pi * u[row + k] for k, p in enumerate(PHASES)}
     return Draw(start, stop, values, phases)
