@@ -187,9 +187,9 @@ class Accumulator:
     yield counts and the sensitivity sums; nothing per sample beyond
     :data:`~.statistics.IN_MEMORY_SAMPLES` values per metric and :data:`PLOT_SAMPLES` for plots."""
 
-    def __init__(self, s: Setup, centres: dict):
-        self.setup, self.centres = s, centres
-        self.moments = {m: stats.Moments(centres[m]) for m in s.metrics}
+    def __init__(self, s: Setup):
+        self.setup, self.centres = s, None  # sums about the first sample's values (against cancellation)
+        self.moments = None
         self.order = {m: stats.OrderStatistics() for m in s.metrics}
         self.bins = stats.BinSums(s.columns, s.metrics)
         self.limits = limits(s)
@@ -201,6 +201,9 @@ class Accumulator:
     def add(self, block: Block) -> None:
         s = self.setup
         n = block.stop - block.start
+        if self.centres is None:
+            self.centres = {m: float(block.metrics[m][0]) for m in s.metrics}
+            self.moments = {m: stats.Moments(self.centres[m]) for m in s.metrics}
         for m in s.metrics:
             y = np.asarray(block.metrics[m], dtype=float)
             self.moments[m].add(y)
@@ -238,7 +241,7 @@ def summarize(s: Setup, source: Callable[[], Iterator[Block]]) -> Summary:
     """The summary of the blocks ``source()`` yields (called a second time, for the exact
     percentiles, when more than :data:`~.statistics.IN_MEMORY_SAMPLES` samples are summarized)."""
     corner, rss = reference_values(s)
-    acc = Accumulator(s, corner)
+    acc = Accumulator(s)
     for block in source():
         acc.add(block)
     if any(o.needs_second_pass for o in acc.order.values()):
