@@ -107,7 +107,7 @@ def tolerance(
     (analyze) and the RSS estimate, the yield of each [requirements] limit
     with its 95 % interval, and the first-order sensitivity indices.
 
-    Example: wormgear tolerance configs/mch50.toml --samples 100000 --target-yield 0.99
+    Example: wormgear tolerance configs/mch50.toml --target-yield 0.99
     """
     from dataclasses import replace
 
