@@ -238,6 +238,8 @@ FIELDS: tuple[Field, ...] = (
             ("worm_backlash", "the worm-stage backlash at the wheel"),
         )
     ),
+    _f("requirements.min_yield", "min_yield", "-", "", "least fraction of built drives meeting every limit "
+       "(estimated by wormgear tolerance; see [statistics])", lo=0.0, hi=1.0, lo_open=True, hi_open=True),
 )
 
 FIELD_BY_PATH: dict[str, Field] = {f.path: f for f in FIELDS}
@@ -483,12 +485,12 @@ def _known_children(prefix: str) -> set[str]:
         if len(parts) > depth:
             out.add(parts[depth])
     if not prefix:
-        out.add("effects")
+        out.update(("effects", "statistics"))  # free-form tables, validated by their own modules
     return out
 
 
 def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> None:
-    if prefix == "effects":
+    if prefix in ("effects", "statistics"):
         return
     known = _known_children(prefix)
     for key, value in data.items():
@@ -506,7 +508,7 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
             what = "table" if isinstance(value, dict) else "key"
             problems.append(f"{source}: {path}: unknown {what}{hint}")
             continue
-        is_section = any(s == path for s in SECTIONS) or path == "effects"
+        is_section = any(s == path for s in SECTIONS) or path in ("effects", "statistics")
         if is_section and not isinstance(value, dict):
             problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(value)}")
         elif not is_section and isinstance(value, dict):

@@ -1,0 +1,276 @@
+"""``wormgear tolerance``: statistical tolerance analysis (Monte Carlo over built drives)."""
+
+from __future__ import annotations
+
+import sys
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from wormgear_cli.cli.app import app
+from wormgear_cli.cli.common import DriveArgument, FormatOption, OutputOption, UnitOption, emit, json_text, render
+
+#: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
+_SECONDS_PER_SAMPLE = {"paper": 2e-6, "iso": 1e-5, "all": 1.2e-5}
+#: most samples of one ``--format csv -o FILE`` run: the file is written at once (atomically), about
+#: 600 bytes per sample held in memory; stdout is streamed block by block (memory constant)
+MAX_CSV_FILE_SAMPLES = 500_000
+#: samples of each allocation rerun (at most)
+ALLOCATION_SAMPLES = 100_000
+
+LABELS = {"total_transmission_error": "total TE", "total_backlash": "backlash", "iso230_E": "ISO E",
+          "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A"}
+SHORT = {"total_transmission_error": "TE", "total_backlash": "BL", "iso230_E": "E", "iso230_B": "B",
+         "iso230_M": "M", "iso230_A": "A"}
+
+
+class MetricSet(str, Enum):
+    paper = "paper"
+    iso = "iso"
+    all = "all"
+
+
+class PlanKind(str, Enum):
+    iso = "iso"
+    dense = "dense"
+
+
+class _Progress:
+    """A rich progress bar on stderr, only on a terminal and only for work estimated over 1 s."""
+
+    def __init__(self, total: int, seconds: float, label: str):
+        from wormgear_cli.cli.common import stderr_is_terminal
+
+        self.bar = None
+        if total > 0 and seconds > 1.0 and stderr_is_terminal():
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
+
+            self.bar = Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
+                                TimeRemainingColumn(), console=Console(stderr=True), transient=True)
+            self.task = self.bar.add_task(label, total=total)
+
+    def __enter__(self):
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.stop()
+
+    def advance(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.advance(self.task, n)
+
+
+@app.command()
+def tolerance(
+    drive: DriveArgument,
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of built drives to sample (N >= 1).")]
+    = 100_000,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same output).")] = 0,
+    metrics: Annotated[MetricSet, typer.Option(
+        "--metrics", help="paper: total TE and backlash as analyze; iso: ISO 230-2 E, B, M, A of the simulated "
+        "acceptance test; all: both.", case_sensitive=False)] = MetricSet.all,
+    plan: Annotated[PlanKind, typer.Option(
+        "--plan", help="Acceptance test: iso (irregular targets as synth plans them with --seed) or dense "
+        "(--points even angles).", case_sensitive=False)] = PlanKind.iso,
+    targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.")] = 24,
+    points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.")] = 360,
+    target_yield: Annotated[Optional[float], typer.Option(
+        "--target-yield", help="Yield to aim at (0 < P < 1; default: [requirements] min_yield): rank the "
+        "tolerances by the yield one step of tightening gains.", show_default=False)] = None,
+    shard: Annotated[Optional[str], typer.Option(
+        "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the samples (CSV parts "
+        "concatenate, header once, to the whole run's CSV).", show_default=False)] = None,
+    summarize: Annotated[Optional[Path], typer.Option(
+        "--summarize", help="Report on the samples of this CSV (concatenated --format csv parts) instead of "
+        "drawing; give the run's --seed, --plan, --targets and --unit.", dir_okay=False,
+        show_default=False)] = None,
+    format: FormatOption = "table",
+    unit: UnitOption = "arcsec",
+    output: OutputOption = None,
+    plot: Annotated[Optional[Path], typer.Option(
+        "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
+        "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
+):
+    """Statistical tolerance analysis: what fraction of built drives passes, and which tolerance to tighten.
+
+    Each sample is one built drive: every toleranced key drawn from its
+    distribution (radial magnitudes Rayleigh, signed deviations normal with
+    the tolerance at 3 sigma, others uniform; override per key in a
+    [statistics] table), truncated at its tolerance, every phase uniform.
+    Reports each metric's mean, std and percentiles beside the corner case
+    (analyze) and the RSS estimate, the yield of each [requirements] limit
+    with its 95 % interval, and the first-order sensitivity indices.
+
+    Example: wormgear tolerance configs/mch50.toml --target-yield 0.99
+    """
+    from dataclasses import replace
+
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec import load_spec
+    from wormgear_cli.tolerance import engine, report
+
+    fmt = getattr(format, "value", format)
+    unit = getattr(unit, "value", unit)
+    metric_set = getattr(metrics, "value", metrics)
+    k_n = engine.parse_shard(shard) if shard is not None else None
+    if summarize is not None and k_n is not None:
+        raise UsageError("--summarize cannot be combined with --shard (summarize the concatenated parts)")
+    if summarize is not None and fmt == "csv":
+        raise UsageError("--summarize reports on samples: use --format table or json")
+    if plot is not None:
+        from wormgear_cli.plots import check_plot_path
+
+        check_plot_path(plot)
+    if target_yield is not None and not 0.0 < target_yield < 1.0:
+        raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
+    if fmt == "csv" and output is not None and str(output) != "-" and summarize is None:
+        start, stop = engine.shard_range(samples, k_n) if samples >= 1 else (0, 0)
+        if stop - start > MAX_CSV_FILE_SAMPLES:
+            raise UsageError(f"--format csv -o: {stop - start} samples are more than the limit of "
+                             f"{MAX_CSV_FILE_SAMPLES} for a file written at once; write to stdout instead (it is "
+                             "streamed: > FILE) or use --shard K/N")
+    spec = load_spec(drive)
+    n_rows = None
+    if summarize is not None:
+        _, metric_set = report.read_header(summarize)
+    options = engine.Options(samples=samples, seed=seed, metrics=metric_set, plan=getattr(plan, "value", plan),
+                             targets=targets, points=points, unit=unit, shard=k_n)
+    if summarize is not None:
+        options = replace(options, samples=max(samples, 1), shard=None)
+    s = engine.setup(spec, options)
+    target = target_yield if target_yield is not None else spec.requirements.min_yield
+    inputs = [drive] + ([summarize] if summarize is not None else [])
+
+    if summarize is not None:
+        summary = engine.summarize(s, lambda: report.read_samples(summarize, s))
+        n_rows = summary.samples
+    elif fmt == "csv":
+        summary = _csv_run(s, output, inputs)
+    else:
+        seconds = (s.stop - s.start) * _SECONDS_PER_SAMPLE[metric_set]
+        with _Progress(s.stop - s.start, seconds, "tolerance") as bar:
+            summary = engine.run(s, progress=bar.advance)
+    allocation = None
+    if target is not None and k_n is None and engine.metrics_for_limits(spec) is not None:
+        from wormgear_cli.tolerance.allocation import allocate
+
+        n_alloc = min(n_rows if n_rows is not None else samples, ALLOCATION_SAMPLES)
+        with _Progress(14, n_alloc * 14 * _SECONDS_PER_SAMPLE["paper"], "allocation") as bar:
+            allocation = allocate(spec, replace(options, samples=n_alloc), float(target), bar.advance)
+    elif target_yield is not None and engine.metrics_for_limits(spec) is None:
+        raise UsageError("--target-yield needs a limit in [requirements] (max_transmission_error_arcsec or "
+                         "max_backlash_arcsec) to count the yield against")
+    doc = report.document(s, summary, allocation, shard)
+    if plot is not None:
+        from wormgear_cli.plots.tolerance import draw
+
+        draw(doc, summary.plot_values, engine.limits(s), plot, LABELS)
+    if fmt == "json":
+        emit(json_text(doc), output, inputs)
+    elif fmt == "table":
+        render(_tables(doc, target), output, inputs)
+
+
+def _csv_run(s, output, inputs):
+    """Stream the samples CSV (stdout block by block; -o atomically) and return the summary."""
+    from wormgear_cli.tolerance import engine, report
+
+    seconds = (s.stop - s.start) * (_SECONDS_PER_SAMPLE[s.options.metrics] + 4e-6)
+    header = report.csv_header(s)  # every part carries the header; concatenate with it once (tail -n +2)
+    with _Progress(s.stop - s.start, seconds, "tolerance") as bar:
+        if output is None or str(output) == "-":
+            sys.stdout.write(header)
+
+            def write(block):
+                sys.stdout.write(report.csv_rows(s, block))
+
+            summary = engine.run(s, on_block=write, progress=bar.advance)
+            sys.stdout.flush()
+            return summary
+        import io
+
+        buf = io.StringIO()
+        buf.write(header)
+        summary = engine.run(s, on_block=lambda block: buf.write(report.csv_rows(s, block)), progress=bar.advance)
+    emit(buf.getvalue(), output, inputs)
+    return summary
+
+
+def _tables(doc: dict, target) -> list:
+    from rich import box
+    from rich.markup import escape
+    from rich.table import Table
+
+    from wormgear_cli.cli.common import fmt_angle
+
+    unit = doc["unit"]
+    a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
+    out = []
+    kw = dict(box=box.SIMPLE_HEAD, padding=(0, 1), title_justify="left")
+    t1 = Table(title=escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"), **kw)
+    for c in ("metric", "mean", "std", "p50", "p90", "p95", "p99"):
+        t1.add_column(c, justify="left" if c == "metric" else "right")
+    t2 = Table(title=escape(f"worst case / RSS / Monte Carlo [{unit}]"), **kw)
+    for c in ("metric", "corner", "RSS", "p99.73", "max"):
+        t2.add_column(c, justify="left" if c == "metric" else "right")
+    for m, r in doc["metrics"].items():
+        p = r["percentiles"]
+        t1.add_row(LABELS[m], a(r["mean"]), a(r["std"]), a(p["50"]), a(p["90"]), a(p["95"]), a(p["99"]))
+        t2.add_row(LABELS[m], a(r["corner"]), a(r["rss"]), a(p["99.73"]), a(p["max"]))
+    out += [t1, t2]
+    if doc["yield"]:
+        t3 = Table(title="yield (fraction of drives within the limit, 95 % interval)", **kw)
+        for c in ("requirement", "yield", "interval"):
+            t3.add_column(c, justify="left" if c == "requirement" else "right")
+        if target is not None:
+            t3.add_column("vs target", justify="right")
+        for key, y in doc["yield"].items():
+            row = [escape(key.replace("requirements.", "") if key != "all" else "all limits"), _pct(y["value"]),
+                   f"{_pct(y['low'])} - {_pct(y['high'])}"]
+            if target is not None:
+                from wormgear_cli.tolerance.statistics import Yield
+
+                row.append(Yield(y["passing"], doc["samples"], y["value"], y["low"], y["high"]).verdict(target))
+            t3.add_row(*row)
+        out.append(t3)
+    sens = {m: v for m, v in doc["sensitivity"].items() if v is not None}
+    if sens:
+        t4 = Table(title="variance share (first-order index)",
+                   **{**kw, "padding": (0, 0)})
+        t4.add_column("key ", no_wrap=True)
+        for m in sens:
+            t4.add_column(SHORT[m], justify="right")
+        keys = [k for k in next(iter(sens.values())) if k != "remainder"]
+        shown = [k for k in keys if any(sens[m].get(k, 0.0) >= 0.005 for m in sens)]
+        for k in shown:
+            t4.add_row(escape(k), *(f"{sens[m][k]:.2f}" for m in sens))
+        t4.add_row("remainder (rest and interactions)",
+                   *(f"{1.0 - sum(sens[m][k] for k in shown):.2f}" for m in sens))
+        out.append(t4)
+    alloc = doc.get("allocation")
+    if alloc:
+        t5 = Table(title=escape(f"tighten one tolerance (yield now {_pct(alloc['yield']['value'])}, "
+                                f"target {_pct(alloc['target'])})"), **kw)
+        for c in ("key", "step", "yield", "gain"):
+            t5.add_column(c, justify="left" if c in ("key", "step") else "right")
+        for st in alloc["steps"][:8]:
+            t5.add_row(escape(st["key"]), st["step"], _pct(st["yield"]["value"]), f"{100 * st['gain']:+.2f} %")
+        out.append(t5)
+    notes = []
+    if doc.get("shard"):
+        notes.append(f"shard {doc['shard']['part']}: samples {doc['shard']['first_sample']} to "
+                     f"{doc['shard']['stop_sample'] - 1}")
+    notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
+    notes.append("RSS: root-sum-square of the single contributions")
+    out += [escape(n) for n in notes]
+    return out
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.2f} %"

@@ -1,0 +1,142 @@
+"""The documents of ``wormgear tolerance``: the JSON report and the samples CSV (written and read).
+
+CSV: a header ``sample,<varied columns>,<metrics>`` then one row per sample;
+varied keys by TOML path in the key's unit ([mm]; elements of an array key as
+``path[i]``; phases [deg]), metrics in the run's angle unit.  Numbers are
+written in their shortest round-trip form, so a CSV read back gives the very
+same floats (``--summarize`` reproduces the run's report exactly).
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from wormgear_cli.errors import DataError
+from wormgear_cli.tolerance.engine import Block, Setup, Summary
+from wormgear_cli.tolerance.sampling import BLOCK
+from wormgear_cli.tolerance.metrics import METRIC_SETS
+
+def csv_header(s: Setup) -> str:
+    return ",".join(("sample", *s.columns, *s.metrics)) + "\n"
+
+
+def csv_rows(s: Setup, block: Block) -> str:
+    """The CSV rows (no header) of one block."""
+    cols = [[str(j) for j in range(block.start, block.stop)]]
+    cols += [list(map(repr, np.asarray(block.columns[c], dtype=float).tolist())) for c in s.columns]
+    cols += [list(map(repr, np.asarray(block.metrics[m], dtype=float).tolist())) for m in s.metrics]
+    return "".join(",".join(row) + "\n" for row in zip(*cols))
+
+
+def read_header(path: Path) -> tuple[tuple[str, ...], str]:
+    """The varied columns of a samples CSV and its metric set ("paper", "iso" or "all")."""
+    name = str(path)
+    if not Path(path).is_file():
+        raise DataError(f"{name}: file not found, expected a samples CSV of wormgear tolerance --format csv")
+    with open(path, encoding="utf-8", newline="") as fh:
+        header = fh.readline().strip()
+    cols = tuple(header.split(","))
+    if not cols or cols[0] != "sample":
+        raise DataError(f"{name}: line 1: expected a header starting with \"sample\" "
+                        "(a CSV of wormgear tolerance --format csv)")
+    for key, names in (("all", METRIC_SETS["all"]), ("paper", METRIC_SETS["paper"]), ("iso", METRIC_SETS["iso"])):
+        k = len(names)
+        if cols[-k:] == names:
+            return cols[1:-k], key
+    raise DataError(f"{name}: line 1: expected the metric columns to end the header "
+                    f"({', '.join(METRIC_SETS['all'])}, or the paper or iso part)")
+
+
+def read_samples(path: Path, s: Setup) -> Iterator[Block]:
+    """Blocks of a samples CSV written for ``s`` (same varied columns and metrics).
+
+    Raises :class:`DataError` for other columns, a malformed number or row, or
+    sample numbers that are not consecutive (a part missing or given twice)."""
+    name = str(path)
+    columns, _ = read_header(path)
+    if columns != s.columns:
+        missing = [c for c in s.columns if c not in columns]
+        extra = [c for c in columns if c not in s.columns]
+        what = (f"missing {missing[0]}" if missing else f"unexpected {extra[0]}" if extra else "in another order")
+        raise DataError(f"{name}: line 1: the varied columns differ from this drive's ({what}); summarize with "
+                        "the drive and [statistics] the samples were drawn with")
+    width = 1 + len(s.columns) + len(s.metrics)
+    expected_next = None
+    line_no = 1
+    with open(path, encoding="utf-8", newline="") as fh:
+        fh.readline()
+        first_line = fh.readline()
+        if not first_line.strip():
+            raise DataError(f"{name}: no sample rows after the header")
+        try:
+            first = int(first_line.split(",", 1)[0])
+        except ValueError:
+            raise DataError(f"{name}: line 2: expected a sample number first, got {first_line.split(',', 1)[0]!r}") \
+                from None
+        # chunks end at the random-stream block boundaries, as the run's blocks do (same sums, same bytes)
+        pending = [first_line]
+        size = BLOCK - first % BLOCK
+        while True:
+            lines = pending + list(itertools.islice(fh, size - len(pending)))
+            pending, size = [], BLOCK
+            if not lines:
+                break
+            try:
+                data = np.loadtxt(lines, delimiter=",", dtype=float, ndmin=2)
+            except ValueError as exc:
+                raise DataError(f"{name}: lines {line_no + 1}-{line_no + len(lines)}: not {width} numbers per row "
+                                f"({str(exc).splitlines()[0]})") from None
+            if data.shape[1] != width:
+                raise DataError(f"{name}: line {line_no + 1}: expected {width} values per row, got {data.shape[1]}")
+            sample = data[:, 0]
+            start = first if expected_next is None else expected_next
+            want = np.arange(start, start + len(sample))
+            if not np.array_equal(sample, want):
+                bad = int(np.argmax(sample != want))
+                raise DataError(f"{name}: line {line_no + 1 + bad}: sample {sample[bad]:g}, expected {want[bad]} "
+                                "(samples must be consecutive: a shard missing, repeated or out of order?)")
+            expected_next = start + len(sample)
+            cols = {c: data[:, 1 + i] for i, c in enumerate(s.columns)}
+            mets = {m: data[:, 1 + len(s.columns) + i] for i, m in enumerate(s.metrics)}
+            yield Block(start, expected_next, cols, mets)
+            line_no += len(lines)
+
+
+def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: str | None = None) -> dict:
+    """The JSON report (contract: ``samples``, ``seed``, ``metrics``, ``yield``, ``sensitivity``)."""
+    o = s.options
+    varied = {}
+    for v in s.varied:
+        for e, col in enumerate(v.quantity.columns()):
+            if col in s.columns:
+                lo, hi = v.bounds(e)
+                varied[col] = {"kind": v.quantity.kind.value, "distribution": v.distribution, "low_mm": lo,
+                               "high_mm": hi, "cp": v.cp, "cpk": v.cpk}
+    doc = {
+        "drive": s.spec.drive.name,
+        "samples": summary.samples,
+        "seed": int(o.seed),
+        "unit": o.unit,
+        "plan": {"kind": o.plan, "target_angles_deg": [float(x) for x in s.targets_deg]}
+        if any(m.startswith("iso230") for m in s.metrics) else None,
+        "metrics": {
+            m: {**summary.described[m], "corner": summary.corner[m], "rss": summary.rss[m]} for m in s.metrics
+        },
+        "yield": {k: {"value": y.value, "low": y.low, "high": y.high, "passing": y.k} for k, y in summary.yields.items()},
+        "sensitivity": {
+            m: (None if summary.sensitivity[m] is None else {**summary.sensitivity[m][0],
+                                                              "remainder": summary.sensitivity[m][1]})
+            for m in s.metrics
+        },
+        "varied": varied,
+        "phases": "uniform in [0, 360) deg",
+    }
+    if shard is not None:
+        doc["shard"] = {"part": shard, "first_sample": s.start, "stop_sample": s.stop}
+    if allocation is not None:
+        doc["allocation"] = allocation
+    return doc

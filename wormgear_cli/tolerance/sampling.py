@@ -1,0 +1,151 @@
+"""Truncated distributions and counter-based random streams for the Monte Carlo samples.
+
+Distributions (:data:`DISTRIBUTIONS`) are data: a name, the quantity kinds
+they fit, whether a process capability applies, and the truncated inverse
+CDF.  Every draw is an inverse-CDF transform of one uniform number, truncated
+to the quantity's interval [L, U] (parts out of tolerance are rejected at
+inspection, so no value lies beyond its tolerance):
+
+    x = F^-1( F(L) + u (F(U) - F(L)) ),   u ~ U(0, 1)
+
+* ``normal`` (mean mu, standard deviation sigma) on [L, U] with process
+  capabilities cp, cpk (ISO 22514-2):  sigma = (U - L) / (6 cp);  the mean is
+  shifted from the middle towards the upper (worse) limit so that
+  cpk = (U - mu) / (3 sigma):  mu = (L + U)/2 + (U - L)/2 (1 - cpk/cp).
+  Defaults cp = cpk = 1: the tolerance at 3 sigma, centred.  Only cpk given:
+  cp = cpk (centred).
+* ``rayleigh`` on [0, T] (the magnitude of a two-dimensional normal offset
+  with sigma per axis): sigma = T / (3 c), c = cpk, else cp, else 1;
+  F(x) = 1 - exp(-x^2 / (2 sigma^2)).
+* ``uniform`` on [L, U].
+
+Random streams: sample j belongs to block b = j // :data:`BLOCK`; each block
+has its own PCG64 generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
+and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms (row-major, so
+a longer matrix starts with the same numbers): one row per phase, then one per
+registry column in registry order.  So sample j is the same
+whatever the block size used for the computation or the shard it falls in.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from wormgear_cli.tolerance.quantities import PHASES, QUANTITIES, Kind, Varied
+
+#: samples per random-stream block (fixed: changing it changes every sample)
+BLOCK = 65536
+#: uniform rows per block: one per phase, then one per registry column (array keys one per element)
+STREAM_COLUMNS = sum(q.length for q in QUANTITIES) + len(PHASES)
+
+
+def _normal_params(low: float, high: float, cp: float | None, cpk: float | None) -> tuple[float, float]:
+    cp_e = cp if cp is not None else (cpk if cpk is not None else 1.0)
+    cpk_e = cpk if cpk is not None else cp_e
+    width = high - low
+    sigma = width / (6.0 * cp_e)
+    mu = 0.5 * (low + high) + 0.5 * width * (1.0 - cpk_e / cp_e)
+    return mu, sigma
+
+
+def _normal_ppf(u, low, high, cp, cpk):
+    from scipy.special import ndtr, ndtri
+
+    mu, sigma = _normal_params(low, high, cp, cpk)
+    a, b = ndtr((low - mu) / sigma), ndtr((high - mu) / sigma)
+    return mu + sigma * ndtri(a + u * (b - a))
+
+
+def _rayleigh_sigma(high: float, cp: float | None, cpk: float | None) -> float:
+    c = cpk if cpk is not None else (cp if cp is not None else 1.0)
+    return high / (3.0 * c)
+
+
+def _rayleigh_ppf(u, low, high, cp, cpk):
+    sigma = _rayleigh_sigma(high, cp, cpk)
+    f_high = -math.expm1(-high * high / (2.0 * sigma * sigma))
+    return sigma * np.sqrt(-2.0 * np.log1p(-u * f_high))
+
+
+def _uniform_ppf(u, low, high, cp, cpk):
+    return low + u * (high - low)
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """A distribution of the catalogue: ``name``; ``kinds``: the quantity kinds it
+    fits; ``capability``: whether cp/cpk apply; ``ppf(u, low, high, cp, cpk)``: the
+    truncated inverse CDF on [low, high] ([mm] arrays in, [mm] out); ``doc``."""
+
+    name: str
+    kinds: tuple[str, ...]
+    capability: bool
+    ppf: Callable
+    doc: str
+
+
+DISTRIBUTIONS: dict[str, Distribution] = {
+    d.name: d for d in (
+        Distribution("normal", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), True, _normal_ppf,
+                     "normal, T at 3 sigma (cp = 1), mean shifted towards the upper limit by cpk < cp"),
+        Distribution("rayleigh", (Kind.radial.value, Kind.unknown.value), True, _rayleigh_ppf,
+                     "magnitude of a 2-D normal offset, sigma per axis = T / (3 c)"),
+        Distribution("uniform", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), False, _uniform_ppf,
+                     "every value in the interval equally likely"),
+    )
+}
+
+
+def sample_values(varied: Varied, u: np.ndarray, element: int = 0) -> np.ndarray:
+    """Values [mm] of element ``element`` of a varied quantity from uniforms ``u`` in [0, 1).
+
+    Truncated to the quantity's interval (see the module doc); a zero
+    tolerance gives zeros.  Shape of ``u``.
+    """
+    low, high = varied.bounds(element)
+    if high <= low:
+        return np.full(np.shape(u), low)
+    x = DISTRIBUTIONS[varied.distribution].ppf(u, low, high, varied.cp, varied.cpk)
+    return np.clip(x, low, high)
+
+
+def block_uniforms(seed: int, block: int) -> np.ndarray:
+    """The (:data:`STREAM_COLUMNS`, :data:`BLOCK`) uniforms in [0, 1) of block ``block``."""
+    ss = np.random.SeedSequence(int(seed), spawn_key=(int(block),))
+    return np.random.Generator(np.random.PCG64(ss)).random((STREAM_COLUMNS, BLOCK))
+
+
+@dataclass(frozen=True)
+class Draw:
+    """Samples [start, stop): ``values`` column -> values [mm] (every registry
+    column, array keys as ``path[i]``), ``phases`` phase path -> phase [rad]."""
+
+    start: int
+    stop: int
+    values: dict
+    phases: dict
+
+
+def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int) -> Draw:
+    """Draw samples ``start`` .. ``stop - 1`` (whatever blocks they span)."""
+    first, last = start // BLOCK, (stop - 1) // BLOCK
+    parts = []
+    for b in range(first, last + 1):
+        u = block_uniforms(seed, b)
+        lo = max(start - b * BLOCK, 0)
+        hi = min(stop - b * BLOCK, BLOCK)
+        parts.append(u[:, lo:hi])
+    u = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
+    # rows: the phases first, then the registry columns in registry order, so a quantity appended
+    # to the registry adds a row at the end and leaves every existing sample unchanged
+    phases = {p: 2.0 * math.pi * u[k] for k, p in enumerate(PHASES)}
+    values, row = {}, len(PHASES)
+    for v in varied:
+        for e, col in enumerate(v.quantity.columns()):
+            values[col] = sample_values(v, u[row], e)
+            row += 1
+    return Draw(start, stop, values, phases)
