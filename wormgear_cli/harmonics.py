@@ -968,8 +968,8 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
             reason[k] = (f"too few distinct angles ({cov.distinct}): an order needs at least 3 (offset, cos, sin)")
         elif cov.beyond(k):
             status[k] = "beyond span"
-            reason[k] = (f"its period ({360.0 / k:.4g} deg) is longer than the {span_deg:.4g} deg covered: it cannot "
-                         "be told from a trend")
+            reason[k] = (f"beyond span: one period is longer than the {span_deg:.4g} deg the data cover, so it "
+                         "cannot be told from a trend (no amplitude)")
     rest = [k for k in ords if k not in status]
     if rest:
         arr = np.asarray(rest)

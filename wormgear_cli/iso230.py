@@ -30,6 +30,9 @@ Choices where the standard is silent (documented in docs/measure.md):
 * s needs two runs: with a single run in a cell s is NaN, and so are the
   figures built on it (R_i, and the axis A and R of every set that
   contains such a cell); E, M and B do not need s and stay defined.
+* One target only (a one-position backlash test: many landings from each
+  side at one angle): A, E and M compare targets and are NaN (not
+  applicable); B and R are that target's reversal and repeatabilities.
 
 All angles in radians.  Pure numpy, no I/O.
 """
@@ -197,6 +200,11 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Fi
         notes.append("no target was measured in both directions (different angles per direction?): "
                      "reversal B, M and the bidirectional R are undefined")
 
+    one_target = nt == 1
+    if one_target:
+        notes.append("one target only (a one-position test): A, E and M compare targets and are not applicable; "
+                     "B and R are that target's values")
+
     def acc(means, ss):
         return _span(*(m + 2.0 * s for m, s in zip(means, ss)), *(m - 2.0 * s for m, s in zip(means, ss)))
 
@@ -214,10 +222,33 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Fi
         M = _span(mean_bi[both])
     else:
         B = B_signed = B_mean = M = nan
+    E = _span(mean_up, mean_dn) if has_up and has_dn else nan
+    E_up = _span(mean_up) if has_up else nan
+    E_dn = _span(mean_dn) if has_dn else nan
+    if one_target:
+        A = A_up = A_dn = E = E_up = E_dn = M = nan
     return Iso230Figures(
-        A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean,
-        E=_span(mean_up, mean_dn) if has_up and has_dn else nan, E_up=_span(mean_up) if has_up else nan, E_down=_span(mean_dn) if has_dn else nan,
+        A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean, E=E, E_up=E_up, E_down=E_dn,
         M=M, R=R, R_up=R_up, R_down=R_dn, targets=table, rows=int(angle.shape[0]), notes=tuple(notes))
+
+
+def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
+    """The figures with every one-direction value withheld (NaN), for rows whose directions are mixed.
+
+    Used when the file has no direction column yet a run visits a target
+    more than once (an up/down table flattened): the "forward" cells then
+    mix both directions, so their s, R, A and E mean nothing.  Axis A, E, R
+    (forward, reverse and bidirectional), the per-target s and R are
+    withheld; ``reason`` is added to the notes."""
+    import dataclasses
+
+    nan = math.nan
+    t = figures.targets
+    blank = np.full(len(t), np.nan)
+    table = dataclasses.replace(t, s_up=blank, s_down=blank, r_up=blank, r_down=blank, r_bi=blank,
+                                mean_up=blank, mean_down=blank, mean_bi=blank, reversal=blank)
+    return dataclasses.replace(figures, A=nan, A_up=nan, A_down=nan, E=nan, E_up=nan, E_down=nan, R=nan,
+                               R_up=nan, R_down=nan, targets=table, notes=figures.notes + (reason,))
 
 
 def measurement_figures(measurement, tol: float = TARGET_TOL) -> Iso230Figures:
