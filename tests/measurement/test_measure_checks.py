@@ -1,0 +1,91 @@
+"""Structure the file does not state, the verdict line, one-position tests, and 80-column tables.
+
+Hand-worked values are written out with their arithmetic; data are constructed so the right
+answer is known without this code.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from wormgear_cli.cli import app
+from wormgear_cli.iso230 import iso230_figures
+from wormgear_cli.measure_report import measure
+
+
+def write(tmp_path, name, header, rows):
+    path = tmp_path / name
+    path.write_text(header + "\n" + "".join(",".join(str(c) for c in r) + "\n" for r in rows))
+    return path
+
+
+def test_one_position_test_hand_worked():
+    # 4 landings from each side at 30 deg (arcsec):
+    #   forward 1, 2, 3, 6: mean 3, s = sqrt((4 + 1 + 0 + 9) / 3) = sqrt(14/3) = 2.160247
+    #   reverse 10, 12, 14, 16: mean 13, s = sqrt((9 + 1 + 1 + 9) / 3) = sqrt(20/3) = 2.581989
+    #   B = 3 - 13 = -10; R fwd = 4 s = 8.640988; R rev = 10.327956
+    #   R = max(2 * 2.160247 + 2 * 2.581989 + 10, 8.64, 10.33) = 19.484472
+    arc = math.pi / 648000
+    err = np.array([1, 2, 3, 6, 10, 12, 14, 16]) * arc
+    d = np.array([1, 1, 1, 1, -1, -1, -1, -1])
+    f = iso230_figures(np.full(8, math.radians(30)), err, d)
+    assert f.B_signed / arc == pytest.approx(-10.0)
+    assert f.targets.s_up[0] / arc == pytest.approx(2.160247, abs=1e-6)
+    assert f.targets.s_down[0] / arc == pytest.approx(2.581989, abs=1e-6)
+    assert f.R_up / arc == pytest.approx(8.640988, abs=1e-6)
+    assert f.R_down / arc == pytest.approx(10.327956, abs=1e-6)
+    assert f.R / arc == pytest.approx(19.484472, abs=1e-6)
+    assert all(math.isnan(x) for x in (f.A, f.A_up, f.A_down, f.E, f.E_up, f.E_down, f.M))
+    assert any("one target only" in n for n in f.notes)
+
+
+def test_flattened_up_down_table_with_run_column_withholds_one_direction_figures(tmp_path):
+    # 3 runs over 4 targets at 0, 90, 180, 270 deg, up then down in each run, direction column lost
+    rows = []
+    for run in range(3):
+        for a in (0, 90, 180, 270):
+            rows.append((a, 1.0 + run, run))
+        for a in (270, 180, 90, 0):
+            rows.append((a, -5.0 - run, run))
+    res = measure(write(tmp_path, "flat.csv", "angle_deg,error_arcsec,run", rows))
+    assert res.mixed_directions
+    assert math.isnan(res.figures.R_up) and math.isnan(res.figures.A_up) and math.isnan(res.figures.E_up)
+    assert "targets repeat within a run without a direction column" in res.verdict
+    # with a direction column the same rows are an ordinary table: nothing withheld
+    rows_d = [(a, e, r, 1 if k % 8 < 4 else -1) for k, (a, e, r) in enumerate(rows)]
+    res = measure(write(tmp_path, "dir.csv", "angle_deg,error_arcsec,run,direction", rows_d))
+    assert not res.mixed_directions
+    # forward errors per target 1, 2, 3: s = 1, R fwd = 4 s = 4
+    assert res.figures.R_up / (math.pi / 648000) == pytest.approx(4.0)
+
+
+def test_verdict_names_duplicates_time_order_and_one_direction(tmp_path):
+    rows = [(0, 1, 0, 0.0, 1), (90, 2, 0, 1.0, 1), (90, 2, 0, 1.0, 1), (180, 3, 0, 0.5, 1), (270, 4, 0, 3.0, 1)]
+    res = measure(write(tmp_path, "odd.csv", "angle_deg,error_arcsec,run,time_s,direction", rows))
+    v = res.verdict
+    assert "1 duplicate row" in v
+    assert "time not monotonic inside a run" in v
+    assert "one direction only (forward)" in v
+
+
+def test_tables_fit_80_columns_without_cutting_numbers(runner, tmp_path, mch50_path):
+    # large deviations (-1234.57 arcsec) and long drive labels
+    rows = []
+    for run in range(2):
+        for d in (1, -1):
+            for k, a in enumerate(np.arange(0, 360, 15.0) + 0.123456):
+                rows.append((round(a, 6), round(-1234.567 + 11.1 * k + 300 * (d < 0) + 0.7 * run, 3), d, run))
+    path = write(tmp_path, "big.csv", "angle_deg,error_arcsec,direction,run", rows)
+    result = runner.invoke(app, ["measure", str(path), "--drive", str(mch50_path)], env={"COLUMNS": "80"})
+    assert result.exit_code == 0
+    out = result.stdout
+    assert "…" not in out
+    assert max(len(line) for line in out.splitlines()) <= 80
+    assert "-1234.22" in out  # first target, forward mean of -1234.567 and -1233.867, whole
+    doc = json.loads(runner.invoke(app, ["measure", str(path), "-f", "json"]).stdout)
+    for t in doc["per_target"]:
+        assert f"{t['mean_forward']:.2f}" in out
