@@ -218,8 +218,9 @@ def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: in
                     break
                 total += len(block)
                 if total > limit:
-                    raise DataError(f"{name}: larger than {limit // (1024 * 1024)} MiB, the most a measurement "
-                                    f"file may be; split it or keep the columns needed")
+                    size = f"{limit // (1024 * 1024)} MiB" if limit >= 1024 * 1024 else f"{limit} bytes"
+                    raise DataError(f"{name}: larger than {size}, the most a measurement file may be; split it "
+                                    "or keep the columns needed")
                 if b"\x00" in block:
                     raise DataError(f"{name}: binary file, expected {expected}")
                 try:
