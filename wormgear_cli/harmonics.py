@@ -241,8 +241,9 @@ def _order_values(a, b, cov_ab, ident, sigma):
         # grad A = (a, b) / A ; grad phi = (b, -a) / A^2
         var_amp = np.where(amp > 0, (a * a * va + b * b * vb + 2 * a * b * cab) / amp**2, 0.5 * (va + vb))
         var_phase = np.where(amp > 0, (b * b * va + a * a * vb - 2 * a * b * cab) / amp**4, np.inf)
-    amp_se = sigma * np.sqrt(np.maximum(var_amp, 0.0))
-    phase_se = sigma * np.sqrt(np.maximum(var_phase, 0.0))
+    with np.errstate(invalid="ignore"):  # 0 x inf (exact fit, zero amplitude): the phase is undefined
+        amp_se = sigma * np.sqrt(np.maximum(var_amp, 0.0))
+        phase_se = sigma * np.sqrt(np.maximum(var_phase, 0.0))
     amp_se = np.where(ident, amp_se, np.nan)
     phase_se = np.where(ident, phase_se, np.nan)
     return amp, phase, amp_se, phase_se
@@ -757,7 +758,7 @@ def _weighted_gram(theta: np.ndarray, ords: np.ndarray, extra: np.ndarray | None
 
 
 def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RESOLVE_MIN_EIG,
-                  extra=None) -> Resolution:
+                  extra=None, gram=None, distinct: int | None = None) -> Resolution:
     """The candidate orders that can be fitted together, chosen by how well each is determined.
 
     Backward elimination on the column correlation matrix G (unit-diagonal
@@ -779,16 +780,24 @@ def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RE
     min_eigenvalue : float [-]
     extra : array_like, shape (n, t), optional
         Columns always kept (e.g. a trend, :func:`trend_columns`).
+    gram : ndarray, optional
+        The Gram matrix of [1, extra, cos/sin per candidate] when already
+        accumulated (then ``theta`` and ``extra`` only give the counts).
+    distinct : int, optional
+        Number of distinct angles (default: counted from ``theta``).
     """
     theta = _as_1d("theta", theta)
     ords = np.atleast_1d(np.asarray(candidates, dtype=float))
     if ords.size == 0:
         return Resolution((), {}, {})
-    ex = None if extra is None else np.asarray(extra, dtype=float).reshape(theta.shape[0], -1)
-    n_fixed = 1 + (0 if ex is None else ex.shape[1])
-    gram = _weighted_gram(theta, ords, ex)
+    if gram is None:
+        ex = None if extra is None else np.asarray(extra, dtype=float).reshape(theta.shape[0], -1)
+        gram = _weighted_gram(theta, ords, ex)
+    n_fixed = gram.shape[0] - 2 * ords.size
+    has_extra = n_fixed > 1
     diag = np.sqrt(np.maximum(np.diag(gram), 0.0))
-    distinct = int(np.unique(theta).size)
+    if distinct is None:
+        distinct = int(np.unique(theta).size)
     alive = list(range(ords.size))
     det: dict = {}
     reason: dict = {}
@@ -817,7 +826,7 @@ def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RE
         k = float(ords[alive[j]])
         if len(cols) > distinct:
             reason[k] = (f"too few distinct angles ({distinct}) for {len(cols)} coefficients "
-                         f"(offset{', trend' if ex is not None and ex.shape[1] else ''} and 2 per order)")
+                         f"(offset{', trend' if has_extra else ''} and 2 per order)")
         else:
             reason[k] = (f"not determined apart from the other orders on these angles (variance inflation "
                          f"{1.0 / max(d[j], 1e-300):.3g})")
@@ -957,8 +966,9 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
     cov = coverage(theta, passes)
     unwrapped = any(k != round(k) for k in ords)
     th = unwrap_passes(theta, passes) if unwrapped else theta
+    y = _as_1d("y", y, theta.shape[0])
     degree = 0 if cov.full_turn else max(0, min(TREND_DEGREE, cov.distinct - 2))
-    trend = trend_columns(theta, cov, degree) if degree else None
+    trend = trend_columns(th, cov, degree) if degree else None
     status: dict[float, str] = {}
     reason: dict[float, str] = {}
     span_deg = math.degrees(cov.span)
@@ -996,7 +1006,10 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
             reason[k] = "only one phase component is seen on these angles (cos and sin collinear)"
         else:
             candidates.append(k)
-    res = select_orders(th, candidates, extra=trend)
+    sums = _AngleSums.build(th, y, d, cov, degree)
+    g0, g1, r0, r1 = sums.grams(np.asarray(candidates, dtype=float))
+    t_cols = sums.trend_count
+    res = select_orders(th[:0], candidates, gram=g0, distinct=sums.ut.shape[0])
     for k in candidates:
         if k in res.kept:
             status[k] = "fitted"
@@ -1004,7 +1017,9 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
             status[k] = "unresolved"
             reason[k] = res.reason.get(k, "not determined on these angles")
     fitted = [k for k in ords if status[k] == "fitted"]
-    fit = fit_modes(th, y, d, fitted, trend=trend)
+    fit = _fit_from_sums(sums, candidates, fitted, g0, g1, r0, r1)
+    if fit is None:  # ill-conditioned: the row-wise solve (minimum-norm, identifiability per column)
+        fit = fit_modes(th, y, d, fitted, trend=trend)
     pos = {k: i for i, k in enumerate(fitted)}
     nan3 = (math.nan, math.nan, math.nan)
 
@@ -1026,3 +1041,115 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
     return OrdersAnalysis(tuple(items), fit.rms, fit.sigma, fit.common.offset,
                           fit.differential.offset if both else math.nan, tol, both, cov.distinct, cov, degree,
                           unwrapped)
+
+
+# --- the joint fit from sums over distinct angles --------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _AngleSums:
+    """Per distinct angle: count, sum of d, sum of y, sum of d y (d = direction); and sum of y^2.
+
+    The normal equations of the joint common/differential fit only need
+    these (d^2 = 1): with B the rows of [1, trend, cos/sin] at the distinct
+    angles, X^T X = [[B^T C B, B^T D B], [B^T D B, B^T C B]] and X^T y =
+    [B^T Sy, B^T Sdy] with C = diag(count), D = diag(sum d).  A table of
+    many runs over few targets is reduced to its targets; a dense scan is
+    streamed in blocks."""
+
+    ut: np.ndarray
+    count: np.ndarray
+    sum_d: np.ndarray
+    sum_y: np.ndarray
+    sum_dy: np.ndarray
+    yy: float
+    n: int
+    both: bool
+    trend: np.ndarray  # (distinct x t)
+
+    @property
+    def trend_count(self) -> int:
+        return self.trend.shape[1]
+
+    @classmethod
+    def build(cls, theta, y, d, cov, degree) -> "_AngleSums":
+        ut, inverse = np.unique(theta, return_inverse=True)
+        inverse = inverse.ravel()
+        m = ut.shape[0]
+        count = np.bincount(inverse, minlength=m).astype(float)
+        sum_d = np.bincount(inverse, weights=d, minlength=m)
+        sum_y = np.bincount(inverse, weights=y, minlength=m)
+        sum_dy = np.bincount(inverse, weights=d * y, minlength=m)
+        trend = trend_columns(ut, cov, degree) if degree else np.zeros((m, 0))
+        both = bool(np.any(d > 0) and np.any(d < 0))
+        return cls(ut, count, sum_d, sum_y, sum_dy, float(y @ y), int(theta.shape[0]), both, trend)
+
+    def grams(self, ords: np.ndarray):
+        """(B^T C B, B^T D B, B^T Sy, B^T Sdy) for the columns [1, trend, cos/sin per order]."""
+        p = 1 + self.trend_count + 2 * ords.shape[0]
+        g0 = np.zeros((p, p))
+        g1 = np.zeros((p, p))
+        r0 = np.zeros(p)
+        r1 = np.zeros(p)
+        m = self.ut.shape[0]
+        for a in range(0, m, BLOCK_ROWS):
+            b = min(a + BLOCK_ROWS, m)
+            blk = np.hstack([np.ones((b - a, 1)), self.trend[a:b], harmonic_columns(self.ut[a:b], ords)])
+            g0 += (blk * self.count[a:b, None]).T @ blk
+            g1 += (blk * self.sum_d[a:b, None]).T @ blk
+            r0 += blk.T @ self.sum_y[a:b]
+            r1 += blk.T @ self.sum_dy[a:b]
+        return g0, g1, r0, r1
+
+
+def _fit_from_sums(sums: _AngleSums, candidates, fitted, g0, g1, r0, r1):
+    """The joint fit at the ``fitted`` orders from the accumulated sums, as a :class:`ModeFit`
+    (residual left empty); None when the normal equations are ill-conditioned (the caller then
+    solves row-wise)."""
+    t = sums.trend_count
+    base = list(range(1 + t))
+    for k in fitted:
+        i = candidates.index(k)
+        base += [1 + t + 2 * i, 2 + t + 2 * i]
+    b = np.asarray(base, dtype=int)
+    p = b.shape[0]
+    if sums.both:
+        gram = np.block([[g0[np.ix_(b, b)], g1[np.ix_(b, b)]], [g1[np.ix_(b, b)], g0[np.ix_(b, b)]]])
+        rhs = np.concatenate([r0[b], r1[b]])
+    else:
+        gram = g0[np.ix_(b, b)]
+        rhs = r0[b]
+    if sums.n < gram.shape[0]:
+        return None
+    lam, vec = np.linalg.eigh(gram)
+    if not lam[0] > 1e-8 * lam[-1] > 0:
+        return None
+    cov = (vec / lam) @ vec.T
+    coef = cov @ rhs
+    rss = max(sums.yy - 2.0 * float(coef @ rhs) + float(coef @ gram @ coef), 0.0)
+    rank = gram.shape[0]
+    dof = sums.n - rank
+    sigma = math.sqrt(rss / dof) if dof > 0 else math.nan
+    rms = math.sqrt(rss / sums.n)
+    m = len(fitted)
+    ords = np.asarray(fitted, dtype=float)
+    fits = []
+    for start in (0, p):
+        if start == p and not sums.both:
+            nan = np.full(m, np.nan)
+            fits.append(OrderFit(ords, nan, nan, nan, nan, nan, nan, np.zeros(m, dtype=bool), math.nan,
+                                 np.zeros(0), np.zeros(0), rms, sigma, rank, rank, False))
+            continue
+        c = coef[start:start + p]
+        cv = cov[start:start + p, start:start + p]
+        ia = 1 + t + 2 * np.arange(m)
+        a_, b_ = c[ia], c[ia + 1]
+        cov_ab = np.empty((m, 2, 2))
+        cov_ab[:, 0, 0] = cv[ia, ia]
+        cov_ab[:, 1, 1] = cv[ia + 1, ia + 1]
+        cov_ab[:, 0, 1] = cov_ab[:, 1, 0] = cv[ia, ia + 1]
+        ident = np.ones(m, dtype=bool)
+        amp, phase, amp_se, phase_se = _order_values(a_, b_, cov_ab, ident, sigma)
+        fits.append(OrderFit(ords, amp, phase, a_, b_, amp_se, phase_se, ident, float(c[0]), np.zeros(0),
+                             np.zeros(0), rms, sigma, rank, rank, False))
+    return ModeFit(fits[0], fits[1], np.zeros(0), rms, sigma, rank, rank, False)
