@@ -638,12 +638,13 @@ class Coverage:
         return (not self.full_turn) and order * self.span < 2.0 * math.pi * (1.0 - 1e-9)
 
 
-def _arc(theta: np.ndarray) -> tuple[float, float, bool, int]:
-    """(span, start, full turn, distinct) of one set of angles [rad]."""
+def _arc(theta: np.ndarray, unique: np.ndarray | None = None) -> tuple[float, float, bool, int]:
+    """(span, start, full turn, distinct) of one set of angles [rad]; ``unique``: the sorted
+    distinct angles when known and all within [0, 2 pi)."""
     two_pi = 2.0 * math.pi
     if theta.size and float(np.ptp(theta)) >= two_pi:
-        return two_pi, 0.0, True, int(np.unique(theta).size)
-    t = np.unique(np.mod(theta, two_pi))
+        return two_pi, 0.0, True, int(np.unique(theta).size if unique is None else unique.size)
+    t = np.unique(np.mod(theta, two_pi)) if unique is None else unique
     if t.size < 2:
         return 0.0, float(t[0]) if t.size else 0.0, False, int(t.size)
     gaps = np.empty(t.size)
@@ -656,7 +657,7 @@ def _arc(theta: np.ndarray) -> tuple[float, float, bool, int]:
     return float(two_pi - gaps[i]), float(t[(i + 1) % t.size]), False, int(t.size)
 
 
-def coverage(theta, passes=None) -> Coverage:
+def coverage(theta, passes=None, unique=None) -> Coverage:
     """The angular span covered by the samples, overall and per pass.
 
     Parameters
@@ -665,6 +666,8 @@ def coverage(theta, passes=None) -> Coverage:
         Sample angles, wrapped (0..2 pi) or not.
     passes : array_like of int, shape (n,), optional
         Pass (run) index of each sample.
+    unique : ndarray, optional
+        The sorted distinct angles when already known (all within [0, 2 pi)).
 
     Returns
     -------
@@ -676,12 +679,16 @@ def coverage(theta, passes=None) -> Coverage:
         other gaps); otherwise the targets sample the whole turn.
     """
     theta = _as_1d("theta", theta)
-    span, start, full, distinct = _arc(theta)
+    if unique is not None and not (unique.size and unique[0] >= 0.0 and unique[-1] < 2.0 * math.pi):
+        unique = None
+    span, start, full, distinct = _arc(theta, unique)
     spans: tuple[float, ...] = ()
     if passes is not None:
         pid = np.asarray(passes)
         ids, inverse = np.unique(pid, return_inverse=True)
-        if ids.size <= MAX_PASS_SPANS:
+        if ids.size == 1:
+            spans = (span,)
+        elif ids.size <= MAX_PASS_SPANS:
             order = np.argsort(inverse, kind="stable")
             bounds = np.searchsorted(inverse[order], np.arange(ids.size + 1))
             spans = tuple(_arc(theta[order[bounds[k]:bounds[k + 1]]])[0] for k in range(ids.size))
@@ -963,12 +970,14 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
         if k in rank and rank[k] == len(ords):
             rank[k] = i
     by_priority = sorted(ords, key=lambda k: (rank[k], ords.index(k)))
-    cov = coverage(theta, passes)
     unwrapped = any(k != round(k) for k in ords)
     th = unwrap_passes(theta, passes) if unwrapped else theta
     y = _as_1d("y", y, theta.shape[0])
+    sums = _AngleSums.build(th, y, d)
+    cov = coverage(theta, passes, unique=sums.ut)
     degree = 0 if cov.full_turn else max(0, min(TREND_DEGREE, cov.distinct - 2))
-    trend = trend_columns(th, cov, degree) if degree else None
+    if degree:
+        sums = sums.with_trend(trend_columns(sums.ut, cov, degree))
     status: dict[float, str] = {}
     reason: dict[float, str] = {}
     span_deg = math.degrees(cov.span)
@@ -981,9 +990,12 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
             reason[k] = (f"beyond span: one period is longer than the {span_deg:.4g} deg the data cover, so it "
                          "cannot be told from a trend (no amplitude)")
     rest = [k for k in ords if k not in status]
+    # one pass over the distinct angles: the Gram matrices of [1, trend, cos/sin of every remaining order]
+    g0, g1, r0, r1 = sums.grams(np.asarray(rest, dtype=float))
+    t_cols = sums.trend_count
     if rest:
         arr = np.asarray(rest)
-        cm, cp, cz = _correlations(th, arr, None)
+        cm, cp, cz = _correlations_from_gram(g0, 1 + t_cols, len(rest), float(sums.n))
         groups = _groups(arr, cm, cp, cz, tol)
         folded = set(_folded(arr, cp, tol))
     else:
@@ -1006,9 +1018,12 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
             reason[k] = "only one phase component is seen on these angles (cos and sin collinear)"
         else:
             candidates.append(k)
-    sums = _AngleSums.build(th, y, d, cov, degree)
-    g0, g1, r0, r1 = sums.grams(np.asarray(candidates, dtype=float))
-    t_cols = sums.trend_count
+    cols = list(range(1 + t_cols))
+    for k in candidates:
+        i = rest.index(k)
+        cols += [1 + t_cols + 2 * i, 2 + t_cols + 2 * i]
+    sub = np.ix_(cols, cols)
+    g0, g1, r0, r1 = g0[sub], g1[sub], r0[cols], r1[cols]
     res = select_orders(th[:0], candidates, gram=g0, distinct=sums.ut.shape[0])
     for k in candidates:
         if k in res.kept:
@@ -1019,7 +1034,7 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
     fitted = [k for k in ords if status[k] == "fitted"]
     fit = _fit_from_sums(sums, candidates, fitted, g0, g1, r0, r1)
     if fit is None:  # ill-conditioned: the row-wise solve (minimum-norm, identifiability per column)
-        fit = fit_modes(th, y, d, fitted, trend=trend)
+        fit = fit_modes(th, y, d, fitted, trend=trend_columns(th, cov, degree) if degree else None)
     pos = {k: i for i, k in enumerate(fitted)}
     nan3 = (math.nan, math.nan, math.nan)
 
@@ -1071,8 +1086,14 @@ class _AngleSums:
     def trend_count(self) -> int:
         return self.trend.shape[1]
 
+    def with_trend(self, trend: np.ndarray) -> "_AngleSums":
+        """The same sums with trend columns (distinct x t) at the distinct angles."""
+        import dataclasses
+
+        return dataclasses.replace(self, trend=trend)
+
     @classmethod
-    def build(cls, theta, y, d, cov, degree) -> "_AngleSums":
+    def build(cls, theta, y, d) -> "_AngleSums":
         ut, inverse = np.unique(theta, return_inverse=True)
         inverse = inverse.ravel()
         m = ut.shape[0]
@@ -1080,9 +1101,8 @@ class _AngleSums:
         sum_d = np.bincount(inverse, weights=d, minlength=m)
         sum_y = np.bincount(inverse, weights=y, minlength=m)
         sum_dy = np.bincount(inverse, weights=d * y, minlength=m)
-        trend = trend_columns(ut, cov, degree) if degree else np.zeros((m, 0))
         both = bool(np.any(d > 0) and np.any(d < 0))
-        return cls(ut, count, sum_d, sum_y, sum_dy, float(y @ y), int(theta.shape[0]), both, trend)
+        return cls(ut, count, sum_d, sum_y, sum_dy, float(y @ y), int(theta.shape[0]), both, np.zeros((m, 0)))
 
     def grams(self, ords: np.ndarray):
         """(B^T C B, B^T D B, B^T Sy, B^T Sdy) for the columns [1, trend, cos/sin per order]."""
@@ -1100,6 +1120,21 @@ class _AngleSums:
             r0 += blk.T @ self.sum_y[a:b]
             r1 += blk.T @ self.sum_dy[a:b]
         return g0, g1, r0, r1
+
+
+def _correlations_from_gram(gram: np.ndarray, first: int, m: int, total: float):
+    """(C_minus, C_plus, C_zero) of :func:`order_correlations` / :func:`offset_correlations` from the
+    row-weighted Gram matrix of [1, ..., cos/sin per order] (harmonic columns from index ``first``):
+    sum exp(i (k_i -/+ k_j) theta) expands into sums of cos/sin products."""
+    c = first + 2 * np.arange(m)
+    s_ = c + 1
+    cc = gram[np.ix_(c, c)]
+    ss = gram[np.ix_(s_, s_)]
+    cs = gram[np.ix_(c, s_)]  # sum cos_i sin_j
+    c_minus = np.hypot(cc + ss, cs.T - cs) / total
+    c_plus = np.hypot(cc - ss, cs.T + cs) / total
+    c_zero = np.hypot(gram[0, c], gram[0, s_]) / total
+    return c_minus, c_plus, c_zero
 
 
 def _fit_from_sums(sums: _AngleSums, candidates, fitted, g0, g1, r0, r1):

@@ -155,16 +155,18 @@ def _all_defined(s: np.ndarray, n: np.ndarray) -> bool:
     return bool(np.any(present)) and bool(np.all(np.isfinite(s[present])))
 
 
-def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Figures:
+def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=None) -> Iso230Figures:
     """ISO 230-2 figures from rows of ``angle`` [rad], ``error`` [rad]
     (actual - target) and ``direction`` (+1 forward/up, -1 reverse/down).
 
     See the module doc for the definitions and the choices made where the
-    standard is silent.  Returns :class:`Iso230Figures`."""
+    standard is silent.  ``grouping``: (target index per row, target
+    angles) of :func:`group_targets` when already computed.  Returns
+    :class:`Iso230Figures`."""
     angle = np.asarray(angle, dtype=float)
     error = np.asarray(error, dtype=float)
     direction = np.asarray(direction, dtype=float)
-    index, target = group_targets(angle, tol)
+    index, target = group_targets(angle, tol) if grouping is None else grouping
     nt = target.shape[0]
     up = direction > 0
     n_up, mean_up, s_up = _cell_stats(error[up], index[up], nt)

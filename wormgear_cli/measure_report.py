@@ -103,6 +103,33 @@ def _label_for(order: float, physical) -> Optional[str]:
     return None
 
 
+def duplicate_rows(m) -> int:
+    """Number of rows that repeat an earlier row exactly (every canonical value equal).
+
+    Rows are sorted by a 64-bit mix of their values (one sort), and rows with
+    equal keys compared value by value."""
+    cols = [m.angle, m.error, m.direction, m.run.astype(float)] + [
+        getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
+        if c in m.present]
+    n = len(m)
+    if n < 2:
+        return 0
+    key = np.zeros(n, dtype=np.uint64)
+    with np.errstate(over="ignore"):
+        for i, c in enumerate(cols):
+            bits = np.ascontiguousarray(c, dtype=float).view(np.uint64)
+            key = (key ^ bits) * np.uint64(0x9E3779B97F4A7C15 + 2 * i)
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    cand = np.flatnonzero(ks[1:] == ks[:-1])
+    if cand.size == 0:
+        return 0
+    same = np.ones(cand.size, dtype=bool)
+    for c in cols:
+        same &= c[order[cand]] == c[order[cand + 1]]
+    return int(np.count_nonzero(same))
+
+
 def structure_findings(m, target_index: np.ndarray) -> tuple[list, bool]:
     """Findings about what the file does not state, and whether the directions are mixed.
 
@@ -137,16 +164,7 @@ def structure_findings(m, target_index: np.ndarray) -> tuple[list, bool]:
                 "than once: if some visits were made in reverse, add a direction column (+1 forward, -1 reverse); "
                 "the one-direction figures (s, R, A, E) are withheld",
                 True, "targets repeat within a run without a direction column: one-direction figures withheld"))
-    # exact duplicate rows (all canonical values equal)
-    cols = [m.angle, m.error, m.direction, m.run] + [getattr(m, a) for c, a in
-                                                     (("load_Nm", "load"), ("temperature_C", "temperature"),
-                                                      ("time_s", "time")) if c in m.present]
-    order = np.lexsort(cols[::-1])
-    same = np.ones(n - 1, dtype=bool)
-    for c in cols:
-        cs = c[order]
-        same &= cs[1:] == cs[:-1]
-    dups = int(np.count_nonzero(same))
+    dups = duplicate_rows(m)
     if dups:
         out.append(Finding("duplicates", f"{dups} row{'s are exact duplicates' if dups > 1 else ' is an exact duplicate'}"
                            " of another row (pasted twice?): they count twice in every figure; remove them if they "
@@ -216,8 +234,9 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     labels = [_label_for(k, physical) for k in order_list] if physical else None
 
     m = read_measurement(data, options=options)
-    figures = iso230_figures(m.angle, m.error, m.direction)
-    target_index, _ = group_targets(m.angle)
+    grouping = group_targets(m.angle)
+    target_index = grouping[0]
+    figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
     findings, mixed = structure_findings(m, target_index)
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
