@@ -6,7 +6,8 @@ Two synthetic files of ``--rows`` rows (default 2 000 000) are written to a temp
 * dense: a forward and a reverse scan at distinct angles (a tracking log: every row its own target)
 
 Each is measured end to end as a subprocess (``wormgear measure FILE --drive configs/mch50.toml``,
-table output, Python start-up included): wall time (best of ``--repeat``) and peak resident memory
+table output, Python start-up included): wall time and CPU time (user + system; steadier than wall
+time on a shared machine), best of ``--repeat``, and peak resident memory
 of the command (``resource.getrusage(RUSAGE_CHILDREN).ru_maxrss`` in a fresh wrapper process per run),
 also per row.  With ``--before PATH`` (a checkout of an earlier version, e.g. /work/main) the same
 command runs against it too and the ratios before/after are printed.
@@ -36,7 +37,8 @@ import json, resource, subprocess, sys, time
 t0 = time.perf_counter()
 r = subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
 dt = time.perf_counter() - t0
-print(json.dumps({"rc": r.returncode, "s": dt, "rss_kb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss,
+u = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(json.dumps({"rc": r.returncode, "s": dt, "cpu": u.ru_utime + u.ru_stime, "rss_kb": u.ru_maxrss,
                   "err": r.stderr.decode()[-300:]}))
 """
 
@@ -77,9 +79,10 @@ def measure_once(tree: Path, path: Path) -> dict:
     return res
 
 
-def best(tree: Path, path: Path, repeat: int) -> tuple[float, float]:
+def best(tree: Path, path: Path, repeat: int) -> tuple[float, float, float]:
+    """(wall time [s], CPU time [s], peak RSS [bytes]): best times, largest peak over ``repeat`` runs."""
     runs = [measure_once(tree, path) for _ in range(repeat)]
-    return min(r["s"] for r in runs), max(r["rss_kb"] for r in runs) * 1024.0
+    return min(r["s"] for r in runs), min(r["cpu"] for r in runs), max(r["rss_kb"] for r in runs) * 1024.0
 
 
 def main() -> None:
@@ -94,15 +97,16 @@ def main() -> None:
             path = Path(tmp) / f"{name}.csv"
             writer(path, args.rows, rng)
             size = path.stat().st_size
-            t_after, m_after = best(ROOT, path, args.repeat)
-            line = (f"{name:5s} {args.rows:8d} rows ({size / 1e6:.0f} MB): {t_after:6.2f} s, peak "
+            t_after, c_after, m_after = best(ROOT, path, args.repeat)
+            line = (f"{name:5s} {args.rows:8d} rows ({size / 1e6:.0f} MB): {t_after:6.2f} s (CPU {c_after:.2f} s), peak "
                     f"{m_after / 1e6:7.0f} MB = {m_after / args.rows:5.0f} B/row "
                     f"({'under' if t_after < 5 else 'OVER'} 5 s, {'under' if m_after / args.rows < 300 else 'OVER'} "
                     "300 B/row)")
             if args.before is not None:
-                t_before, m_before = best(args.before, path, args.repeat)
-                line += (f"; before {t_before:.2f} s, {m_before / 1e6:.0f} MB = {m_before / args.rows:.0f} B/row: "
-                         f"time x{t_before / t_after:.1f}, memory x{m_before / m_after:.1f} less")
+                t_before, c_before, m_before = best(args.before, path, args.repeat)
+                line += (f"; before {t_before:.2f} s (CPU {c_before:.2f} s), {m_before / 1e6:.0f} MB = "
+                         f"{m_before / args.rows:.0f} B/row: time x{t_before / t_after:.1f} (CPU "
+                         f"x{c_before / c_after:.1f}), memory x{m_before / m_after:.1f} less")
             print(line, flush=True)
 
 

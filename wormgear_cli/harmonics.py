@@ -1114,11 +1114,21 @@ class _AngleSums:
         m = self.ut.shape[0]
         for a in range(0, m, BLOCK_ROWS):
             b = min(a + BLOCK_ROWS, m)
-            blk = np.hstack([np.ones((b - a, 1)), self.trend[a:b], harmonic_columns(self.ut[a:b], ords)])
-            g0 += (blk * self.count[a:b, None]).T @ blk
-            g1 += (blk * self.sum_d[a:b, None]).T @ blk
-            r0 += blk.T @ self.sum_y[a:b]
-            r1 += blk.T @ self.sum_dy[a:b]
+            blk = np.empty((b - a, p))
+            blk[:, 0] = 1.0
+            blk[:, 1:1 + self.trend_count] = self.trend[a:b]
+            arg = np.multiply.outer(self.ut[a:b], ords)
+            np.cos(arg, out=blk[:, 1 + self.trend_count::2])
+            np.sin(arg, out=blk[:, 2 + self.trend_count::2])
+            weighted = np.concatenate([blk * self.count[a:b, None], blk * self.sum_d[a:b, None]], axis=1) \
+                if self.both else blk * self.count[a:b, None]
+            g = weighted.T @ blk
+            g0 += g[:p]
+            if self.both:
+                g1 += g[p:]
+            r = blk.T @ np.column_stack([self.sum_y[a:b], self.sum_dy[a:b]])
+            r0 += r[:, 0]
+            r1 += r[:, 1]
         return g0, g1, r0, r1
 
 
