@@ -72,7 +72,8 @@ def measure_once(tree: Path, path: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     cmd = [sys.executable, "-c", WRAPPER, sys.executable, "-m", "wormgear_cli", "measure", str(path), "--drive",
            str(DRIVE)]
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True).stdout
+    # cwd = tree: ``python -m`` puts the working folder first on sys.path
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True, cwd=tree).stdout
     res = json.loads(out)
     if res["rc"] != 0:
         raise SystemExit(f"measure failed ({tree}): {res['err']}")
