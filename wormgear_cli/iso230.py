@@ -110,12 +110,23 @@ class Iso230Figures:
                                               "E_down", "M", "R", "R_up", "R_down")}
 
 
-def group_targets(angle: np.ndarray, tol: float = TARGET_TOL) -> tuple[np.ndarray, np.ndarray]:
+def group_targets(angle: np.ndarray, tol: float = TARGET_TOL, unique=None) -> tuple[np.ndarray, np.ndarray]:
     """Target index per row and the target angles (mean of their rows).
 
     Rows whose sorted angles are within ``tol`` [rad] of their neighbour
-    share a target."""
+    share a target.  ``unique``: (sorted distinct angles, index of each
+    row's angle among them) of ``np.unique(angle, return_inverse=True)``
+    when already computed (saves a sort of the rows)."""
     angle = np.asarray(angle, dtype=float)
+    if unique is not None:
+        ut, inverse = unique
+        new = np.empty(ut.shape[0], dtype=bool)
+        if ut.shape[0]:
+            new[0] = True
+            new[1:] = np.diff(ut) > tol
+        index = (np.cumsum(new) - 1)[np.ravel(inverse)]
+        count = np.bincount(index)
+        return index, np.bincount(index, weights=angle) / count
     order = np.argsort(angle, kind="stable")
     sorted_angle = angle[order]
     new = np.empty(angle.shape[0], dtype=bool)

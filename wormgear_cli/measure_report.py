@@ -103,11 +103,23 @@ def _label_for(order: float, physical) -> Optional[str]:
     return None
 
 
-def duplicate_rows(m) -> int:
+def duplicate_rows(m, repeated=None) -> int:
     """Number of rows that repeat an earlier row exactly (every canonical value equal).
 
     Rows are sorted by a 64-bit mix of their values (one sort), and rows with
-    equal keys compared value by value."""
+    equal keys compared value by value.  ``repeated`` (bool per row): the
+    rows whose angle occurs more than once, the only ones that can be
+    duplicates (a dense scan then needs no sort)."""
+    if repeated is not None:
+        sel = np.flatnonzero(repeated)
+        if sel.size < 2:
+            return 0
+        if sel.size < len(m):
+            import dataclasses
+
+            m = dataclasses.replace(m, angle=m.angle[sel], error=m.error[sel], direction=m.direction[sel],
+                                    run=m.run[sel], load=m.load[sel], temperature=m.temperature[sel],
+                                    time=m.time[sel])
     cols = [m.angle, m.error, m.direction, m.run.astype(float)] + [
         getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
         if c in m.present]
@@ -130,7 +142,7 @@ def duplicate_rows(m) -> int:
     return int(np.count_nonzero(same))
 
 
-def structure_findings(m, target_index: np.ndarray) -> tuple[list, bool]:
+def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list, bool]:
     """Findings about what the file does not state, and whether the directions are mixed.
 
     Parameters
@@ -138,6 +150,8 @@ def structure_findings(m, target_index: np.ndarray) -> tuple[list, bool]:
     m : Measurement
     target_index : ndarray of int, shape (n,)
         Target of each row (:func:`~wormgear_cli.iso230.group_targets`).
+    repeated : ndarray of bool, shape (n,), optional
+        Rows whose angle occurs more than once (see :func:`duplicate_rows`).
     """
     out = []
     n = len(m)
@@ -164,7 +178,7 @@ def structure_findings(m, target_index: np.ndarray) -> tuple[list, bool]:
                 "than once: if some visits were made in reverse, add a direction column (+1 forward, -1 reverse); "
                 "the one-direction figures (s, R, A, E) are withheld",
                 True, "targets repeat within a run without a direction column: one-direction figures withheld"))
-    dups = duplicate_rows(m)
+    dups = duplicate_rows(m, repeated)
     if dups:
         out.append(Finding("duplicates", f"{dups} row{'s are exact duplicates' if dups > 1 else ' is an exact duplicate'}"
                            " of another row (pasted twice?): they count twice in every figure; remove them if they "
@@ -234,14 +248,16 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     labels = [_label_for(k, physical) for k in order_list] if physical else None
 
     m = read_measurement(data, options=options)
-    grouping = group_targets(m.angle)
+    unique = np.unique(m.angle, return_inverse=True)  # one sort of the rows, shared below
+    grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
     figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
-    findings, mixed = structure_findings(m, target_index)
+    findings, mixed = structure_findings(m, target_index, repeated=np.bincount(unique[1].ravel())[unique[1].ravel()] > 1)
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
                                        "run): one-direction figures withheld")
-    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, labels, priority, passes=m.run)
+    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, labels, priority, passes=m.run,
+                              unique=unique)
     cov = analysis.coverage
     if not cov.full_turn and cov.distinct >= 2:
         beyond = [f"{it.order:g}" for it in analysis.items if it.status == "beyond span"]
