@@ -68,7 +68,7 @@ class MeasureResult:
         cov = a.coverage
         nt = len(self.figures.targets)
         span = ("full turn" if cov.full_turn else "one angle" if cov.distinct < 2
-                else f"span {math.degrees(cov.span):.4g} deg")
+                else f"partial span {math.degrees(cov.span):.4g} deg")
         head = (f"{m.source}: {len(m)} rows, {nt} target{'s' if nt != 1 else ''}, {span} "
                 f"({int(np.count_nonzero(m.direction > 0))} forward, {int(np.count_nonzero(m.direction < 0))} "
                 "reverse rows)")
@@ -266,7 +266,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
                    "cannot be told from a trend and are reported as beyond span, without amplitude" if beyond else "")
                 + (f"; a polynomial trend of degree {analysis.trend_degree} over the span stands for the slow part"
                    if analysis.trend_degree else ""))
-        findings.append(Finding("span", text, False, f"partial span {math.degrees(cov.span):.4g} deg"))
+        findings.append(Finding("span", text, False))
     return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed)
 
 

@@ -150,7 +150,7 @@ def _tables(doc: dict, ntargets: int) -> list:
 
     iso = doc["iso230_2"]
     out = [Text(doc["verdict"])]
-    st = table(f"ISO 230-2 figures [{unit}] (n/a: not applicable or withheld, see notes)")
+    st = table(f"ISO 230-2 figures [{unit}] (n/a: see notes)")
     st.add_column("figure", overflow="fold")
     for col in ("bidirectional", "forward", "reverse"):
         num(st, col)
