@@ -222,7 +222,8 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
-    from wormgear_cli.harmonics import analyse_orders, physical_orders, physical_priority
+    from wormgear_cli.harmonics import physical_orders, physical_priority
+    from wormgear_cli.order_analysis import analyse_orders
     from wormgear_cli.iso230 import group_targets, iso230_figures, withhold_directional
     from wormgear_cli.measurement import read_measurement
 
