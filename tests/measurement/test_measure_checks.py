@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.iso230 import iso230_figures
 from wormgear_cli.measure_report import measure
 
 
@@ -21,26 +20,6 @@ def write(tmp_path, name, header, rows):
     path = tmp_path / name
     path.write_text(header + "\n" + "".join(",".join(str(c) for c in r) + "\n" for r in rows))
     return path
-
-
-def test_one_position_test_hand_worked():
-    # 4 landings from each side at 30 deg (arcsec):
-    #   forward 1, 2, 3, 6: mean 3, s = sqrt((4 + 1 + 0 + 9) / 3) = sqrt(14/3) = 2.160247
-    #   reverse 10, 12, 14, 16: mean 13, s = sqrt((9 + 1 + 1 + 9) / 3) = sqrt(20/3) = 2.581989
-    #   B = 3 - 13 = -10; R fwd = 4 s = 8.640988; R rev = 10.327956
-    #   R = max(2 * 2.160247 + 2 * 2.581989 + 10, 8.64, 10.33) = 19.484472
-    arc = math.pi / 648000
-    err = np.array([1, 2, 3, 6, 10, 12, 14, 16]) * arc
-    d = np.array([1, 1, 1, 1, -1, -1, -1, -1])
-    f = iso230_figures(np.full(8, math.radians(30)), err, d)
-    assert f.B_signed / arc == pytest.approx(-10.0)
-    assert f.targets.s_up[0] / arc == pytest.approx(2.160247, abs=1e-6)
-    assert f.targets.s_down[0] / arc == pytest.approx(2.581989, abs=1e-6)
-    assert f.R_up / arc == pytest.approx(8.640988, abs=1e-6)
-    assert f.R_down / arc == pytest.approx(10.327956, abs=1e-6)
-    assert f.R / arc == pytest.approx(19.484472, abs=1e-6)
-    assert all(math.isnan(x) for x in (f.A, f.A_up, f.A_down, f.E, f.E_up, f.E_down, f.M))
-    assert any("one target only" in n for n in f.notes)
 
 
 def test_flattened_up_down_table_with_run_column_withholds_one_direction_figures(tmp_path):
