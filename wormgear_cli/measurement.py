@@ -62,7 +62,7 @@ DEFAULTS = {"direction": 1.0, "run": 0.0, "load_Nm": 0.0, "temperature_C": 20.0,
 ERROR_UNITS = ("arcsec", "arcmin", "deg", "urad")
 ANGLE_UNITS = ("deg", "rad")
 
-#: largest measurement file read [bytes] (256 MiB: about 6 million rows of four columns)
+#: largest measurement file read [bytes] (256 MiB: 7 to 11 million rows of four columns)
 MAX_FILE_BYTES = 256 * 1024 * 1024
 #: first block inspected for binary content before the rest is read [bytes]
 SNIFF_BYTES = 64 * 1024
