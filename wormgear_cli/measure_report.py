@@ -109,36 +109,34 @@ def duplicate_rows(m, repeated=None) -> int:
     Rows are sorted by a 64-bit mix of their values (one sort), and rows with
     equal keys compared value by value.  ``repeated`` (bool per row): the
     rows whose angle occurs more than once, the only ones that can be
-    duplicates (a dense scan then needs no sort)."""
-    if repeated is not None:
-        sel = np.flatnonzero(repeated)
-        if sel.size < 2:
-            return 0
-        if sel.size < len(m):
-            import dataclasses
-
-            m = dataclasses.replace(m, angle=m.angle[sel], error=m.error[sel], direction=m.direction[sel],
-                                    run=m.run[sel], load=m.load[sel], temperature=m.temperature[sel],
-                                    time=m.time[sel])
-    cols = [m.angle, m.error, m.direction, m.run.astype(float)] + [
+    duplicates (a dense scan then needs no sort).  No column is copied."""
+    cols = [m.angle, m.error, m.direction, m.run] + [
         getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
         if c in m.present]
     n = len(m)
     if n < 2:
         return 0
+    sel = None if repeated is None else np.flatnonzero(repeated)
+    if sel is not None and sel.size < 2:
+        return 0
     key = np.zeros(n, dtype=np.uint64)
     with np.errstate(over="ignore"):
         for i, c in enumerate(cols):
             bits = np.ascontiguousarray(c, dtype=float).view(np.uint64)
-            key = (key ^ bits) * np.uint64(0x9E3779B97F4A7C15 + 2 * i)
+            key ^= bits
+            key *= np.uint64(0x9E3779B97F4A7C15 + 2 * i)
+    rows = np.arange(n) if sel is None else sel
+    if sel is not None:
+        key = key[sel]
     order = np.argsort(key, kind="stable")
     ks = key[order]
     cand = np.flatnonzero(ks[1:] == ks[:-1])
     if cand.size == 0:
         return 0
+    first, second = rows[order[cand]], rows[order[cand + 1]]
     same = np.ones(cand.size, dtype=bool)
     for c in cols:
-        same &= c[order[cand]] == c[order[cand + 1]]
+        same &= c[first] == c[second]
     return int(np.count_nonzero(same))
 
 

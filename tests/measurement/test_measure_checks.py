@@ -68,3 +68,21 @@ def test_tables_fit_80_columns_without_cutting_numbers(runner, tmp_path, mch50_p
     doc = json.loads(runner.invoke(app, ["measure", str(path), "-f", "json"]).stdout)
     for t in doc["per_target"]:
         assert f"{t['mean_forward']:.2f}" in out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_duplicate_count_matches_a_set_of_rows(tmp_path, seed):
+    from collections import Counter
+
+    from wormgear_cli.measure_report import duplicate_rows
+    from wormgear_cli.measurement import read_measurement
+
+    rng = np.random.default_rng(seed)
+    rows = [(int(rng.integers(0, 6)) * 30, int(rng.integers(0, 3)), int(rng.choice([-1, 1])), int(rng.integers(0, 2)))
+            for _ in range(60)]
+    m = read_measurement(write(tmp_path, "d.csv", "angle_deg,error_arcsec,direction,run", rows))
+    expected = sum(c - 1 for c in Counter(rows).values())  # rows beyond the first of each distinct row
+    _, inverse = np.unique(m.angle, return_inverse=True)
+    repeated = np.bincount(inverse)[inverse] > 1
+    assert duplicate_rows(m) == expected
+    assert duplicate_rows(m, repeated) == expected
