@@ -14,6 +14,12 @@ apart is decided from the samples too (:func:`alias_groups`): with 24
 evenly spaced targets over one revolution order 240 is indistinguishable
 from a constant and order 300 from order 12.
 
+The measurement-level steps live in their own modules and are re-exported
+here: :mod:`wormgear_cli.coverage` (span covered, trend, unwrapping) and
+:mod:`wormgear_cli.order_analysis` (:func:`analyse_orders`).  The one test
+of which orders can be fitted together is :func:`select_orders` /
+:func:`resolvable_orders` here.
+
 Pure numpy, no I/O.
 """
 
@@ -105,12 +111,26 @@ def _as_1d(name: str, value, n: int | None = None) -> np.ndarray:
     return arr
 
 
-def _solve(x: np.ndarray, y: np.ndarray, weights: np.ndarray | None, rcond: float, n_fixed: int) -> _Solve:
-    """Weighted least squares with a relative singular-value cutoff.
+#: rows per block when a design is built and reduced in blocks (bounds the memory of long measurements)
+BLOCK_ROWS = 65536
 
-    Well-conditioned designs are solved by the normal equations (fast on
-    100 000 rows); anything else by QR and an SVD of R, cutting singular
-    values below ``rcond`` times the largest (minimum-norm solution).
+
+def _solve(x: np.ndarray, y: np.ndarray, weights: np.ndarray | None, rcond: float, n_fixed: int) -> _Solve:
+    """Weighted least squares of ``y`` on the columns of ``x`` (see :func:`_solve_blocks`)."""
+    return _solve_blocks(lambda a, b: x[a:b], x.shape[0], x.shape[1], y, weights, rcond, n_fixed)
+
+
+def _solve_blocks(block, n: int, p: int, y: np.ndarray, weights: np.ndarray | None, rcond: float,
+                  n_fixed: int) -> _Solve:
+    """Weighted least squares with a relative singular-value cutoff, the design built in row blocks.
+
+    ``block(a, b)`` returns rows a..b-1 of the (n x p) design; it is called
+    in blocks of :data:`BLOCK_ROWS` rows, so the whole design is never held
+    (a single block when n <= BLOCK_ROWS).  Well-conditioned designs are
+    solved by the normal equations accumulated over the blocks; anything
+    else by a QR of [X y] reduced block by block (R of the stacked previous
+    R and the next block) and an SVD of R, cutting singular values below
+    ``rcond`` times the largest (minimum-norm solution).
 
     The first ``n_fixed`` columns (intercept, cos/sin: all of magnitude <= 1)
     are used as they are, so a column that vanishes on the samples (sin at a
@@ -119,23 +139,40 @@ def _solve(x: np.ndarray, y: np.ndarray, weights: np.ndarray | None, rcond: floa
     their units.  A column is *identifiable* when the null space of the
     design has no weight on it (its coefficient is unique).
     """
-    n, p = x.shape
-    if weights is None:
-        sw = None
-        xw, yw = x, y
-        wsum = float(n)
+    if weights is not None and (np.any(weights < 0) or not np.all(np.isfinite(weights))):
+        raise ValueError("weights must be finite and non-negative")
+    sw = None if weights is None else np.sqrt(weights)
+    wsum = float(n) if weights is None else float(np.sum(weights))
+    starts = list(range(0, n, BLOCK_ROWS)) or [0]
+
+    def wblock(a, b):
+        xb = block(a, b)
+        if sw is None:
+            return xb, y[a:b]
+        return xb * sw[a:b, None], y[a:b] * sw[a:b]
+
+    single = n <= BLOCK_ROWS
+    if single:
+        xw_all, yw_all = wblock(0, n)
+        sq = np.einsum("ij,ij->j", xw_all, xw_all)
     else:
-        if np.any(weights < 0) or not np.all(np.isfinite(weights)):
-            raise ValueError("weights must be finite and non-negative")
-        sw = np.sqrt(weights)
-        xw = x * sw[:, None]
-        yw = y * sw
-        wsum = float(np.sum(weights))
-    norms = np.sqrt(np.einsum("ij,ij->j", xw, xw))
+        sq = np.zeros(p)
+        for a in starts:
+            xb, _ = wblock(a, min(a + BLOCK_ROWS, n))
+            sq += np.einsum("ij,ij->j", xb, xb)
+    norms = np.sqrt(sq)
     rms_norm = math.sqrt(max(wsum, 1e-300))
     safe = np.where(norms > 0, norms / rms_norm, 1.0)
     safe[:n_fixed] = 1.0
-    xs = xw / safe if np.any(safe != 1.0) else xw
+    scaled = bool(np.any(safe != 1.0))
+
+    def sblock(a, b):
+        if single:
+            xb, yb = xw_all, yw_all
+        else:
+            xb, yb = wblock(a, b)
+        return (xb / safe if scaled else xb), yb
+
     coef_s = cov_s = None
     identifiable = np.ones(p, dtype=bool)
     rank = p
@@ -143,19 +180,28 @@ def _solve(x: np.ndarray, y: np.ndarray, weights: np.ndarray | None, rcond: floa
         # fast path: normal equations, used only when the design is well
         # conditioned (cond(X) < 1e4, so cond(X^T X) < 1e8 and the solution
         # loses at most ~1e-8 relative accuracy)
-        gram = xs.T @ xs
+        gram = np.zeros((p, p))
+        rhs = np.zeros(p)
+        for a in starts:
+            xs, yb = sblock(a, min(a + BLOCK_ROWS, n))
+            gram += xs.T @ xs
+            rhs += xs.T @ yb
         lam, vec = np.linalg.eigh(gram)
         if lam[0] > 1e-8 * lam[-1] > 0:
             cov_s = (vec / lam) @ vec.T
-            coef_s = cov_s @ (xs.T @ yw)
+            coef_s = cov_s @ rhs
     if coef_s is None:
-        # robust path: QR of [X y] (or X padded to square), then SVD of R
-        if n < p:
-            xs = np.vstack([xs, np.zeros((p - n, p))])
-            yq = np.concatenate([yw, np.zeros(p - n)])
-        else:
-            yq = yw
-        r_aug = np.linalg.qr(np.column_stack([xs, yq]), mode="r")
+        # robust path: QR of [X y] (X padded to square when n < p), reduced block by block, then SVD of R
+        r_aug = None
+        for a in starts:
+            xs, yq = sblock(a, min(a + BLOCK_ROWS, n))
+            aug = np.column_stack([xs, yq])
+            if n < p:
+                aug = np.vstack([aug, np.zeros((p - n, p + 1))])
+            stacked = aug if r_aug is None else np.vstack([r_aug, aug])
+            r_aug = np.linalg.qr(stacked, mode="r")
+        if r_aug.shape[0] < p + 1:
+            r_aug = np.vstack([r_aug, np.zeros((p + 1 - r_aug.shape[0], p + 1))])
         r, qty = r_aug[:p, :p], r_aug[:p, p]
         u, sv, vt = np.linalg.svd(r)
         smax = sv[0] if sv.size else 0.0
@@ -171,7 +217,10 @@ def _solve(x: np.ndarray, y: np.ndarray, weights: np.ndarray | None, rcond: floa
         identifiable = null_weight < 1e-6
     coef = coef_s / safe
     cov = cov_s / np.outer(safe, safe)
-    residual = y - x @ coef
+    residual = np.empty(n)
+    for a in starts:
+        b = min(a + BLOCK_ROWS, n)
+        residual[a:b] = y[a:b] - block(a, b) @ coef
     wres = residual if sw is None else residual * sw
     rss = float(wres @ wres)
     dof = n - rank
@@ -198,8 +247,9 @@ def _order_values(a, b, cov_ab, ident, sigma):
         # grad A = (a, b) / A ; grad phi = (b, -a) / A^2
         var_amp = np.where(amp > 0, (a * a * va + b * b * vb + 2 * a * b * cab) / amp**2, 0.5 * (va + vb))
         var_phase = np.where(amp > 0, (b * b * va + a * a * vb - 2 * a * b * cab) / amp**4, np.inf)
-    amp_se = sigma * np.sqrt(np.maximum(var_amp, 0.0))
-    phase_se = sigma * np.sqrt(np.maximum(var_phase, 0.0))
+    with np.errstate(invalid="ignore"):  # 0 x inf (exact fit, zero amplitude): the phase is undefined
+        amp_se = sigma * np.sqrt(np.maximum(var_amp, 0.0))
+        phase_se = sigma * np.sqrt(np.maximum(var_phase, 0.0))
     amp_se = np.where(ident, amp_se, np.nan)
     phase_se = np.where(ident, phase_se, np.nan)
     return amp, phase, amp_se, phase_se
@@ -293,7 +343,8 @@ class ModeFit:
     rank_deficient: bool
 
 
-def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond: float = RCOND) -> ModeFit:
+def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond: float = RCOND,
+              trend=None) -> ModeFit:
     """Joint least squares of the common and differential modes on all rows.
 
     Model: y_i = c + sum_k [a_k cos + b_k sin](k theta_i)
@@ -304,6 +355,11 @@ def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond:
     works when the directions are sampled at different angles (dense
     scans).  If only one direction is present the differential columns are
     left out and the differential fit is all NaN.
+    ``trend``: optional extra columns (n x t, e.g. :func:`trend_columns`)
+    added to both modes (a slow drift over a partial span); their
+    coefficients are not reported.  The design is built and reduced in
+    blocks of rows (:func:`_solve_blocks`), so memory stays proportional to
+    the number of rows, not rows x columns.
     Units as in :func:`fit_orders`.
     """
     theta = _as_1d("theta", theta)
@@ -313,11 +369,18 @@ def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond:
     ords = np.atleast_1d(np.asarray(orders, dtype=float))
     m = ords.shape[0]
     w = None if weights is None else _as_1d("weights", weights, n)
-    base = np.hstack([np.ones((n, 1)), harmonic_columns(theta, ords)])
+    tr = np.zeros((n, 0)) if trend is None else np.asarray(trend, dtype=float).reshape(n, -1)
     both = bool(np.any(d > 0) and np.any(d < 0))
-    x = np.hstack([base, base * d[:, None]]) if both else base
-    sol = _solve(x, y, w, rcond, x.shape[1])
-    p = 1 + 2 * m
+
+    def block(a, b):
+        base = np.hstack([np.ones((b - a, 1)), harmonic_columns(theta[a:b], ords), tr[a:b]])
+        return np.hstack([base, base * d[a:b, None]]) if both else base
+
+    p_mode = 1 + 2 * m + tr.shape[1]
+    ncols = 2 * p_mode if both else p_mode
+    sol = _solve_blocks(block, n, ncols, y, w, rcond, ncols)
+    x = np.empty((0, ncols))  # only its shape is used below
+    p = p_mode
     fits = []
     for start in (0, p):
         if start == p and not both:
@@ -328,9 +391,9 @@ def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond:
                 rms=sol.rms, sigma=sol.sigma, rank=sol.rank, columns=x.shape[1],
                 rank_deficient=sol.rank < x.shape[1]))
             continue
-        coef = sol.coef[start:start + p]
-        cov = sol.cov[start:start + p, start:start + p]
-        ident_cols = sol.identifiable[start:start + p]
+        coef = sol.coef[start:start + 1 + 2 * m]
+        cov = sol.cov[start:start + 1 + 2 * m, start:start + 1 + 2 * m]
+        ident_cols = sol.identifiable[start:start + 1 + 2 * m]
         a, b = coef[1::2], coef[2::2]
         ia = 1 + 2 * np.arange(m)
         cov_ab = np.empty((m, 2, 2))
@@ -365,16 +428,23 @@ def _sampling(theta: np.ndarray, weights) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _correlations(theta, orders, weights) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(C_minus, C_plus, C_zero) of :func:`order_correlations` and :func:`offset_correlations`."""
+    """(C_minus, C_plus, C_zero) of :func:`order_correlations` and :func:`offset_correlations`,
+    accumulated over blocks of the distinct angles."""
     theta = _as_1d("theta", theta)
     ords = np.atleast_1d(np.asarray(orders, dtype=float))
     ut, w = _sampling(theta, weights)
-    e = np.exp(1j * np.multiply.outer(ut, ords))
-    ew = e * w[:, None]
-    c_minus = np.abs(e.conj().T @ ew)
-    c_plus = np.abs(e.T @ ew)
-    c_zero = np.abs(w @ e)
-    return c_minus, c_plus, c_zero
+    m = ords.shape[0]
+    s_minus = np.zeros((m, m), dtype=complex)
+    s_plus = np.zeros((m, m), dtype=complex)
+    s_zero = np.zeros(m, dtype=complex)
+    for a in range(0, max(ut.shape[0], 1), BLOCK_ROWS):
+        b = min(a + BLOCK_ROWS, ut.shape[0])
+        e = np.exp(1j * np.multiply.outer(ut[a:b], ords))
+        ew = e * w[a:b, None]
+        s_minus += e.conj().T @ ew
+        s_plus += e.T @ ew
+        s_zero += w[a:b] @ e
+    return np.abs(s_minus), np.abs(s_plus), np.abs(s_zero)
 
 
 def order_correlations(theta, orders: Sequence[float], weights=None) -> tuple[np.ndarray, np.ndarray]:
@@ -540,162 +610,132 @@ def physical_priority(geometry, harmonics: int = 3, worm_starts: int = 1, rel_to
     return [k for k, _, _ in sorted(items, key=lambda t: (t[2], t[0]))]
 
 
-# --- a measurement's orders, aliasing included ---------------------------------------------------------------
+# --- which orders can be fitted together ----------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
-class OrderReport:
-    """One requested order after :func:`analyse_orders`.
+class Resolution:
+    """Result of :func:`select_orders`.
 
-    ``order`` [cycles/rev]; ``label`` (shaft or mesh, or None); ``status``:
-    "fitted"; "aliased" (not fitted: the samples cannot tell it from the
-    offset or from another requested order, which then carries its
-    content); "folded" (its cos and sin are collinear on the samples: one
-    phase component only, not fitted); "unresolved" (not fitted: the
-    targets cannot resolve this many orders together, orders earlier in the
-    priority list were kept); ``fitted`` = status is "fitted";
-    ``aliased_with``: the other requested orders (0.0 = the offset) the
-    samples cannot tell it from; ``common`` / ``differential``: (amplitude,
-    amplitude_stderr, phase [rad]) of the mean of the directions and of
-    half the reversal, NaN where not fitted.
+    ``kept``: the candidate orders fitted together (in candidate order);
+    ``determinacy``: order -> smallest eigenvalue of the order's (cos, sin)
+    block of the column correlation matrix after the other kept columns are
+    projected out (1: independent of the others; 1 / determinacy is the
+    largest variance inflation of its coefficients), taken when the order
+    was kept or dropped; ``reason``: dropped order -> sentence.
     """
 
-    order: float
-    label: str | None
-    status: str
-    aliased_with: tuple[float, ...]
-    common: tuple[float, float, float]
-    differential: tuple[float, float, float]
-
-    @property
-    def fitted(self) -> bool:
-        return self.status == "fitted"
+    kept: tuple[float, ...]
+    determinacy: dict
+    reason: dict
 
 
-@dataclass(frozen=True)
-class OrdersAnalysis:
-    """Result of :func:`analyse_orders`: ``items`` per distinct requested
-    order (in request order), the joint fit's ``residual_rms`` and
-    ``sigma``, ``common_offset`` and ``differential_offset`` (half the mean
-    reversal; NaN with one direction), ``alias_tol``, ``both_directions``,
-    ``distinct_angles`` (number of distinct sampled angles)."""
-
-    items: tuple[OrderReport, ...]
-    residual_rms: float
-    sigma: float
-    common_offset: float
-    differential_offset: float
-    alias_tol: float
-    both_directions: bool
-    distinct_angles: int
+def _weighted_gram(theta: np.ndarray, ords: np.ndarray, extra: np.ndarray | None) -> np.ndarray:
+    """Gram matrix of [1, extra, cos/sin per order] over the rows, accumulated in blocks."""
+    n = theta.shape[0]
+    ncol = 1 + (0 if extra is None else extra.shape[1]) + 2 * ords.shape[0]
+    gram = np.zeros((ncol, ncol))
+    for a in range(0, n, BLOCK_ROWS):
+        b = min(a + BLOCK_ROWS, n)
+        parts = [np.ones((b - a, 1))]
+        if extra is not None:
+            parts.append(extra[a:b])
+        parts.append(harmonic_columns(theta[a:b], ords))
+        xb = np.hstack(parts)
+        gram += xb.T @ xb
+    return gram
 
 
-def resolvable_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RESOLVE_MIN_EIG) -> list[float]:
-    """The candidates that can be fitted together, taken greedily in the given order.
+def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RESOLVE_MIN_EIG,
+                  extra=None, gram=None, distinct: int | None = None) -> Resolution:
+    """The candidate orders that can be fitted together, chosen by how well each is determined.
 
-    Starting from the offset alone, each candidate order is kept when the
-    design [1, cos(k theta), sin(k theta), ...] of the kept orders plus this
-    one stays well conditioned: the smallest eigenvalue of the column
-    correlation matrix (unit-diagonal Gram matrix) is at least
-    ``min_eigenvalue`` (1e-6: the standard errors are inflated by at most
-    ~1000x).  With N distinct targets at most (N - 1) / 2 orders fit; the
-    rest are left out (not resolvable by these targets), the first ones
-    in ``candidates`` having priority."""
+    Backward elimination on the column correlation matrix G (unit-diagonal
+    Gram matrix) of [1, ``extra`` columns, cos(k theta), sin(k theta) per
+    candidate]: the determinacy of an order is the smallest eigenvalue of
+    its 2 x 2 block of the Schur complement of the other columns, i.e.
+    1 / lambda_max((G^-1)_kk) (variance inflation factors of the pair).
+    While some order's determinacy is below ``min_eigenvalue`` (1e-6: the
+    standard errors inflated by more than 1000x), the worst-determined one
+    is dropped.  The list order of ``candidates`` only breaks ties between
+    orders that cannot be told apart at all (determinacy below 1e-8, e.g.
+    more columns than distinct angles): the later one is dropped.  A column
+    that vanishes on the samples (a folded order) is dropped first.
+
+    Parameters
+    ----------
+    theta : array_like [rad], shape (n,)
+    candidates : sequence of float [cycles/rev]
+    min_eigenvalue : float [-]
+    extra : array_like, shape (n, t), optional
+        Columns always kept (e.g. a trend, :func:`trend_columns`).
+    gram : ndarray, optional
+        The Gram matrix of [1, extra, cos/sin per candidate] when already
+        accumulated (then ``theta`` and ``extra`` only give the counts).
+    distinct : int, optional
+        Number of distinct angles (default: counted from ``theta``).
+    """
     theta = _as_1d("theta", theta)
     ords = np.atleast_1d(np.asarray(candidates, dtype=float))
     if ords.size == 0:
-        return []
-    x = np.hstack([np.ones((theta.shape[0], 1)), harmonic_columns(theta, ords)])
-    gram = x.T @ x
-    diag = np.sqrt(np.diag(gram))
-    keep_cols = [0]
-    kept = []
-    for i, k in enumerate(ords):
-        cols = [1 + 2 * i, 2 + 2 * i]
+        return Resolution((), {}, {})
+    if gram is None:
+        ex = None if extra is None else np.asarray(extra, dtype=float).reshape(theta.shape[0], -1)
+        gram = _weighted_gram(theta, ords, ex)
+    n_fixed = gram.shape[0] - 2 * ords.size
+    has_extra = n_fixed > 1
+    diag = np.sqrt(np.maximum(np.diag(gram), 0.0))
+    if distinct is None:
+        distinct = int(np.unique(theta).size)
+    alive = list(range(ords.size))
+    det: dict = {}
+    reason: dict = {}
+    for i in list(alive):
+        cols = [n_fixed + 2 * i, n_fixed + 2 * i + 1]
         if np.any(diag[cols] <= 1e-9 * diag[0]):
-            continue  # a column vanishing on the samples (folded order)
-        trial = keep_cols + cols
-        sub = gram[np.ix_(trial, trial)] / np.outer(diag[trial], diag[trial])
-        if np.linalg.eigvalsh(sub)[0] >= min_eigenvalue:
-            keep_cols = trial
-            kept.append(float(k))
-    return kept
-
-
-def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequence[str | None] | None = None,
-                   priority: Sequence[float] | None = None, tol: float = ALIAS_TOL) -> OrdersAnalysis:
-    """Amplitudes at exact orders of a measurement, aliasing and resolution handled.
-
-    ``theta`` [rad], ``y`` errors [any unit], ``direction`` +1/-1 per row;
-    ``orders`` [cycles/rev] (repeats dropped, first kept), optional
-    ``labels``; ``priority``: the orders in the order they should be kept
-    when not all can be fitted (default: ``orders`` as given).
-
-    1. Alias groups on the sampled angles (:func:`alias_groups`): an order
-       grouped with the offset is not fitted; in any other group only the
-       member first in ``priority`` is fitted and carries the group.
-    2. Folded orders (:func:`folded_orders`) are not fitted.
-    3. The rest are kept greedily in priority order while the design stays
-       well conditioned (:func:`resolvable_orders`).
-    4. One joint least-squares fit on all rows (:func:`fit_modes`): common
-       mode + direction x differential mode at the kept orders.
-    """
-    theta = _as_1d("theta", theta)
-    d = _as_1d("direction", direction, theta.shape[0])
-    ords: list[float] = []
-    labs: list[str | None] = []
-    for i, k in enumerate(np.atleast_1d(np.asarray(orders, dtype=float))):
-        if float(k) not in ords:
-            ords.append(float(k))
-            labs.append(None if labels is None else labels[i])
-    rank = {k: len(ords) for k in ords}
-    for i, k in enumerate([] if priority is None else [float(v) for v in priority]):
-        if k in rank and rank[k] == len(ords):
-            rank[k] = i
-    by_priority = sorted(ords, key=lambda k: (rank[k], ords.index(k)))
-    if ords:
-        arr = np.asarray(ords)
-        cm, cp, cz = _correlations(theta, arr, None)
-        groups = _groups(arr, cm, cp, cz, tol)
-        folded = set(_folded(arr, cp, tol))
-    else:
-        groups, folded = [], set()
-    group_of: dict[float, tuple[float, ...]] = {}
-    for g in groups:
-        for k in g:
-            group_of[k] = g
-    status: dict[float, str] = {}
-    candidates = []
-    for k in by_priority:
-        g = group_of.get(k)
-        if g is not None and (0.0 in g or k != min((v for v in g if v in rank), key=lambda v: (rank[v], ords.index(v)))):
-            status[k] = "aliased"
-        elif k in folded:
-            status[k] = "folded"
+            alive.remove(i)
+            det[float(ords[i])] = 0.0
+            reason[float(ords[i])] = "only one phase component is seen on these angles"
+    fixed = list(range(n_fixed))
+    while alive:
+        cols = fixed + [c for i in alive for c in (n_fixed + 2 * i, n_fixed + 2 * i + 1)]
+        sub = gram[np.ix_(cols, cols)] / np.outer(diag[cols], diag[cols])
+        inv = np.linalg.pinv(sub + 1e-10 * np.eye(len(cols)), hermitian=True)
+        d = []
+        for j, i in enumerate(alive):
+            blk = inv[n_fixed + 2 * j:n_fixed + 2 * j + 2, n_fixed + 2 * j:n_fixed + 2 * j + 2]
+            d.append(1.0 / max(float(np.linalg.eigvalsh(blk)[-1]), 1.0))
+        d = np.asarray(d)
+        for j, i in enumerate(alive):
+            det[float(ords[i])] = float(d[j])
+        if d.min() >= min_eigenvalue:
+            break
+        undetermined = np.flatnonzero(d < 1e-8)
+        j = int(undetermined[-1]) if undetermined.size else int(np.argmin(d))
+        k = float(ords[alive[j]])
+        if len(cols) > distinct:
+            reason[k] = (f"too few distinct angles ({distinct}) for {len(cols)} coefficients "
+                         f"(offset{', trend' if has_extra else ''} and 2 per order)")
         else:
-            candidates.append(k)
-    kept = set(resolvable_orders(theta, candidates))
-    for k in candidates:
-        status[k] = "fitted" if k in kept else "unresolved"
-    fitted = [k for k in ords if status[k] == "fitted"]
-    fit = fit_modes(theta, y, d, fitted)
-    pos = {k: i for i, k in enumerate(fitted)}
-    nan3 = (math.nan, math.nan, math.nan)
+            reason[k] = (f"not determined apart from the other orders on these angles (variance inflation "
+                         f"{1.0 / max(d[j], 1e-300):.3g})")
+        alive.pop(j)
+    kept = tuple(float(ords[i]) for i in sorted(alive))
+    return Resolution(kept, det, reason)
 
-    def triple(f, i):
-        if not f.identifiable[i] or not np.isfinite(f.amplitude[i]):
-            return nan3
-        return (float(f.amplitude[i]), float(f.amplitude_stderr[i]), float(f.phase[i]))
 
-    items = []
-    for k, lab in zip(ords, labs):
-        others = [v for v in group_of.get(k, (k,)) if v != k]
-        if k in pos:
-            i = pos[k]
-            items.append(OrderReport(k, lab, "fitted", tuple(others), triple(fit.common, i),
-                                     triple(fit.differential, i)))
-        else:
-            items.append(OrderReport(k, lab, status[k], tuple(others), nan3, nan3))
-    both = bool(np.any(d > 0) and np.any(d < 0))
-    return OrdersAnalysis(tuple(items), fit.rms, fit.sigma, fit.common.offset,
-                          fit.differential.offset if both else math.nan, tol, both, int(np.unique(theta).size))
+def resolvable_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RESOLVE_MIN_EIG,
+                      extra=None) -> list[float]:
+    """The candidates that can be fitted together (:func:`select_orders`), in candidate order.
+
+    The single test of resolvability in the code base: an order is kept
+    when its determinacy (smallest eigenvalue of its Schur-complement block
+    of the column correlation matrix) is at least ``min_eigenvalue``; when
+    not all can be kept, the worst-determined is dropped first and the list
+    order only breaks exact ties."""
+    return list(select_orders(theta, candidates, min_eigenvalue, extra).kept)
+
+
+# --- re-exported: the measurement-level analysis lives in its own modules --------------------------------------
+from wormgear_cli.coverage import Coverage, coverage, trend_columns, unwrap_passes  # noqa: E402,F401
+from wormgear_cli.order_analysis import STATUSES, OrderReport, OrdersAnalysis, analyse_orders  # noqa: E402,F401

@@ -30,6 +30,9 @@ Choices where the standard is silent (documented in docs/measure.md):
 * s needs two runs: with a single run in a cell s is NaN, and so are the
   figures built on it (R_i, and the axis A and R of every set that
   contains such a cell); E, M and B do not need s and stay defined.
+* One target only (a one-position backlash test: many landings from each
+  side at one angle): A, E and M compare targets and are NaN (not
+  applicable); B and R are that target's reversal and repeatabilities.
 
 All angles in radians.  Pure numpy, no I/O.
 """
@@ -107,12 +110,23 @@ class Iso230Figures:
                                               "E_down", "M", "R", "R_up", "R_down")}
 
 
-def group_targets(angle: np.ndarray, tol: float = TARGET_TOL) -> tuple[np.ndarray, np.ndarray]:
+def group_targets(angle: np.ndarray, tol: float = TARGET_TOL, unique=None) -> tuple[np.ndarray, np.ndarray]:
     """Target index per row and the target angles (mean of their rows).
 
     Rows whose sorted angles are within ``tol`` [rad] of their neighbour
-    share a target."""
+    share a target.  ``unique``: (sorted distinct angles, index of each
+    row's angle among them) of ``np.unique(angle, return_inverse=True)``
+    when already computed (saves a sort of the rows)."""
     angle = np.asarray(angle, dtype=float)
+    if unique is not None:
+        ut, inverse = unique
+        new = np.empty(ut.shape[0], dtype=bool)
+        if ut.shape[0]:
+            new[0] = True
+            new[1:] = np.diff(ut) > tol
+        index = (np.cumsum(new) - 1)[np.ravel(inverse)]
+        count = np.bincount(index)
+        return index, np.bincount(index, weights=angle) / count
     order = np.argsort(angle, kind="stable")
     sorted_angle = angle[order]
     new = np.empty(angle.shape[0], dtype=bool)
@@ -152,16 +166,18 @@ def _all_defined(s: np.ndarray, n: np.ndarray) -> bool:
     return bool(np.any(present)) and bool(np.all(np.isfinite(s[present])))
 
 
-def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Figures:
+def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=None) -> Iso230Figures:
     """ISO 230-2 figures from rows of ``angle`` [rad], ``error`` [rad]
     (actual - target) and ``direction`` (+1 forward/up, -1 reverse/down).
 
     See the module doc for the definitions and the choices made where the
-    standard is silent.  Returns :class:`Iso230Figures`."""
+    standard is silent.  ``grouping``: (target index per row, target
+    angles) of :func:`group_targets` when already computed.  Returns
+    :class:`Iso230Figures`."""
     angle = np.asarray(angle, dtype=float)
     error = np.asarray(error, dtype=float)
     direction = np.asarray(direction, dtype=float)
-    index, target = group_targets(angle, tol)
+    index, target = group_targets(angle, tol) if grouping is None else grouping
     nt = target.shape[0]
     up = direction > 0
     n_up, mean_up, s_up = _cell_stats(error[up], index[up], nt)
@@ -197,6 +213,11 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Fi
         notes.append("no target was measured in both directions (different angles per direction?): "
                      "reversal B, M and the bidirectional R are undefined")
 
+    one_target = nt == 1
+    if one_target:
+        notes.append("one target only (a one-position test): A, E and M compare targets and are not applicable; "
+                     "B and R are that target's values")
+
     def acc(means, ss):
         return _span(*(m + 2.0 * s for m, s in zip(means, ss)), *(m - 2.0 * s for m, s in zip(means, ss)))
 
@@ -214,10 +235,33 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL) -> Iso230Fi
         M = _span(mean_bi[both])
     else:
         B = B_signed = B_mean = M = nan
+    E = _span(mean_up, mean_dn) if has_up and has_dn else nan
+    E_up = _span(mean_up) if has_up else nan
+    E_dn = _span(mean_dn) if has_dn else nan
+    if one_target:
+        A = A_up = A_dn = E = E_up = E_dn = M = nan
     return Iso230Figures(
-        A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean,
-        E=_span(mean_up, mean_dn) if has_up and has_dn else nan, E_up=_span(mean_up) if has_up else nan, E_down=_span(mean_dn) if has_dn else nan,
+        A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean, E=E, E_up=E_up, E_down=E_dn,
         M=M, R=R, R_up=R_up, R_down=R_dn, targets=table, rows=int(angle.shape[0]), notes=tuple(notes))
+
+
+def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
+    """The figures with every one-direction value withheld (NaN), for rows whose directions are mixed.
+
+    Used when the file has no direction column yet a run visits a target
+    more than once (an up/down table flattened): the "forward" cells then
+    mix both directions, so their s, R, A and E mean nothing.  Axis A, E, R
+    (forward, reverse and bidirectional), the per-target s and R are
+    withheld; ``reason`` is added to the notes."""
+    import dataclasses
+
+    nan = math.nan
+    t = figures.targets
+    blank = np.full(len(t), np.nan)
+    table = dataclasses.replace(t, s_up=blank, s_down=blank, r_up=blank, r_down=blank, r_bi=blank,
+                                mean_up=blank, mean_down=blank, mean_bi=blank, reversal=blank)
+    return dataclasses.replace(figures, A=nan, A_up=nan, A_down=nan, E=nan, E_up=nan, E_down=nan, R=nan,
+                               R_up=nan, R_down=nan, targets=table, notes=figures.notes + (reason,))
 
 
 def measurement_figures(measurement, tol: float = TARGET_TOL) -> Iso230Figures:

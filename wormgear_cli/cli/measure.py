@@ -19,9 +19,8 @@ from wormgear_cli.cli.common import (
     json_text,
     render,
 )
+from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
 
-#: default orders without a drive spec
-DEFAULT_ORDERS = (1.0, 2.0, 3.0, 4.0)
 #: per-target rows shown in the table format before it is left to --format csv
 MAX_TABLE_TARGETS = 100
 #: per-target CSV columns (angles in --unit; the column names carry the unit)
@@ -29,39 +28,8 @@ TARGET_COLUMNS = ("target_deg", "n_forward", "n_reverse", "mean_forward", "s_for
                   "mean_bidirectional", "reversal", "R_forward", "R_reverse", "R")
 
 DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, error_arcsec; optional direction, "
-                                              "run, load_Nm, temperature_C, time_s).", show_default=False)]
-
-
-#: largest order accepted by --orders: beyond it, 1/1000 deg of angle error is a sizeable phase error
-MAX_ORDER = 100_000.0
-
-
-def parse_orders(text: str) -> list[float]:
-    """``"1,8,240.5"`` -> [1.0, 8.0, 240.5]; UsageError unless every item is a finite number > 0."""
-    from wormgear_cli.errors import UsageError
-
-    items = [t.strip() for t in text.split(",")]
-    out = []
-    for item in items:
-        try:
-            value = float(item)
-        except ValueError:
-            value = math.nan
-        if not math.isfinite(value) or value <= 0:
-            raise UsageError(f"--orders: expected positive numbers separated by commas, got {item!r}")
-        if value > MAX_ORDER:
-            raise UsageError(f"--orders: {item} is above {MAX_ORDER:g} cycles per revolution, finer than "
-                             "angle readings resolve")
-        if value not in out:
-            out.append(value)
-    return out
-
-
-def _label_for(order: float, physical: list[tuple[float, str]]) -> Optional[str]:
-    for k, label in physical:
-        if abs(k - order) <= 1e-9 * max(abs(k), 1.0):
-            return label
-    return None
+                                              "run, load_Nm, temperature_C, time_s; other headers via --map).",
+                                              show_default=False)]
 
 
 @app.command()
@@ -76,6 +44,9 @@ def measure(
     harmonics: Annotated[int, typer.Option(
         "--harmonics", help="With --drive: harmonics of each shaft/mesh order to include.", min=1,
         max=10)] = 3,
+    column_map: MapOption = None,
+    error_unit: ErrorUnitOption = None,
+    angle_unit: AngleUnitOption = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -90,14 +61,16 @@ def measure(
     deviation E, mean bidirectional deviation M and repeatability R; and
     the amplitude and phase at exact orders by least squares on all rows,
     split into the common mode (mean of the directions) and the
-    differential mode (half the reversal), with a warning where the target
-    spacing aliases an order.  CSV output is the per-target table.
+    differential mode (half the reversal).  The span covered is reported;
+    orders longer than a partial span are 'beyond span'.  Spreadsheet
+    exports (';' or tab, decimal commas, other headers) are read with
+    --map and the unit options.  CSV output is the per-target table.
 
     Example: wormgear measure test.csv --drive configs/mch50.toml --format json
+
+    Example: wormgear measure export.csv --map angle_deg=Position --map error_arcsec=Abweichung
     """
-    from wormgear_cli.harmonics import analyse_orders, physical_orders, physical_priority
-    from wormgear_cli.iso230 import measurement_figures
-    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.measure_report import measure as run, parse_orders, report
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -109,156 +82,28 @@ def measure(
         from wormgear_cli.io import refuse_input
 
         refuse_input(plot, inputs, "--plot")
-    spec = None
-    physical: list[tuple[float, str]] = []
-    priority = None
-    if drive is not None:
-        from wormgear_cli.analysis import geometry
-        from wormgear_cli.spec import load_spec
-
-        spec = load_spec(drive)
-        geo, starts = geometry(spec), spec.worm_pair.worm.starts
-        physical = physical_orders(geo, harmonics, worm_starts=starts)
-        priority = physical_priority(geo, harmonics, worm_starts=starts)
-    if orders is not None:
-        order_list = parse_orders(orders)
-        priority = None  # the user's order is the priority
-    elif physical:
-        order_list = [k for k, _ in physical]
-    else:
-        order_list = list(DEFAULT_ORDERS)
-    labels = [_label_for(k, physical) for k in order_list] if physical else None
-
-    m = read_measurement(data)
-    figures = measurement_figures(m)
-    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, labels, priority)
-    doc = report(m, figures, analysis, unit, spec.drive.name if spec is not None else None)
+    options = read_options(column_map, error_unit, angle_unit)
+    order_list = parse_orders(orders) if orders is not None else None
+    result = run(data, options, drive, order_list, harmonics)
+    few = len(result.figures.targets) <= MAX_TABLE_TARGETS
+    doc = report(result, unit, per_target=fmt != "table" or few)
+    for w in doc["warnings"]:
+        typer.echo(f"warning: {w}", err=True)
 
     if plot is not None:
         from wormgear_cli.plots.measure import deviation_chart
 
-        deviation_chart(figures, m, unit, plot, title=Path(data).name)
+        deviation_chart(result.figures, result.measurement, unit, plot, title=Path(data).name)
     if fmt == "json":
         emit(_json(doc), output, inputs)
     elif fmt == "csv":
+        typer.echo(f"note: {doc['verdict']}", err=True)
         for note in doc["notes"]:
             typer.echo(f"note: {note}", err=True)
         cols = [c if c.startswith(("target_deg", "n_")) else f"{c}_{unit}" for c in TARGET_COLUMNS]
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:
-        render(_tables(doc), output, inputs)
-
-
-def report(m, figures, analysis, unit: str, drive_name: Optional[str]) -> dict:
-    """The JSON document of ``wormgear measure`` (angles in ``unit``, phases and targets in degrees)."""
-    import numpy as np
-
-    from wormgear_cli.units import to_unit
-
-    def a(x) -> Optional[float]:
-        x = float(x)
-        return float(to_unit(x, unit)) if math.isfinite(x) else None
-
-    t = figures.targets
-
-    def column(values) -> list:
-        # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
-        return np.asarray(to_unit(np.asarray(values, dtype=float), unit)).tolist()
-
-    # rounded to 1e-9 deg: removes the rad -> deg round-off, far below the grouping tolerance
-    cols = {
-        "target_deg": np.round(np.degrees(t.target), 9).tolist(),
-        "n_forward": t.n_up.tolist(),
-        "n_reverse": t.n_down.tolist(),
-        "mean_forward": column(t.mean_up),
-        "s_forward": column(t.s_up),
-        "mean_reverse": column(t.mean_down),
-        "s_reverse": column(t.s_down),
-        "mean_bidirectional": column(t.mean_bi),
-        "reversal": column(t.reversal),
-        "R_forward": column(t.r_up),
-        "R_reverse": column(t.r_down),
-        "R": column(t.r_bi),
-    }
-    names = list(cols)
-    per_target = [dict(zip(names, row)) for row in zip(*cols.values())]
-    ax = figures.axis()
-    iso = {
-        "A": a(ax["A"]), "A_forward": a(ax["A_up"]), "A_reverse": a(ax["A_down"]),
-        "B": a(ax["B"]), "B_signed": a(ax["B_signed"]), "B_mean": a(ax["B_mean"]),
-        "B_mean_abs": a(abs(ax["B_mean"])),
-        "E": a(ax["E"]), "E_forward": a(ax["E_up"]), "E_reverse": a(ax["E_down"]),
-        "M": a(ax["M"]),
-        "R": a(ax["R"]), "R_forward": a(ax["R_up"]), "R_reverse": a(ax["R_down"]),
-    }
-    notes = list(figures.notes)
-    items = []
-    unresolved = []
-    carriers = {it.order for it in analysis.items if it.fitted}
-    for it in analysis.items:
-        def mode(tr):
-            amp, se, ph = tr
-            return {"amplitude": a(amp), "amplitude_stderr": a(se),
-                    "phase_deg": float(np.degrees(ph)) if math.isfinite(ph) else None}
-
-        items.append({
-            "order": it.order,
-            "label": it.label,
-            "status": it.status,
-            "aliased_with": list(it.aliased_with),
-            "common": mode(it.common),
-            "differential": mode(it.differential),
-        })
-        name = f"order {it.order:g}" + (f" ({it.label})" if it.label else "")
-        if it.status == "aliased":
-            if 0.0 in it.aliased_with:
-                notes.append(f"{name} is aliased onto the offset by the target spacing (constant on these "
-                             "targets): not fitted")
-            else:
-                onto = ", ".join(f"{k:g}" for k in it.aliased_with)
-                carried = [f"{k:g}" for k in it.aliased_with if k in carriers]
-                tail = f", its content is in the amplitude of order {carried[0]}" if carried else ""
-                notes.append(f"{name} is aliased by the target spacing onto order{'s' if len(it.aliased_with) > 1 else ''} "
-                             f"{onto}: not fitted{tail}")
-        elif it.status == "fitted" and it.aliased_with:
-            onto = ", ".join(f"{k:g}" for k in it.aliased_with)
-            notes.append(f"{name} also carries order {onto} (aliased by the target spacing)")
-        elif it.status == "folded":
-            notes.append(f"{name}: the targets see only one phase component of it (cos and sin collinear): "
-                         "not fitted")
-        elif it.status == "unresolved":
-            unresolved.append(f"{it.order:g}")
-    if unresolved:
-        notes.append(f"{analysis.distinct_angles} distinct target angles cannot resolve all orders together: "
-                     f"order{'s' if len(unresolved) > 1 else ''} {', '.join(unresolved)} not fitted (lower "
-                     "harmonics and earlier orders kept first)")
-    runs_f = t.n_up[t.n_up > 0]
-    runs_r = t.n_down[t.n_down > 0]
-    return {
-        "source": m.source,
-        "drive": drive_name,
-        "unit": unit,
-        "rows": len(m),
-        "targets": len(t),
-        "rows_forward": int(np.count_nonzero(m.direction > 0)),
-        "rows_reverse": int(np.count_nonzero(m.direction < 0)),
-        "runs_per_target": {
-            "forward": [int(runs_f.min()), int(runs_f.max())] if runs_f.size else None,
-            "reverse": [int(runs_r.min()), int(runs_r.max())] if runs_r.size else None,
-        },
-        "iso230_2": iso,
-        "orders": {
-            "method": "joint least squares on all rows: error = common(theta) + direction * differential(theta), "
-                      "each an offset plus A sin(k theta + phase) per order",
-            "alias_tolerance": analysis.alias_tol,
-            "residual_rms": a(analysis.residual_rms),
-            "common_offset": a(analysis.common_offset),
-            "differential_offset": a(analysis.differential_offset),
-            "items": items,
-        },
-        "per_target": per_target,
-        "notes": notes,
-    }
+        render(_tables(doc, len(result.figures.targets)), output, inputs)
 
 
 def _json(doc: dict) -> str:
@@ -280,7 +125,12 @@ def _json(doc: dict) -> str:
     return text.replace(marker, '"per_target": [\n' + body + "\n  ]")
 
 
-def _tables(doc: dict) -> list:
+def _tables(doc: dict, ntargets: int) -> list:
+    """The table view: verdict line, ISO 230-2 figures, orders (common, then differential), per target, notes.
+
+    Every table fits 80 columns without cutting a number: numbers never wrap
+    (no_wrap), labels and long words fold, and wide tables are split."""
+    from rich import box
     from rich.markup import escape
     from rich.table import Table
     from rich.text import Text
@@ -290,63 +140,95 @@ def _tables(doc: dict) -> list:
     def a(x) -> str:
         return "-" if x is None or not math.isfinite(x) else fmt_angle(x, unit)
 
+    def table(title: str) -> Table:
+        return Table(title=escape(title), title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False,
+                     padding=(0, 1))
+
+    def num(t: Table, name: str) -> None:
+        t.add_column(name, justify="right", no_wrap=True)
+
     iso = doc["iso230_2"]
-    out = []
-    head = (f"{doc['source']}: {doc['rows']} rows, {doc['targets']} targets "
-            f"({doc['rows_forward']} forward, {doc['rows_reverse']} reverse rows)")
-    out.append(Text(head))
-    st = Table(title=escape(f"ISO 230-2 figures [{unit}]"), title_justify="left")
-    for col in ("figure", "bidirectional", "forward", "reverse"):
-        st.add_column(col, justify="left" if col == "figure" else "right")
-    st.add_row("accuracy A", a(iso["A"]), a(iso["A_forward"]), a(iso["A_reverse"]))
-    st.add_row("systematic deviation E", a(iso["E"]), a(iso["E_forward"]), a(iso["E_reverse"]))
-    st.add_row("repeatability R", a(iso["R"]), a(iso["R_forward"]), a(iso["R_reverse"]))
-    st.add_row("mean bidirectional deviation M", a(iso["M"]), "", "")
-    st.add_row("reversal B = max |B_i|", a(iso["B"]), "", "")
-    st.add_row("  largest B_i, signed", a(iso["B_signed"]), "", "")
-    st.add_row("mean reversal B_mean", a(iso["B_mean"]), "", "")
+    out = [Text(doc["verdict"])]
+    st = table(f"ISO 230-2 figures [{unit}] (n/a: see notes)")
+    st.add_column("figure", overflow="fold")
+    for col in ("bidirectional", "forward", "reverse"):
+        num(st, col)
+
+    def na(x) -> str:
+        return "n/a" if x is None else fmt_angle(x, unit)
+
+    st.add_row("accuracy A", na(iso["A"]), na(iso["A_forward"]), na(iso["A_reverse"]))
+    st.add_row("systematic deviation E", na(iso["E"]), na(iso["E_forward"]), na(iso["E_reverse"]))
+    st.add_row("repeatability R", na(iso["R"]), na(iso["R_forward"]), na(iso["R_reverse"]))
+    st.add_row("mean bidirectional deviation M", na(iso["M"]), "", "")
+    st.add_row("reversal B = max |B_i|", na(iso["B"]), "", "")
+    st.add_row("  largest B_i, signed", na(iso["B_signed"]), "", "")
+    st.add_row("mean reversal B_mean", na(iso["B_mean"]), "", "")
     out.append(st)
 
     od = doc["orders"]
-    ot = Table(title=escape(f"orders (least squares at exact orders, all rows) [{unit}, phase in deg]"),
-               title_justify="left")
-    for col in ("order", "shaft / mesh", "common", "phase", "differential", "phase", "status"):
-        ot.add_column(col, justify="left" if col in ("shaft / mesh", "status") else "right")
+    cov = doc["coverage"]
 
     def ph(x):
         return "-" if x is None else f"{x:.1f}"
 
-    def amp(m):
-        if m["amplitude"] is None:
-            return "-"
-        return f"{a(m['amplitude'])} +/- {a(m['amplitude_stderr'])}"
-
-    for it in od["items"]:
-        c, d = it["common"], it["differential"]
-        status = it["status"]
+    def status(it):
+        s = it["status"]
         if it["aliased_with"]:
-            status += " ~ " + ("offset" if 0 in it["aliased_with"] else
-                               ", ".join(f"{k:g}" for k in it["aliased_with"]))
-        ot.add_row(f"{it['order']:g}", escape(it["label"] or ""), amp(c), ph(c["phase_deg"]), amp(d), ph(d["phase_deg"]),
-                   status)
-    ot.caption = escape(f"error ~ offset + A sin(k theta + phase); common = mean of directions, differential = half the "
-                  f"reversal. Residual RMS {a(od['residual_rms'])}, common offset {a(od['common_offset'])}, "
-                  f"differential offset {a(od['differential_offset'])}")
+            s += " ~ " + ("offset" if 0 in it["aliased_with"] else ", ".join(f"{k:g}" for k in it["aliased_with"]))
+        return s
+
+    has_diff = any(it["differential"]["amplitude"] is not None for it in od["items"])
+    ot = table(f"orders, common mode (mean of directions) [{unit}, phase deg]")
+    num(ot, "order")
+    ot.add_column("shaft / mesh", overflow="fold", ratio=1)
+    for col in ("amplitude", "+/-", "phase"):
+        num(ot, col)
+    ot.add_column("status", overflow="fold")
+    for it in od["items"]:
+        c = it["common"]
+        ot.add_row(f"{it['order']:g}", escape(it["label"] or ""), a(c["amplitude"]) if c["amplitude"] is not None else "-",
+                   a(c["amplitude_stderr"]) if c["amplitude"] is not None else "-", ph(c["phase_deg"]),
+                   escape(status(it)))
+    span = "full turn" if cov["full_turn"] else f"span {cov['span_deg']:.4g} deg, trend degree {cov['trend_degree']}"
+    ot.caption = escape(f"error ~ offset + A sin(k theta + phase) per order; {span}. Residual RMS "
+                        f"{a(od['residual_rms'])}, common offset {a(od['common_offset'])}")
     ot.caption_justify = "left"
     out.append(ot)
+    if has_diff:
+        dt = table(f"differential mode (half the reversal) [{unit}, phase deg]")
+        num(dt, "order")
+        for col in ("amplitude", "+/-", "phase"):
+            num(dt, col)
+        for it in od["items"]:
+            d = it["differential"]
+            if d["amplitude"] is None:
+                continue
+            dt.add_row(f"{it['order']:g}", a(d["amplitude"]), a(d["amplitude_stderr"]), ph(d["phase_deg"]))
+        dt.caption = escape(f"differential offset {a(od['differential_offset'])}")
+        dt.caption_justify = "left"
+        out.append(dt)
 
     rows = doc["per_target"]
-    if len(rows) <= MAX_TABLE_TARGETS:
-        tt = Table(title=escape(f"per target [{unit}; target in deg]"), title_justify="left")
-        for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev", "mean bi", "B_i", "R_i"):
-            tt.add_column(col, justify="right")
+    if ntargets <= MAX_TABLE_TARGETS:
+        tt = table(f"per target by direction [{unit}; target deg]")
+        for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev"):
+            num(tt, col)
         for r in rows:
             tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]), a(r["s_forward"]),
-                       str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]), a(r["mean_bidirectional"]),
-                       a(r["reversal"]), a(r["R"]))
+                       str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]))
         out.append(tt)
+        bt = table(f"per target bidirectional [{unit}; target deg]")
+        for col in ("target", "mean bi", "B_i", "R fwd", "R rev", "R_i"):
+            num(bt, col)
+        for r in rows:
+            bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]), a(r["R_forward"]),
+                       a(r["R_reverse"]), a(r["R"]))
+        out.append(bt)
     else:
-        out.append(Text(f"{len(rows)} targets: the per-target table is in --format csv or json"))
+        out.append(Text(f"{ntargets} targets: the per-target table is in --format csv or json"))
+    for w in doc["warnings"]:
+        out.append(Text(f"warning: {w}"))
     for note in doc["notes"]:
         out.append(Text(f"note: {note}"))
     return out

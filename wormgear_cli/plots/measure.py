@@ -36,7 +36,10 @@ def deviation_chart(figures, measurement, unit: str, path: Path, title: str = ""
         mu = to_unit(mean[sel], unit)
         ax.plot(x[sel], mu, "-o", ms=3, lw=1.2, color=colour, label=f"mean {name}")
         band = np.isfinite(s[sel])
-        if np.any(band):
+        if len(t) == 1 and np.any(band):  # one target (one-position test): a band has no width, draw +/- 2 s bars
+            ax.errorbar(x[sel], mu, yerr=2 * to_unit(s[sel], unit), fmt="none", capsize=6, color=colour,
+                        label=f"{name} +/- 2s")
+        elif np.any(band):
             sd = to_unit(s[sel], unit)
             ax.fill_between(x[sel], np.where(band, mu - 2 * sd, np.nan), np.where(band, mu + 2 * sd, np.nan),
                             color=colour, alpha=0.15, lw=0, label=f"{name} +/- 2s")

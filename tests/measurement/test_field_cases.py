@@ -1,0 +1,136 @@
+"""Each field case of tests/data/field/README.md with the right value it names.
+
+Values (arcsec) are the README's, which come from the recordings' known truth (an exact
+10 sin(144 theta) signal; the directions of an ISO 230-2 cycle; ISO 230-2 arithmetic on
+the shipped configs/mch50-warm.csv), not from this code's output.
+"""
+
+from __future__ import annotations
+
+import json
+import shlex
+
+import numpy as np
+import pytest
+
+from tests.conftest import ROOT
+from wormgear_cli.cli import app
+
+FIELD = ROOT / "tests" / "data" / "field"
+
+
+def measure_json(runner, *args):
+    result = runner.invoke(app, ["measure", *map(str, args), "-f", "json"])
+    assert result.exit_code == 0, result.stderr
+    return json.loads(result.stdout), result.stderr
+
+
+def by_order(doc):
+    return {it["order"]: it for it in doc["orders"]["items"]}
+
+
+@pytest.mark.parametrize("orders", ["144", "1,144", "144,1"])
+def test_partial_span_order144_whatever_the_order_list(runner, orders):
+    doc, _ = measure_json(runner, FIELD / "partial-span-order144.csv", "--orders", orders)
+    items = by_order(doc)
+    assert items[144.0]["status"] == "fitted"
+    assert items[144.0]["common"]["amplitude"] == pytest.approx(10.0, abs=0.01)  # README: 10.000 +/- 0.01
+    if "1" in orders.split(","):
+        assert items[1.0]["status"] == "beyond span"
+        assert items[1.0]["common"]["amplitude"] is None
+        assert "11.07 deg" in items[1.0]["reason"]
+    assert doc["coverage"]["full_turn"] is False
+    assert doc["coverage"]["span_deg"] == pytest.approx(11.07, abs=0.01)  # -10.64 .. +0.43 deg in the file
+
+
+def test_partial_span_note_names_the_span(runner):
+    doc, _ = measure_json(runner, FIELD / "partial-span-order144.csv", "--orders", "1,144")
+    notes = "\n".join(doc["notes"])
+    assert "order 1 not fitted: beyond span: one period is longer than the 11.07 deg the data cover" in notes
+    assert "partial span 11.07 deg" in doc["verdict"]
+
+
+def test_no_direction_column_warns_and_withholds_forward_repeatability(runner):
+    doc, err = measure_json(runner, FIELD / "no-direction-column.csv")
+    assert "warning: no direction column: every row is taken as forward, yet one run visits the same target" in err
+    iso = doc["iso230_2"]
+    assert iso["R_forward"] is None  # not the 138.44 computed from mixed directions
+    assert iso["A_forward"] is None
+    assert all(t["s_forward"] is None for t in doc["per_target"])
+    assert "one-direction figures withheld" in doc["verdict"]
+
+
+def test_no_direction_column_with_the_directions_restored(runner, tmp_path):
+    # put the directions back by the visiting order (first visit of a target in a run: up, second: down)
+    lines = (FIELD / "no-direction-column.csv").read_text().splitlines()
+    header = lines[1].split(",")
+    out = [lines[1] + ",direction"]
+    seen = set()
+    for line in lines[2:]:
+        cells = dict(zip(header, line.split(",")))
+        key = (cells["run"], cells["angle_deg"])
+        out.append(line + ("," + ("-1" if key in seen else "1")))
+        seen.add(key)
+    path = tmp_path / "restored.csv"
+    path.write_text("\n".join(out) + "\n")
+    doc, err = measure_json(runner, path)
+    assert doc["iso230_2"]["R_forward"] == pytest.approx(18.30, abs=0.005)  # README
+    assert doc["iso230_2"]["R_reverse"] == pytest.approx(204.75, abs=0.005)
+    assert "warning" not in err
+
+
+def test_time_restarts_give_the_passes_of_the_run_column():
+    from wormgear_cli.measurement import read_measurement
+
+    without = read_measurement(FIELD / "time-restarts-no-run.csv")
+    with_run = read_measurement(FIELD / "time-restarts-with-run.csv")
+    assert "run" in without.derived and "run" in without.present
+    assert np.array_equal(without.run, with_run.run)  # README: two sessions joined end to end
+    assert np.unique(without.run).tolist() == [0, 1]
+    assert any("time_s goes backwards at line 303" in n for n in without.notes)  # 2 comment/header + 300 rows
+
+
+def test_one_position_backlash_per_target_values(runner):
+    doc, _ = measure_json(runner, FIELD / "one-position-backlash.csv")
+    t = doc["per_target"]
+    assert len(t) == 1
+    # README: B = -15.13 (mean forward - mean reverse), s up 7.25, s down 7.10, R up 28.99, R down 28.40, R 43.82
+    assert t[0]["reversal"] == pytest.approx(-15.13, abs=0.005)
+    assert t[0]["s_forward"] == pytest.approx(7.25, abs=0.005)
+    assert t[0]["s_reverse"] == pytest.approx(7.10, abs=0.005)
+    iso = doc["iso230_2"]
+    assert iso["B_signed"] == pytest.approx(-15.13, abs=0.005)
+    assert iso["R_forward"] == pytest.approx(28.99, abs=0.005)
+    assert iso["R_reverse"] == pytest.approx(28.40, abs=0.005)
+    assert iso["R"] == pytest.approx(43.82, abs=0.005)
+    # figures that compare targets are not applicable, not refused
+    assert iso["A"] is None and iso["E"] is None and iso["M"] is None
+    assert "one target (one-position test)" in doc["verdict"]
+
+
+SPREADSHEET_MAP = ('--map angle_deg="Position (deg)" --map error_arcsec="Abweichung (arcsec)" --map direction=Richtung '
+                   '--map run=Lauf --map temperature_C="Temperatur (°C)"')
+
+
+def test_spreadsheet_export_gives_the_figures_of_the_shipped_file(runner):
+    doc, _ = measure_json(runner, FIELD / "spreadsheet-export.csv", *shlex.split(SPREADSHEET_MAP))
+    iso = doc["iso230_2"]
+    # README: A 182.86, B 158.26, E 180.77, M 71.90, R 160.10 (those of configs/mch50-warm.csv)
+    for key, value in {"A": 182.86, "B": 158.26, "E": 180.77, "M": 71.90, "R": 160.10}.items():
+        assert iso[key] == pytest.approx(value, abs=0.005), key
+    shipped, _ = measure_json(runner, ROOT / "configs" / "mch50-warm.csv")
+    assert iso == pytest.approx(shipped["iso230_2"])
+
+
+def test_spreadsheet_export_without_map_shows_the_header_and_a_map_that_fits(runner):
+    path = FIELD / "spreadsheet-export.csv"
+    result = runner.invoke(app, ["measure", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == (
+        f"error: {path}:1: missing required column error_arcsec (header has: Position (deg), Abweichung (arcsec), "
+        'Richtung, Lauf, Temperatur (°C)); try --map error_arcsec="Abweichung (arcsec)" --map direction=Richtung '
+        '--map run=Lauf --map temperature_C="Temperatur (°C)"\n')
+    # and the suggestion works as given (with the recognised 'Position (deg)')
+    hint = result.stderr.split("; try ", 1)[1].strip()
+    doc, _ = measure_json(runner, path, *shlex.split(hint))
+    assert doc["iso230_2"]["A"] == pytest.approx(182.86, abs=0.005)

@@ -1,0 +1,60 @@
+"""Options for reading a measurement file, shared by ``measure`` and ``diagnose``.
+
+Use in a command::
+
+    def measure(data: DataArgument, column_map: MapOption = None, error_unit: ErrorUnitOption = None,
+                angle_unit: AngleUnitOption = None, ...):
+        options = read_options(column_map, error_unit, angle_unit)
+        m = read_measurement(data, options=options)
+"""
+
+from __future__ import annotations
+
+from enum import Enum
+from typing import Annotated, Optional
+
+import typer
+
+from wormgear_cli.measurement import ReadOptions
+
+
+class ErrorUnit(str, Enum):
+    arcsec = "arcsec"
+    arcmin = "arcmin"
+    deg = "deg"
+    urad = "urad"
+
+
+class InputAngleUnit(str, Enum):
+    deg = "deg"
+    rad = "rad"
+
+
+MapOption = Annotated[Optional[list[str]], typer.Option(
+    "--map", help="Column of the file to read as a canonical column, CANONICAL=HEADER (repeatable), e.g. "
+    "--map angle_deg=Position --map error_arcsec=Deviation. Canonical names: angle_deg, error_arcsec, "
+    "direction, run, load_Nm, temperature_C, time_s.", show_default=False)]
+ErrorUnitOption = Annotated[Optional[ErrorUnit], typer.Option(
+    "--error-unit", help="Unit of the error column (default: the unit in its header, e.g. 'error (arcmin)', "
+    "else arcsec).", case_sensitive=False, show_default=False)]
+AngleUnitOption = Annotated[Optional[InputAngleUnit], typer.Option(
+    "--angle-unit", help="Unit of the angle column (default: the unit in its header, else deg).",
+    case_sensitive=False, show_default=False)]
+
+
+def read_options(column_map: Optional[list[str]], error_unit=None, angle_unit=None) -> ReadOptions:
+    """:class:`ReadOptions` from the option values; UsageError (one line per bad ``--map``) otherwise."""
+    from wormgear_cli.errors import UsageError
+
+    pairs = []
+    problems = []
+    for item in column_map or ():
+        canon, sep, header = item.partition("=")
+        if not sep or not canon.strip() or not header.strip():
+            problems.append(f"--map {item}: expected CANONICAL=HEADER, e.g. --map angle_deg=Position")
+            continue
+        pairs.append((canon.strip(), header.strip()))
+    if problems:
+        raise UsageError(problems)
+    return ReadOptions(column_map=tuple(pairs), error_unit=getattr(error_unit, "value", error_unit),
+                       angle_unit=getattr(angle_unit, "value", angle_unit))
