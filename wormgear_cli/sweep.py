@@ -171,6 +171,71 @@ def shard_bounds(total: int, k: int, n: int) -> tuple[int, int]:
     return (k - 1) * total // n, k * total // n
 
 
+# --- size policy: what each output can hold ------------------------------------------------
+
+#: most points of one (i, l) run (the whole grid, or this shard's part), by output; checked
+#: from the axes' N before any array is built.  A table and a plot hold the whole grid as
+#: arrays (~160 bytes per point); JSON holds every point as a Python object and its text
+#: (~3 KB per point); CSV to a file holds the file text for the atomic write (~115 bytes per
+#: point); CSV on stdout is streamed in blocks (memory constant, ~2.5 us per point).
+MAX_COLLECTED_POINTS = 2_000_000
+MAX_JSON_POINTS = 100_000
+MAX_CSV_FILE_POINTS = 2_000_000
+MAX_CSV_STREAM_POINTS = 1_000_000_000
+#: most points of one --param run with JSON output (~9 KB per point: 30 columns); every
+#: --param grid is also limited to MAX_PARAM_POINTS points
+MAX_PARAM_JSON_POINTS = 50_000
+
+
+def ratio_distance_limits(fmt: str, plot: bool, to_file: bool) -> list:
+    """(limit, what it is for, what to do instead) for an (i, l) run writing ``fmt``
+    ("table", "json" or "csv"; ``to_file``: CSV held for a file rather than streamed)
+    and, with ``plot``, a plot."""
+    if fmt == "table":
+        out = [(MAX_COLLECTED_POINTS, "--format table (it holds the whole grid)",
+                "use --format csv or fewer values")]
+    elif fmt == "json":
+        out = [(MAX_JSON_POINTS, "--format json (it holds every point as an object)",
+                "use --format csv, fewer values or --shard K/N")]
+    elif to_file:
+        out = [(MAX_CSV_FILE_POINTS, "--format csv with -o (the file is written at once)",
+                "write to stdout instead (it is streamed: > FILE) or use --shard K/N")]
+    else:
+        out = [(MAX_CSV_STREAM_POINTS, "--format csv (about 2.5 us per point)", "split it with --shard K/N")]
+    if plot:
+        out.append((MAX_COLLECTED_POINTS, "--plot (it holds the whole grid)", "plot a coarser grid"))
+    return out
+
+
+def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool, to_file: bool,
+                              shard: Optional[tuple[int, int]] = None) -> None:
+    """Refuse (UsageError) a run whose point count exceeds the limit of its output (see
+    :func:`ratio_distance_limits`), from the axes' sizes alone: nothing is built."""
+    total = n_i * n_l
+    start, stop = shard_bounds(total, *shard) if shard else (0, total)
+    points = stop - start
+    where = f"--i x --l-mm: {n_i} x {n_l} = {total} points" + (f" ({points} in this shard)" if shard else "")
+    for limit, what, instead in ratio_distance_limits(fmt, plot, to_file):
+        if points > limit:
+            raise UsageError(f"{where} are more than the limit of {limit} for {what}; {instead}")
+    if fmt == "json" and n_i + n_l > MAX_JSON_POINTS:
+        raise UsageError(f"--i x --l-mm: {n_i} + {n_l} grid values are more than the limit of {MAX_JSON_POINTS} "
+                         "for --format json (it lists the grid); use --format csv")
+
+
+def check_param_size(axes: list, fmt: str, shard: Optional[tuple[int, int]] = None) -> None:
+    """Refuse (UsageError) a --param run too large for its output (JSON: MAX_PARAM_JSON_POINTS;
+    every grid: :func:`check_param_axes`)."""
+    check_param_axes(axes)
+    total = param_size(axes)
+    start, stop = shard_bounds(total, *shard) if shard else (0, total)
+    if fmt == "json" and stop - start > MAX_PARAM_JSON_POINTS:
+        counts = " x ".join(str(len(ax.values)) for ax in axes)
+        raise UsageError(f"--param: {counts} = {total} points" + (f" ({stop - start} in this shard)" if shard else "")
+                         + f" are more than the limit of {MAX_PARAM_JSON_POINTS} for --format json (it holds "
+                         "every point as an object); use --format csv or --shard K/N")
+
+
 # --- the (i, l) sweep ------------------------------------------------------------------------
 
 
@@ -284,6 +349,16 @@ class RatioDistanceSweep:
         """(i index, l index) of points [start, stop)."""
         p = np.arange(start, stop, dtype=np.int64)
         return p // self.l_values.size, p % self.l_values.size
+
+    def run_bounds(self, shard: Optional[tuple[int, int]] = None) -> tuple[int, int]:
+        """Point indices [start, stop) of a run (all points, or part K of N for ``shard``).
+
+        Raises UsageError for a snapped grid (``module``) of which no design is left."""
+        start, stop = shard_bounds(self.size, *shard) if shard else (0, self.size)
+        if self.module is not None and shard is None and self.kept_count() == 0:
+            raise UsageError(f"no design left: at --module-mm {self.module:g} every point of the grid has a gear "
+                             f"with fewer than {self.min_teeth} teeth; raise l, or lower --min-pinion-teeth")
+        return start, stop
 
     # -- snapping ----------------------------------------------------------------------------------
 
@@ -448,6 +523,18 @@ class RatioDistanceSweep:
     def gear_te(self, i, l) -> np.ndarray:
         """Gear-stage TE [rad] of the continuous model at arbitrary (i, l)."""
         return self.continuous().evaluate(i, l)["gear_transmission_error"]
+
+
+def ratio_distance_sweep(spec, i_range: Optional[RangeSpec], l_range: Optional[RangeSpec],
+                         hold: Optional[str] = None, module: Optional[float] = None,
+                         min_teeth: Optional[int] = None) -> RatioDistanceSweep:
+    """The (i, l) sweep of ``spec`` over checked ranges; an axis not given is the spec's own
+    value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold`` None means "force"."""
+    gp = spec.gear_pair
+    i_values = i_range.values() if i_range is not None else np.array([gp.output_gear.teeth / gp.pinion.teeth])
+    l_values = l_range.values() if l_range is not None else \
+        np.array([gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2.0])
+    return RatioDistanceSweep(spec, i_values, l_values, hold=hold or "force", module=module, min_teeth=min_teeth)
 
 
 def best_points(data: dict) -> dict:
