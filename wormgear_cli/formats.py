@@ -53,7 +53,7 @@ def fmt_number(x) -> str:
     if isinstance(x, float):
         if not math.isfinite(x):
             return ""
-        return repr(x)
+        return repr(float(x))  # float(): numpy's float64 is a float whose repr names its type
     if hasattr(x, "item"):
         return fmt_number(x.item())
     return str(x)

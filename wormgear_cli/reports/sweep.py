@@ -13,7 +13,8 @@ from typing import Callable, Iterator, Optional
 import numpy as np
 
 from wormgear_cli.formats import Cell, Column, Table, csv_block, csv_text, fmt_angle
-from wormgear_cli.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings, param_rows
+from wormgear_cli import sweep as core
+from wormgear_cli.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
 from wormgear_cli.units import to_unit
 
 #: heat-map size shown in the table (rows = i values, columns = l values)
@@ -223,7 +224,7 @@ def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Pro
     """One row per point [start, stop): the key values, then the metrics in ``unit``."""
     columns = param_columns(axes)
     n = len(axes)
-    for values, result in param_rows(spec, axes, start, stop, progress=progress):
+    for values, result in core.param_rows(spec, axes, start, stop, progress=progress):
         m = result.metrics(unit)
         yield list(values) + [m[c] for c in columns[n:]]
 
@@ -249,14 +250,12 @@ def _best_row(columns, rows) -> int:
 
 def param_json(spec, axes, rows: list, unit: str, shard, start: int, stop: int) -> dict:
     """The JSON document of a --param sweep's rows [start, stop)."""
-    from wormgear_cli.sweep import param_size
-
     columns = param_columns(axes)
     doc = {"drive": spec.drive.name, "unit": unit,
            "params": [{"key": ax.key, "values": list(ax.values)} for ax in axes],
            "columns": columns, "points": [dict(zip(columns, r)) for r in rows]}
     if shard is not None:
-        doc["shard"] = _shard_doc(shard, start, stop, param_size(axes))
+        doc["shard"] = _shard_doc(shard, start, stop, core.param_size(axes))
     elif rows:
         doc["summary"] = {"points": len(rows),
                           "best": {"total_transmission_error": dict(zip(columns, rows[_best_row(columns, rows)]))}}
