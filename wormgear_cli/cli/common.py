@@ -160,11 +160,12 @@ def terminal_console(stderr: bool = False, width: Optional[int] = None):
 
 
 class Progress:
-    """A rich progress bar on stderr when it is a terminal and the work may take > 1 s."""
+    """A rich progress bar on stderr when it is a terminal and the work may take > 1 s
+    (none under NO_COLOR: a live bar cannot be drawn without escape codes)."""
 
     def __init__(self, total: int, seconds: float, label: str):
         self.bar = None
-        if total > 0 and seconds > 1.0 and stderr_is_terminal():
+        if total > 0 and seconds > 1.0 and stderr_is_terminal() and not no_color():
             from rich.progress import BarColumn, MofNCompleteColumn, TimeRemainingColumn
             from rich.progress import Progress as Bar
 
@@ -256,15 +257,11 @@ def fit_table(table, console, width: int) -> list:
     if _fits(table, console, width) or len(table.columns) <= 2:
         return [table]
     key, rest = table.columns[0], table.columns[1:]
-    groups, current = [], []
-    for c in rest:
-        trial = _part(table, [key, *current, c], None, None)
-        if current and not _fits(trial, console, width):
-            groups.append(current)
-            current = [c]
-        else:
-            current.append(c)
-    groups.append(current)
+    for n_parts in range(2, len(rest) + 1):  # the fewest parts of balanced size that all fit
+        size = -(-len(rest) // n_parts)
+        groups = [rest[k:k + size] for k in range(0, len(rest), size)]
+        if all(_fits(_part(table, [key, *g], None, None), console, width) for g in groups):
+            break
     parts = []
     for n, g in enumerate(groups):
         title = table.title if n == 0 else (f"{table.title} (continued)" if table.title else None)

@@ -24,7 +24,6 @@ from wormgear_cli.cli.common import (
     is_stdout,
     json_text,
     render,
-    write_stdout,
 )
 
 #: estimated seconds per point, for deciding whether to show a progress bar
@@ -151,7 +150,7 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
             chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance)
             if is_stdout(output):
                 for data in chunks:  # streamed block by block: memory stays constant
-                    write_stdout(data)
+                    emit(data, None)
             else:
                 emit(report.joined(chunks), output, [drive])
             return
@@ -178,7 +177,7 @@ def _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n):
     with Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:
         if fmt == "csv" and is_stdout(output) and plot is None:
             for text in report.param_csv(spec, axes, start, stop, unit, bar.advance):  # rows as computed
-                write_stdout(text)
+                emit(text, None)
             return
         rows = list(report.param_table_rows(spec, axes, start, stop, unit, bar.advance))
     if fmt == "csv":
