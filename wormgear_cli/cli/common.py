@@ -106,23 +106,6 @@ def emit(data: Union[str, bytes], output: Optional[Path], inputs: Iterable = ())
     announce_written(output)
 
 
-def check_distinct(outputs: dict, inputs: Iterable = ()) -> None:
-    """Refuse (UsageError) two output options naming one file, or an output naming an input.
-
-    ``outputs`` maps option name ("-o", "--plot", ...) to its path or None."""
-    from wormgear_cli.errors import UsageError
-
-    named = [(opt, Path(p)) for opt, p in outputs.items() if p is not None and not is_stdout(p)]
-    for a in range(len(named)):
-        for b in range(a + 1, len(named)):
-            if named[a][1].resolve() == named[b][1].resolve():
-                raise UsageError(f"{named[b][1]}: {named[b][0]} and {named[a][0]} name the same file")
-    for opt, p in named:
-        for src in inputs:
-            if src is not None and p.resolve() == Path(src).resolve():
-                raise UsageError(f"{p}: refusing to overwrite the input file; choose another {opt}")
-
-
 # --- terminals -------------------------------------------------------------------------------
 
 
