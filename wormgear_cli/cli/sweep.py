@@ -82,6 +82,7 @@ def sweep(
     Example: wormgear sweep configs/mch50.toml --i 2:10:9 --l-mm 100:300:11 --unit arcsec
     """
     from wormgear_cli import sweep as core
+    from wormgear_cli import sweep_limits as limits
     from wormgear_cli.errors import UsageError
     from wormgear_cli.plots import check_plot_path
     from wormgear_cli.spec import load_spec
@@ -89,19 +90,8 @@ def sweep(
     fmt = getattr(format, "value", format)
     unit = getattr(unit, "value", unit)
     params = list(param or [])
-    if params and (i is not None or l_mm is not None or module_mm is not None or hold is not None
-                   or min_pinion_teeth is not None):
-        raise UsageError("--param cannot be combined with --i, --l-mm, --module-mm, --hold or "
-                         "--min-pinion-teeth; run two sweeps")
-    if not params and i is None and l_mm is None:
-        raise UsageError("nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, "
-                         "or --param KEY=START:STOP:N")
-    if min_pinion_teeth is not None and module_mm is None:
-        raise UsageError("--min-pinion-teeth applies only with --module-mm")
-    if shard is not None and fmt == "table":
-        raise UsageError("--shard works with --format csv or json (a table needs the whole grid)")
-    if shard is not None and plot is not None:
-        raise UsageError("--plot cannot be combined with --shard (a plot needs the whole grid)")
+    limits.check_options(params=params, i=i, l_mm=l_mm, module_mm=module_mm, hold=hold, min_teeth=min_pinion_teeth,
+                         shard=shard, fmt=fmt, plot=plot is not None)
     if plot is not None:
         check_plot_path(plot)
         if output is not None and Path(plot).resolve() == Path(output).resolve():
@@ -109,7 +99,7 @@ def sweep(
     k_n = core.parse_shard(shard) if shard is not None else None
     if params:
         axes = [core.parse_param(p) for p in params]
-        core.check_param_size(axes, fmt, k_n)
+        limits.check_param_size(axes, fmt, k_n)
         if plot is not None:
             from wormgear_cli.plots.sweep import check_param_plot
 
@@ -123,7 +113,7 @@ def sweep(
     if module_mm is not None:
         core.check_module(module_mm)
     n_i, n_l = (i_range.n if i_range is not None else 1), (l_range.n if l_range is not None else 1)
-    core.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, not is_stdout(output), k_n)
+    limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, not is_stdout(output), k_n)
     if plot is not None:
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
 
