@@ -376,6 +376,7 @@ class _Transaction:
         self.staged: list[tuple[str, Path]] = []  # (temporary file, destination)
         self.direct: list[tuple[Path, bytes]] = []  # special files (FIFO, device): written at commit
         self.read: list[Path] = []  # input files read in this run (never overwritten)
+        self.committed: list = []  # callbacks run once every output is in place
 
     def commit(self) -> None:
         """Write the special files, then rename the staged files into place.  A failure
@@ -398,12 +399,25 @@ class _Transaction:
                 raise UsageError(f"{dest}: cannot write ({exc.strerror})") from None
             raise
         self.staged, self.direct = [], []
+        callbacks, self.committed = self.committed, []
+        for callback in callbacks:
+            callback()
 
     def discard(self) -> None:
         with signals_deferred():
             for tmp, _ in self.staged:
                 _unlink_quietly(tmp)
-            self.staged, self.direct = [], []
+            self.staged, self.direct, self.committed = [], [], []
+
+
+def after_commit(callback) -> None:
+    """Run ``callback()`` once the run's outputs are all in place (at once outside an
+    :func:`output_transaction`; never when the run fails).  "wrote FILE" messages use it, so
+    a run that fails or is stopped never claims a file it did not leave."""
+    if _CURRENT is None:
+        callback()
+    else:
+        _CURRENT.committed.append(callback)
 
 
 _CURRENT: _Transaction | None = None

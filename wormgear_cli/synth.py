@@ -249,6 +249,16 @@ def parse_effect(text: str, option: str = "--effect") -> tuple[str, dict]:
     return name, values
 
 
+def parse_effects(texts, option: str = "--effect") -> dict[str, dict]:
+    """Every ``--effect`` text (:func:`parse_effect`) merged: name -> {key: value}; a later
+    text's keys override an earlier one's for the same effect."""
+    effects: dict = {}
+    for text in texts or []:
+        name, values = parse_effect(text, option)
+        effects.setdefault(name, {}).update(values)
+    return effects
+
+
 def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True) -> dict[str, dict]:
     """Merge the spec's ``[effects.*]`` with ``effects`` (name -> {key: value}, catalogue units).
 

@@ -188,8 +188,9 @@ def new(
 ):
     """Write a complete, commented drive template to start from.
 
-    The template holds the paper's MCH50 values where Table 1 gives them and
-    the documented defaults elsewhere; it never overwrites an existing file.
+    The template is the paper's MCH50 drive (the values of configs/mch50.toml:
+    Table 1, the paper's loads, and that file's assumptions); derived keys are
+    comments holding their derived value.  It never overwrites an existing file.
 
     Example: wormgear new my-table.toml && wormgear analyze my-table.toml
     """
@@ -201,5 +202,9 @@ def new(
         raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    from wormgear_cli.cli.common import announce_written
+    from wormgear_cli.io import after_commit
+
     atomic_write(path, template(name or path.stem))
-    typer.echo(f"wrote {path}; edit it, then run: wormgear check {path}", err=True)
+    announce_written(path)
+    after_commit(lambda: typer.echo(f"edit it, then run: wormgear check {path}", err=True))
