@@ -60,6 +60,8 @@ def template(name: str = "my drive") -> str:
             lines.append(f"# {f.key} = 60.0")
         elif f.default == "" and f.kind == "str":
             lines.append(f'{f.key} = ""')
+        elif f.default == "":  # optional, no value (e.g. accuracy_grade)
+            lines.append(f"# {f.key} = ")
         else:
             lines.append(f"{f.key} = {_toml_value(f, _example(f))}")
     lines += [
