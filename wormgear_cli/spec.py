@@ -435,8 +435,7 @@ def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "driv
             values[f.path] = val
 
     effects = _load_effects(data.get("effects"), problems, source)
-    if not problems:
-        _apply_grades(values, bad)
+    _apply_grades(values, bad)
 
     if problems:
         raise SpecError(problems)
@@ -460,6 +459,8 @@ def _apply_grades(values: dict, bad) -> None:
     from wormgear_cli.models.iso1328 import GradeError, flank_tolerances
 
     module = values["gear_pair.module_mm"]
+    if module is _MISSING:
+        return
     face = values["gear_pair.face_width_mm"]
     face = 10.0 * module if face is _MISSING else face
     for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
@@ -467,6 +468,8 @@ def _apply_grades(values: dict, bad) -> None:
         if grade is _MISSING or grade is None:
             continue
         teeth = values[f"{sec}.teeth"]
+        if teeth is _MISSING:
+            continue
         try:
             tol = flank_tolerances(grade, module, module * teeth, face, teeth)
         except GradeError as exc:
