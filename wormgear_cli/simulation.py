@@ -19,6 +19,13 @@ The simulated error is
     eccentricity/clearance sqrt(S2^2+C2^2)/cos(alpha_2) at the wheel order
     i_c.  Each is a sinusoid of amplitude (value / 2) on the wheel pitch
     circle, i.e. the paper's +/- 1/2 envelope term by term, reduced by i_c.
+  - the full budget's pitch deviations (only when the spec gives them a size;
+    docs/budget.md): cumulative pitch F_p of the output gear (order 1), of the
+    pinion and of the wheel (order i_c), each a sinusoid of amplitude F_p/(2r) at
+    its shaft reduced by the ratios; single pitch f_p of either spur gear at the
+    mesh order z1.  With ``gear_pair.kinematics = "involute"`` the gear
+    eccentricity is the sinusoid e/r_b1 sin(i_c theta + psi) instead of the
+    paper's curve, and e is only an eccentricity the spec states.
 * lost motion (reversal), never negative (each part is clipped at 0):
   - gear: Delta e tan(alpha) (1 + sin phi) / R2, between 0 and the paper's
     eccentric Delta phi_ch part;
