@@ -456,8 +456,6 @@ def _apply_grades(values: dict, bad) -> None:
     """Fill the spur gears' pitch deviations (and profile error) from ``accuracy_grade``
     where the spec does not give them (ISO 1328-1:2013; explicit keys win).  A gear
     outside the standard's scope is a problem naming the grade key and the range."""
-    from wormgear_cli.models.iso1328 import GradeError, flank_tolerances
-
     module = values["gear_pair.module_mm"]
     if module is _MISSING:
         return
@@ -470,6 +468,8 @@ def _apply_grades(values: dict, bad) -> None:
         teeth = values[f"{sec}.teeth"]
         if teeth is _MISSING:
             continue
+        from wormgear_cli.models.iso1328 import GradeError, flank_tolerances
+
         try:
             tol = flank_tolerances(grade, module, module * teeth, face, teeth)
         except GradeError as exc:
@@ -495,8 +495,10 @@ def value_origin(spec: "Spec", path: str) -> str:
     section, key = path.rsplit(".", 1)
     grade_keys = ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm")
     if key in grade_keys and section in ("gear_pair.output_gear", "gear_pair.pinion"):
-        raw_sec = _get(_thaw(spec.raw), section)
-        if isinstance(raw_sec, dict) and raw_sec.get("accuracy_grade") is not None:
+        raw_sec: Any = spec.raw
+        for part in section.split("."):
+            raw_sec = raw_sec.get(part) if hasattr(raw_sec, "get") else None
+        if hasattr(raw_sec, "get") and raw_sec.get("accuracy_grade") is not None:
             return "grade"
     return "default"
 
