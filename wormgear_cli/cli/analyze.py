@@ -131,6 +131,9 @@ def _tables(r: dict, unit: str) -> list:
     gear_note = escape(f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
                   f"{share} to it (delta1 = {g['deflection_um']:.3f} um, "
                   f"{r['deflection_model']})")
+    if g["backlash_parts"].get("thickness", 0.0) > 0.0:
+        gear_note += escape(f"; {g['kinematics']} kinematics: backlash includes the tooth-thickness allowances "
+                            f"{a(g['backlash_parts']['thickness'])}")
     out += [gt, gear_note]
     wt = Table(title=escape(f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]"),
                title_justify="left")
