@@ -109,8 +109,9 @@ def test_module_snapping_reproduces_analyze_with_those_teeth(mch50_spec):
 
 
 def test_torque_hold_scales_the_gear_force_with_the_output_radius(mch50_spec):
-    """At constant output torque F_N R2 = const, so delta1 (linear in F_N) carries R2_spec / R2
-    on top of the stiffness change that the force-held sweep already shows."""
+    """At constant output torque F_N R2 = const, so delta1 carries (R2_spec / R2)^0.75 on top of the
+    stiffness change that the force-held sweep already shows: below a line load of 100 N/mm (here
+    12.5..34 N/mm) ISO 6336-1 scales c' with (F_t K_A / b / 100)^0.25, so delta ~ F^0.75."""
     from wormgear_cli.sweep import RatioDistanceSweep
 
     i, l = np.linspace(2, 10, 5), np.linspace(100, 300, 5)
@@ -118,7 +119,7 @@ def test_torque_hold_scales_the_gear_force_with_the_output_radius(mch50_spec):
     t = RatioDistanceSweep(mch50_spec, i, l, hold="torque").collect()
     r2 = f["l_mm"] * f["i"] / (1 + f["i"])
     r2_spec = 2.5 * 144 / 2
-    np.testing.assert_allclose(t["gear_deflection_um"] / f["gear_deflection_um"], r2_spec / r2, rtol=1e-12)
+    np.testing.assert_allclose(t["gear_deflection_um"] / f["gear_deflection_um"], (r2_spec / r2) ** 0.75, rtol=1e-12)
 
 
 @pytest.fixture(scope="module")

@@ -28,6 +28,8 @@ MCH50_ASSUMPTIONS: dict = {
 }
 #: value shown on the commented lines of the optional requirement keys
 EXAMPLE_LIMIT_ARCSEC = 60.0
+#: values shown on the commented lines of other optional keys (each valid when uncommented)
+OPTIONAL_EXAMPLES = {"accuracy_grade": 6, "min_yield": 0.99}
 
 
 def _toml_value(f: Field, value) -> str:
@@ -120,12 +122,14 @@ def template(name: str = "my drive") -> str:
             lines.append(f"{f.key} = {_toml_value(f, values[f.path])}")
         elif f.path in derived:
             lines.append(f"# {f.key} = {_toml_value(f, derived[f.path])}  # the value derived for this drive")
+        elif f.key in OPTIONAL_EXAMPLES:
+            lines.append(f"# {f.key} = {_toml_value(f, OPTIONAL_EXAMPLES[f.key])}")
         elif f.section == "requirements":
             lines.append(f"# {f.key} = {_num(EXAMPLE_LIMIT_ARCSEC)}")
         elif f.kind == "str":
             lines.append(f'{f.key} = ""')
-        else:  # pragma: no cover - every numeric key has a value or a derived value
-            raise AssertionError(f"template: no value for {f.path}")
+        else:  # optional, no value for this drive (accuracy_grade, pitch deviations without a grade)
+            lines.append(f"# {f.key} = {_toml_value(f, OPTIONAL_EXAMPLES.get(f.key, 0))}")
     lines += [
         "",
         "# Effects the paper's model lacks (none is on by default); see the effect catalogue.",

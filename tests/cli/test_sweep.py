@@ -57,7 +57,7 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     out = r1.stdout
     assert "showing 12 of 30 i values and 8 of 40 l values" in out
     assert out.count("holds") == 3
-    assert "gear TE falls 50.1 % from l = 100 to 200 mm and" in out and "33.4 % from 200 to 300 mm" in out
+    assert "gear TE falls 50.2 % from l = 100 to 200 mm and" in out and "33.4 % from 200 to 300 mm" in out
 
 
 @pytest.mark.parametrize("args, message", [
