@@ -140,7 +140,7 @@ from wormgear_cli.diagnosis.mixed import (
     wald,
 )
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, PhaseSource, fit_model, phase_sources, sources_total
-from wormgear_cli.diagnosis.report import report
+from wormgear_cli.diagnosis.report import DiagnoseResult, report, run_diagnose
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, short_term_noise, versus
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, cell_level, data_info, make_cells, make_groups
 from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step
@@ -160,13 +160,13 @@ from wormgear_cli.diagnosis.thresholds import (
 from wormgear_cli.units import ARCSEC
 
 __all__ = [
-    "ARCSEC", "Accepted", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross", "DataInfo", "Diagnosis",
+    "ARCSEC", "Accepted", "DiagnoseResult", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross", "DataInfo", "Diagnosis",
     "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "MIN_RUNS", "MIN_STABILITY",
     "MIN_TEMPERATURE_RANGE", "MIN_TOLERANCE", "MONOTONIC", "ModelFit", "NEARLY", "NEAR_FACTOR", "NEAR_SHARE",
     "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason", "UNPHYSICAL_HINT",
     "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",
     "containment_df", "contrast_df", "data_info", "diagnose", "f_sf", "fit_model", "gap_summary", "iso_figures",
     "jointly_resolvable", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
-    "phase_sources", "physical_problem", "reml", "replication_problem", "report", "resolvable_orders",
+    "phase_sources", "physical_problem", "reml", "replication_problem", "report", "resolvable_orders", "run_diagnose",
     "short_term_noise", "sources_total", "t_ppf", "versus", "wald",
 ]

@@ -3,16 +3,17 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+
 import numpy as np
 
-from wormgear_cli.diagnosis.augment import augmented_params, wrap_deg
+from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
 from wormgear_cli.diagnosis.runs import Groups
 from wormgear_cli.diagnosis.scoring import ScoreStatus
-from wormgear_cli.diagnosis.selection import Diagnosis, StopReason
+from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.units import ARCSEC
-
 
 
 def _status(diag: Diagnosis) -> list[dict]:
@@ -266,3 +267,31 @@ def _report(diag: Diagnosis) -> dict:
                                      "common-mode thermal_drift cannot be told apart from a plain drift over "
                                      "time; heating and cooling separates them")
     return doc
+
+
+@dataclass(frozen=True)
+class DiagnoseResult:
+    """What ``wormgear diagnose`` computes: the ``diagnosis``, its JSON ``document``
+    (the report) and, when asked for, the augmented spec as TOML text (``spec_toml``)."""
+
+    diagnosis: Diagnosis
+    document: dict
+    spec_toml: str | None
+
+
+def run_diagnose(spec, meas, *, alpha: float = 0.01, fit_phases: bool = True, max_effects: int = 4,
+                 resamples: int = 50, progress=None, data_name: str = "",
+                 write_spec: str | None = None) -> DiagnoseResult:
+    """Diagnose ``meas`` against ``spec`` and assemble the report.
+
+    Parameters as :func:`wormgear_cli.diagnosis.diagnose`; ``data_name``
+    names the measurement in the augmented spec's header; ``write_spec``: the
+    file the augmented spec will be written to (recorded in the report's
+    ``augmented_spec``; None: no spec text is made).  Raises UsageError and
+    DataError as :func:`~wormgear_cli.diagnosis.diagnose`."""
+    diag = diagnose(spec, meas, alpha=alpha, fit_phases=fit_phases, max_effects=max_effects, resamples=resamples,
+                    progress=progress)
+    doc = report(diag)
+    doc["augmented_spec"] = None if write_spec is None else str(write_spec)
+    text = augmented_toml(diag, data_name) if write_spec is not None else None
+    return DiagnoseResult(diag, doc, text)
