@@ -149,9 +149,9 @@ def _tables(doc: dict, unit: str) -> list:
     from rich.markup import escape
     from rich.table import Table
 
-    from wormgear_cli.units import RAD_PER_UNIT
+    from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
-    factor = RAD_PER_UNIT["arcsec"] / RAD_PER_UNIT[unit]
+    factor = ARCSEC / RAD_PER_UNIT[unit]
 
     def a(x):
         return "-" if x is None else fmt_angle(x * factor, unit)

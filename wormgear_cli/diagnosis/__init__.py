@@ -114,17 +114,17 @@ F and t distributions are scipy.special's fdtrc and stdtrit.
 
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml
 from wormgear_cli.diagnosis.candidates import (
-    REPLICATION_REMEDY,
-    UNPHYSICAL_HINT,
     Candidate,
     CandidateKind,
+    REPLICATION_REMEDY,
+    UNPHYSICAL_HINT,
     candidate,
     candidate_params,
-    jointly_resolvable,
+    jointly_fittable_orders,
     needs_problem,
     physical_problem,
     replication_problem,
-    resolvable_orders,
+    unaliased_orders,
 )
 from wormgear_cli.diagnosis.inference import Accepted, Found
 from wormgear_cli.diagnosis.mixed import (
@@ -148,6 +148,7 @@ from wormgear_cli.diagnosis.selection import Diagnosis, Stop, StopReason, diagno
 from wormgear_cli.diagnosis.thresholds import (
     EXCESS_FACTOR,
     INDISTINGUISHABLE,
+    JOINT_MIN_SINGULAR_VALUE,
     MIN_RUNS,
     MIN_STABILITY,
     MIN_TEMPERATURE_RANGE,
@@ -161,12 +162,12 @@ from wormgear_cli.units import ARCSEC
 
 __all__ = [
     "ARCSEC", "Accepted", "DiagnoseResult", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross", "DataInfo", "Diagnosis",
-    "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "MIN_RUNS", "MIN_STABILITY",
+    "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "JOINT_MIN_SINGULAR_VALUE", "MIN_RUNS", "MIN_STABILITY",
     "MIN_TEMPERATURE_RANGE", "MIN_TOLERANCE", "MONOTONIC", "ModelFit", "NEARLY", "NEAR_FACTOR", "NEAR_SHARE",
     "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason", "UNPHYSICAL_HINT",
     "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",
     "containment_df", "contrast_df", "data_info", "diagnose", "f_sf", "fit_model", "gap_summary", "iso_figures",
-    "jointly_resolvable", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
-    "phase_sources", "physical_problem", "reml", "replication_problem", "report", "resolvable_orders", "run_diagnose",
+    "jointly_fittable_orders", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
+    "phase_sources", "physical_problem", "reml", "replication_problem", "report", "unaliased_orders", "run_diagnose",
     "short_term_noise", "sources_total", "t_ppf", "versus", "wald",
 ]

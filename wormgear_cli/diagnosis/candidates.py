@@ -3,7 +3,7 @@
 Observability (the signal an effect needs varies), replication (effects
 that vary between runs need at least MIN_RUNS runs), physical range, and
 the orders the target spacing aliases (:func:`order_aliases`,
-:func:`resolvable_orders`, :func:`jointly_resolvable`).
+:func:`unaliased_orders`, :func:`jointly_fittable_orders`).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ from wormgear_cli.diagnosis.design import residualise
 from wormgear_cli.diagnosis.mixed import level_shares
 from wormgear_cli.diagnosis.phases import probe_signals
 from wormgear_cli.diagnosis.runs import DataInfo, Groups
-from wormgear_cli.diagnosis.thresholds import MIN_TEMPERATURE_RANGE, MONOTONIC
+from wormgear_cli.diagnosis.thresholds import JOINT_MIN_SINGULAR_VALUE, MIN_TEMPERATURE_RANGE, MONOTONIC
 from wormgear_cli.units import ARCSEC
 
 
@@ -206,11 +206,15 @@ def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     return out
 
 
-def resolvable_orders(theta, orders) -> tuple[list, dict]:
-    """(orders these angles can resolve, {order: what it is aliased with}) among ``orders``.
+def unaliased_orders(theta, orders) -> tuple[list, dict]:
+    """(orders the target spacing does not alias, {order: what it is aliased with}) among ``orders``.
 
-    An order aliased onto a constant, or folded onto its own mirror, is not
-    resolvable; of orders aliased with each other only the lowest is kept."""
+    An order aliased onto a constant, or folded onto its own mirror, is left
+    out; of orders aliased with each other only the lowest is kept.  Aliasing
+    only: whether the kept orders can be fitted together is
+    :func:`jointly_fittable_orders`.  (Not the same test as
+    :func:`wormgear_cli.harmonics.resolvable_orders`, which judges the
+    conditioning of the whole design for ``measure``.)"""
     from wormgear_cli.harmonics import alias_groups, folded_orders
 
     orders = [float(o) for o in orders]
@@ -228,13 +232,15 @@ def resolvable_orders(theta, orders) -> tuple[list, dict]:
     return [o for o in orders if o not in aliased], aliased
 
 
-def jointly_resolvable(theta, orders, priority=None, tol: float = 0.05) -> tuple[list, dict]:
-    """Like :func:`resolvable_orders`, then greedily (in ``priority`` order) keep
+def jointly_fittable_orders(theta, orders, priority=None,
+                            tol: float = JOINT_MIN_SINGULAR_VALUE) -> tuple[list, dict]:
+    """Like :func:`unaliased_orders`, then greedily (in ``priority`` order) keep
     only orders whose cos/sin columns stay independent of the intercept and the
     orders kept before them at the distinct sampled angles (smallest singular
     value of the column-normalised design >= ``tol``), while the columns use at
-    most half the distinct angles."""
-    keep, aliased = resolvable_orders(theta, orders)
+    most half the distinct angles.  The one joint-fit criterion of the
+    diagnosis (used by its order table)."""
+    keep, aliased = unaliased_orders(theta, orders)
     angles = np.unique(np.round(np.asarray(theta, dtype=float), 9))
     cols = [np.ones_like(angles) / math.sqrt(angles.shape[0])]
     chosen = []

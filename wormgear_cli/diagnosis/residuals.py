@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from wormgear_cli.diagnosis.candidates import jointly_resolvable
+from wormgear_cli.diagnosis.candidates import jointly_fittable_orders
 from wormgear_cli.diagnosis.mixed import VarFit
 from wormgear_cli.diagnosis.phases import ModelFit
 from wormgear_cli.diagnosis.runs import DataInfo, Groups
@@ -91,7 +91,7 @@ def order_table(meas, resid, geometry) -> list[dict]:
         return min((h for h in (1, 2, 3) for b in bases if abs(o - h * b) < 1e-9 * max(o, 1.0)), default=4)
 
     priority = sorted((o for o, _ in phys), key=lambda o: (harmonic(o), o))
-    keep, aliased = jointly_resolvable(meas.angle, [o for o, _ in phys], priority)
+    keep, aliased = jointly_fittable_orders(meas.angle, [o for o, _ in phys], priority)
     fit = None
     if keep:
         with np.errstate(invalid="ignore", divide="ignore"):

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, resolvable_orders
+from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
 from wormgear_cli.diagnosis.design import orthonormal, residualise
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
 from wormgear_cli.diagnosis.phases import ModelFit
@@ -113,7 +113,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     n_targets = int(group_targets(theta)[1].shape[0])
     top = min(30, n_targets // 2)
     orders = sorted({*map(float, range(1, top + 1)), *labels})
-    keep, _ = resolvable_orders(theta, orders)
+    keep, _ = unaliased_orders(theta, orders)
     tests = []
     for o in keep:
         c = np.column_stack([np.cos(o * theta), np.sin(o * theta)])

@@ -22,3 +22,6 @@ NEAR_FACTOR = 5.0
 NEAR_SHARE = 0.05
 #: a residual RMS above this multiple of the noise floor is reported as unexplained
 EXCESS_FACTOR = 2.0
+#: smallest singular value of the column-normalised design [1, cos, sin, ...] at the distinct angles for
+#: orders to be fitted together in the order table (sv^2 is the smallest eigenvalue of the unit-diagonal Gram)
+JOINT_MIN_SINGULAR_VALUE = 0.05
