@@ -49,12 +49,27 @@ class Groups:
         return int(self.pass_size.shape[0])
 
 
-def make_groups(direction: np.ndarray, run: np.ndarray | None) -> Groups:
-    """Passes and runs from the ``direction`` and (optional) ``run`` columns.
+def time_restarts(time: np.ndarray | None) -> np.ndarray | None:
+    """(N,) bool, True where ``time`` [s] goes backwards from the previous row: sessions
+    joined end to end, each restarting its clock.  None without a time column.
+
+    The one place diagnose infers passes from time (until measurement
+    reading infers them for every command)."""
+    if time is None:
+        return None
+    t = np.asarray(time, dtype=float)
+    out = np.zeros(t.shape[0], dtype=bool)
+    out[1:] = t[1:] < t[:-1]
+    return out
+
+
+def make_groups(direction: np.ndarray, run: np.ndarray | None, time: np.ndarray | None = None) -> Groups:
+    """Passes and runs from the ``direction``, (optional) ``run`` and (optional) ``time`` [s] columns.
 
     With a run column: a pass is every row of one (run, direction) pair, a
     run every row of one run number.  Without: a pass is a block of
-    consecutive rows in one direction and each pass is its own run."""
+    consecutive rows in one direction, a new one also starting where time
+    goes backwards (:func:`time_restarts`), and each pass is its own run."""
     direction = np.asarray(direction, dtype=float)
     n = direction.shape[0]
     if run is not None:
@@ -69,12 +84,17 @@ def make_groups(direction: np.ndarray, run: np.ndarray | None) -> Groups:
     else:
         change = np.ones(n, dtype=bool)
         change[1:] = direction[1:] != direction[:-1]
+        restarts = time_restarts(time)
+        if restarts is not None:
+            change |= restarts
         pass_id = np.cumsum(change) - 1
         p = int(pass_id[-1]) + 1
         pass_run = np.arange(p)
         pass_dir = direction[change]
         runs = p
         describe = "no run column: a pass is a block of consecutive rows in one direction"
+        if restarts is not None and np.any(restarts):
+            describe += " (a new one where time_s goes backwards)"
     size = np.bincount(pass_id, minlength=int(pass_id.max()) + 1).astype(float)
     nested = bool(np.bincount(pass_run).max() > 1) if runs > 0 else False
     random = bool(size.shape[0] >= 2 and np.mean(size) >= 3.0)

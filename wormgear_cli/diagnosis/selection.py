@@ -153,7 +153,8 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     y = meas.error / ARCSEC
     n = y.shape[0]
     g = drive_geometry(spec)
-    groups = make_groups(meas.direction, meas.run if "run" in meas.present else None)
+    groups = make_groups(meas.direction, meas.run if "run" in meas.present else None,
+                         meas.time if "time_s" in meas.present else None)
     few_runs = groups.runs < MIN_RUNS
     if few_runs:
         # one or two runs: scatter between runs and passes cannot be estimated (a variance from one run is
