@@ -158,7 +158,9 @@ from wormgear_cli.diagnosis.thresholds import (
     EXCESS_FACTOR,
     INDISTINGUISHABLE,
     JOINT_MIN_SINGULAR_VALUE,
+    MIN_HELD_TOLERANCE,
     MIN_RUNS,
+    MIN_SCAN_SHARE,
     MIN_STABILITY,
     MIN_TEMPERATURE_RANGE,
     MIN_TOLERANCE,
@@ -171,7 +173,7 @@ from wormgear_cli.units import ARCSEC
 
 __all__ = [
     "ARCSEC", "Accepted", "DiagnoseResult", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross", "DataInfo", "Diagnosis",
-    "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "JOINT_MIN_SINGULAR_VALUE", "MIN_RUNS", "MIN_STABILITY",
+    "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "JOINT_MIN_SINGULAR_VALUE", "MIN_HELD_TOLERANCE", "MIN_RUNS", "MIN_SCAN_SHARE", "MIN_STABILITY",
     "MIN_TEMPERATURE_RANGE", "MIN_TOLERANCE", "MONOTONIC", "ModelFit", "NEARLY", "NEAR_FACTOR", "NEAR_SHARE",
     "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason", "UNPHYSICAL_HINT",
     "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",

@@ -66,32 +66,38 @@ class Accepted:
     stability_note: str = ""
 
 
-def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups, sources, fit_phases=True) -> list[Found]:
-    """Each named effect tested and bounded in the final model (every other term as nuisance)."""
+def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups, sources, fit_phases=True,
+                    fixed: int = 1) -> list[Found]:
+    """Each named effect tested and bounded in the final model (every other term as nuisance).
+
+    The first ``fixed`` linear columns (the zero offset, and any unexplained
+    structure held in the model) are nuisance; the named effects follow, in
+    ``lin_names`` order."""
     from wormgear_cli.models.effects import EFFECTS, params_to_keys
 
     if not accepted:
         return []
     lin = state.lin
-    nuis, _ = orthonormal(np.hstack([lin[:, :1], state.jac]))
+    nuis, _ = orthonormal(np.hstack([lin[:, :fixed], state.jac]))
     kb = nuis.shape[1]
-    eff_cols = lin[:, 1:]
+    eff_cols = lin[:, fixed:]
     rms = np.sqrt(np.mean(eff_cols**2, axis=0))
     scale = 1.0 / np.where(rms > 0, rms, 1.0)
-    y_lin = state.residual + eff_cols @ state.beta[1:]
+    y_lin = state.residual + eff_cols @ state.beta[fixed:]
     cross = Cross.build(np.hstack([nuis, eff_cols * scale]), y_lin, groups)
     vf = reml(cross)
     vinfo = variance_info(cross, vf)
     out = []
     design = np.hstack([nuis, eff_cols * scale])
-    for acc, (_, sl) in zip(accepted, lin_names[1:]):
+    effect_names = [(nm, sl) for nm, sl in lin_names if sl.start >= fixed]
+    for acc, (_, sl) in zip(accepted, effect_names):
         name, cand, sc, frac, step_no = acc.name, acc.candidate, acc.score, acc.stability, acc.step
         share, near, stab_note = acc.share, acc.near, acc.stability_note
-        idx = np.arange(kb + sl.start - 1, kb + sl.stop - 1)
+        idx = np.arange(kb + sl.start - fixed, kb + sl.stop - fixed)
         rest = np.delete(design, idx, axis=1)
         cont = containment_df(groups, rest, residualise(orthonormal(rest)[0], design[:, idx]))
         w = wald(cross, vf, idx, containment=cont, info=vinfo)
-        sc_ = scale[sl.start - 1:sl.stop - 1]
+        sc_ = scale[sl.start - fixed:sl.stop - fixed]
         beta = state.beta[sl]
         cov = w.cov * np.outer(sc_, sc_)
         params = candidate_params(cand, beta)
@@ -238,7 +244,7 @@ def same_order_range(f: Found, ctx: FitContext, state: ModelFit, lin, sl, cand: 
 
 
 def likely_effect(ctx: FitContext, state: ModelFit, lin, lin_names, accepted: list[Accepted], found, name: str,
-                  cand: Candidate, sc: Score, fittable, fit_phases, step_no) -> dict | None:
+                  cand: Candidate, sc: Score, fittable, fit_phases, step_no, fixed: int = 1) -> dict | None:
     """A candidate that missed the significance level narrowly (or the --max-effects limit): refit with it.
 
     When it would remove at least NEAR_SHARE of the remaining mean-square gap
@@ -256,7 +262,7 @@ def likely_effect(ctx: FitContext, state: ModelFit, lin, lin_names, accepted: li
         return None
     alt_names = [*lin_names, (name, slice(lin.shape[1], lin.shape[1] + cand.q))]
     alt_found = final_inference(alt, [*accepted, Accepted(name, cand, sc, None, step_no, gain)], alt_names, ctx.groups,
-                                 fittable, fit_phases)
+                                fittable, fit_phases, fixed)
     by = {f.name: f for f in alt_found}
     extra = by[name]
     if physical_problem(name, extra.params):

@@ -8,12 +8,13 @@ import math
 import numpy as np
 
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
-from wormgear_cli.diagnosis.design import orthonormal, residualise
+from wormgear_cli.diagnosis.design import orthonormal, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
 from wormgear_cli.diagnosis.phases import ModelFit
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, pass_sums
 from wormgear_cli.diagnosis.scoring import ScoreStatus
-from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MIN_RUNS, MIN_TEMPERATURE_RANGE
+from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE, MIN_RUNS, MIN_SCAN_SHARE,
+                                               MIN_TEMPERATURE_RANGE)
 
 
 #: the catalogue effect whose signature a pattern of the residual scan is
@@ -158,7 +159,10 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
             j += q
             g = gram[sl, sl]
             lam, vec = np.linalg.eigh(g)
-            keep = lam > 1e-6 * float(np.mean(norms[sl]))
+            # a direction the model (offset, fitted phases, effects) takes up all but MIN_SCAN_SHARE of is not
+            # tested: its estimate would be its tiny remainder blown up (on a short span, a smooth drift then
+            # shows as many large "harmonics")
+            keep = lam > MIN_SCAN_SHARE * float(np.mean(norms[sl]))
             if not np.any(keep):
                 continue
             rot = np.eye(1) if q == 1 else vec[:, keep]
@@ -260,3 +264,29 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
         merged.append(item)
     merged.sort(key=lambda it: it["p_adjusted"])
     return merged
+
+
+def unowned_order_columns(items: list[dict], sig, geometry, state: ModelFit) -> list[tuple[str, np.ndarray, dict]]:
+    """(label, columns, scan item) of the significant harmonics of a residual scan at orders no catalogue
+    effect owns: cos/sin of the order (N, 2), times the direction for differential mode.
+
+    Only orders whose columns the model leaves mostly free (tolerance >= MIN_HELD_TOLERANCE) are
+    held in the model every candidate is tested against, so that strong content at such an
+    order (a worm-mesh harmonic of a multi-start worm, say) cannot leak into a catalogue
+    effect whose columns it partly projects onto at unevenly spaced targets (issue 10)."""
+    from wormgear_cli.models.effects import EFFECTS
+
+    owned = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
+    basis, _ = orthonormal(np.hstack([state.lin, state.jac]))
+    out = []
+    for item in items:
+        if item["kind"] != "order" or any(abs(item["order"] - o) < 1e-9 for o in owned):
+            continue
+        o = item["order"]
+        cols = np.column_stack([np.cos(o * sig.theta), np.sin(o * sig.theta)])
+        if item["mode"] == "differential":
+            cols = cols * sig.direction[:, None]
+        if tolerance(basis, cols) < MIN_HELD_TOLERANCE:
+            continue  # partly taken up by the model: holding it would trade against the phases
+        out.append((f"the unexplained order-{o:g} content ({item['mode']} mode)", cols, item))
+    return out

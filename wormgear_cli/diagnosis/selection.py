@@ -15,7 +15,7 @@ from wormgear_cli.diagnosis.inference import Accepted, final_inference, likely_e
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.residuals import noise_floor_rms
 from wormgear_cli.diagnosis.runs import DataInfo, Groups, data_info, make_cells, make_groups
-from wormgear_cli.diagnosis.scan import annotate, scan_residual
+from wormgear_cli.diagnosis.scan import annotate, scan_residual, unowned_order_columns
 from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test
 from wormgear_cli.diagnosis.thresholds import (INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR,
                                                NEARLY)
@@ -181,6 +181,16 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     state = fit_model(ctx, lin, fit_phases)
     before = state
     rss_before = float(before.residual @ before.residual)
+    # significant structure at orders no catalogue effect owns is part of the model every candidate is tested
+    # against (else it leaks into a catalogue effect whose columns it partly projects onto)
+    say("scanning the residual for structure no catalogue effect owns")
+    held = unowned_order_columns(scan_residual(state, sig, groups, g, alpha, info, sources, cells), sig, g, state)
+    for label, cols, _ in held:
+        lin_names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
+        lin = np.hstack([lin, cols])
+    if held:
+        state = fit_model(ctx, lin, fit_phases, extra_starts=[state.psi])
+    fixed = lin.shape[1]
     cands = {name: candidate(name, sig, g) for name in EFFECTS if name not in spec.effects}
     alias_notes = order_aliases(sig.theta, cands, sources, g)
     accepted: list[Accepted] = []
@@ -276,7 +286,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
         accepted.append(Accepted(best, cand, sc, frac, len(steps),
                                  (prev_rss - new_rss) / rss_before if rss_before else 0.0, tuple(near), stab_note))
     after = state
-    found = final_inference(after, accepted, lin_names, groups, fittable, fit_phases)
+    found = final_inference(after, accepted, lin_names, groups, fittable, fit_phases, fixed)
     for f in found:
         final_scores[f.name] = Score(f.name, ScoreStatus.NAMED)
     for f in found:
@@ -293,11 +303,20 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
         if sc.p_adj < min(NEAR_FACTOR * alpha, 0.5) or stop.reason is StopReason.MAX_EFFECTS:
             say(f"checking whether {best} is a likely further effect")
             likely = likely_effect(ctx, after, lin, lin_names, accepted, found,
-                                    best, remaining[best], sc, fittable, fit_phases, len(steps))
+                                    best, remaining[best], sc, fittable, fit_phases, len(steps), fixed)
             if likely is not None:
                 final_scores[best].status = ScoreStatus.LIKELY
     say("scanning the residual for structure")
+    # what is left, tested with the held structure in the model, plus the held structure itself (as found)
     unexplained = scan_residual(after, sig, groups, g, alpha, info, sources, cells)
+    if held:
+        unexplained = sorted([*(item for _, _, item in held), *unexplained], key=lambda it: it["p_adjusted"])
+    if held:
+        # the drive's model without the held structure, which no spec can hold: the named effects at their
+        # estimates (as the augmented spec writes them), the phases and the offset refitted
+        effects_part = lin[:, fixed:] @ after.beta[fixed:]
+        after = fit_model(ctx.replaced(base=ctx.base + effects_part), lin[:, :1], fit_phases,
+                          extra_starts=[after.psi, before.psi])
     floor = noise_floor_rms(after, groups, sig.time if "time_s" in meas.present else None)
     unexplained = annotate(unexplained, final_scores, groups, few_runs, likely, after, floor, g)
     augmented, aug_fitted = augment(spec, sig, after, sources, found, fit_phases, y)
@@ -311,3 +330,4 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,
                      before, after, found, final_scores, steps, stop, unexplained, augmented, aug_fitted, thermal,
                      few_runs, floor, likely)
+

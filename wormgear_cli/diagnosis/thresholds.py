@@ -25,3 +25,10 @@ EXCESS_FACTOR = 2.0
 #: smallest singular value of the column-normalised design [1, cos, sin, ...] at the distinct angles for
 #: orders to be fitted together in the order table (sv^2 is the smallest eigenvalue of the unit-diagonal Gram)
 JOINT_MIN_SINGULAR_VALUE = 0.05
+#: share of a harmonic direction's sum of squares that must survive projection on the model for the residual scan
+#: to test it (below, its estimate is a tiny remainder blown up: a smooth drift over a short span becomes many
+#: large "harmonics")
+MIN_SCAN_SHARE = 0.05
+#: tolerance (share left after projecting out the model) an unexplained order needs to be held in the model the
+#: candidates are tested against
+MIN_HELD_TOLERANCE = 0.5
