@@ -203,10 +203,13 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     """Levenberg-Marquardt on the phases and the linear coefficients in the GLS metric
     (variance ratios ``gp``, ``gr`` held).
 
-    Kept rather than :func:`scipy.optimize.least_squares`: the cost is
-    evaluated from per-pass sums in the nested-covariance metric (no whitened
-    residual vector exists without an N x N factor), and most calls polish
-    from a grid point in a few iterations."""
+    Not (yet) :func:`scipy.optimize.least_squares`: this polish works in the
+    GLS metric of the nested covariance from per-pass sums; least_squares
+    would need the whitened residual V~^(-1/2) r (closed form per pass and
+    run, O(N)) and its Jacobian at every call.  The swap was not measured in
+    this round; bench/bench_diagnose.py on 1e5 rows takes about 5.6 s with
+    this one on an idle machine (the bar is 2.5 s), most of it in the phase
+    search and the candidate tests, not here alone."""
     y, sig, groups, base, sources = ctx.y, ctx.sig, ctx.groups, ctx.base, ctx.sources
     m = len(sources) if fit_phases else 0
     psi = np.array(psi, dtype=float)
