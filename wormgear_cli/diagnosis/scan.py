@@ -95,10 +95,13 @@ def annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: 
     return out
 
 
-def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo, sources, cells: Cells) -> list[dict]:
+def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo, sources, cells: Cells,
+                  orders_cache: dict | None = None) -> list[dict]:
     """Significant structure left in the residual: harmonics at physical and low
     orders (common and differential mode), trends against temperature, load and
-    time, and a mean reversal; Bonferroni over every test made."""
+    time, and a mean reversal; Bonferroni over every test made.  ``orders_cache``:
+    a dict that keeps the orders the targets resolve between scans of one
+    measurement (they depend on the angles only)."""
     from wormgear_cli.harmonics import physical_orders
     from wormgear_cli.iso230 import group_targets
 
@@ -114,7 +117,12 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     n_targets = int(group_targets(theta)[1].shape[0])
     top = min(30, n_targets // 2)
     orders = sorted({*map(float, range(1, top + 1)), *labels})
-    keep, _ = unaliased_orders(theta, orders)
+    if orders_cache is not None and "orders" in orders_cache:
+        keep = orders_cache["orders"]
+    else:
+        keep, _ = unaliased_orders(theta, orders)
+        if orders_cache is not None:
+            orders_cache["orders"] = keep
     tests = []
     for o in keep:
         c = np.column_stack([np.cos(o * theta), np.sin(o * theta)])

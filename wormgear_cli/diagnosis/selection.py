@@ -184,7 +184,9 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     # significant structure at orders no catalogue effect owns is part of the model every candidate is tested
     # against (else it leaks into a catalogue effect whose columns it partly projects onto)
     say("scanning the residual for structure no catalogue effect owns")
-    held = unowned_order_columns(scan_residual(state, sig, groups, g, alpha, info, sources, cells), sig, g, state)
+    scan_orders: dict = {}
+    held = unowned_order_columns(scan_residual(state, sig, groups, g, alpha, info, sources, cells, scan_orders), sig,
+                                 g, state)
     for label, cols, _ in held:
         lin_names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
         lin = np.hstack([lin, cols])
@@ -308,7 +310,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
                 final_scores[best].status = ScoreStatus.LIKELY
     say("scanning the residual for structure")
     # what is left, tested with the held structure in the model, plus the held structure itself (as found)
-    unexplained = scan_residual(after, sig, groups, g, alpha, info, sources, cells)
+    unexplained = scan_residual(after, sig, groups, g, alpha, info, sources, cells, scan_orders)
     if held:
         unexplained = sorted([*(item for _, _, item in held), *unexplained], key=lambda it: it["p_adjusted"])
     if held:
