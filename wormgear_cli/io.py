@@ -193,6 +193,31 @@ def _remember_input(path: Path) -> None:
 # --- what an output path is -------------------------------------------------------------
 
 
+def refuse_same_outputs(outputs) -> None:
+    """The one check that a run's outputs name different files.
+
+    Parameters
+    ----------
+    outputs : iterable of (path or None, option name)
+        The outputs named by the user, e.g. ``[(output, "-o"), (plot, "--plot")]``; None and
+        ``-`` (stdout) are skipped.
+
+    Raises
+    ------
+    UsageError
+        Two options name the same file (same path, or the same file through a link).
+    """
+    named = [(Path(p), opt) for p, opt in outputs if p is not None and str(p) != "-"]
+    for i, (a, opt_a) in enumerate(named):
+        for b, opt_b in named[i + 1:]:
+            try:
+                same = _same_file(a, b) or a.resolve() == b.resolve()
+            except OSError:
+                same = False
+            if same:
+                raise UsageError(f"{b}: {opt_a} and {opt_b} name the same file")
+
+
 def check_output_path(path: str | Path | None, option: str = "-o") -> None:
     """Refuse early (before any work) an output path that can never be written.
 
