@@ -16,6 +16,16 @@ wheel pitch radius, alpha the linear expansion coefficients [1/K] of
 housing (H), worm (1) and wheel (2).  A positive Delta a opens the
 backlash.  Units: lengths [mm], coefficients [1/K], results [mm/K] or
 [um/K].
+
+Which temperatures (the decision behind the warm-up demo): the catalogue
+coefficient is per kelvin of the recorded temperature.  Here that is the
+temperature of the worm and the wheel (a sensor at the mesh, in its oil),
+and the housing rises by a ratio q of it, so k = a alpha_H q - (r_1 alpha_1
++ r_2 alpha_2) (:func:`predicted_centre_distance_um_per_K`; q = 1, the
+default, is a uniform warm-up).  A running worm drive heats at the mesh, so
+in a warm-up the housing lags and rises less (:func:`mesh_housing_warmup`);
+the lag bends the relation, and ``wormgear synth``'s ``mesh-warmup``
+reports by how much.
 """
 
 from __future__ import annotations
