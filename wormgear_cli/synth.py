@@ -556,15 +556,13 @@ def _comments(spec, plan: Plan, n_t: int, temperature: Programme, load: Programm
         layout = f"iso, {n_t} targets over {span:g} deg (irregular spacing)"
     else:
         layout = f"dense, {n_t} evenly spaced angles over {span:g} deg"
-    runs = f"{plan.runs} run{'s' if plan.runs != 1 else ''}"
+    runs = f"{plan.runs} run{'s' if plan.runs != 1 else ''}, each"
     if plan.cycles > 1:
-        runs = f"{plan.cycles} cycles of {runs} ({plan.cycle_gap_s:g} s between cycles)"
+        runs = (f"{plan.cycles} cycles of {plan.runs} run{'s' if plan.runs != 1 else ''} "
+                f"({plan.cycle_gap_s:g} s between cycles), each run")
     return (
         f"# synthetic measurement made by wormgear synth from drive {spec.drive.name}",
-        f"# plan: {layout}; {runs}, each run forward (+1) then "
-        f"reverse (-1); {plan.dwell:g} s per point" if plan.cycles > 1 else
-        f"# plan: {layout}; {runs}, each forward (+1) then "
-        f"reverse (-1); {plan.dwell:g} s per point",
+        f"# plan: {layout}; {runs} forward (+1) then reverse (-1); {plan.dwell:g} s per point",
         f"# temperature: {temperature.describe('degC')}; load: {load.describe('N m')}",
         "# the model settings, effects, noise and seed are kept in a separate truth file",
     )
