@@ -304,8 +304,8 @@ def synth(
                                                     case_sensitive=False)] = RunNoiseKind.offset,
     temperature: Annotated[str, typer.Option(
         "--temperature", help="Temperature programme [degC]: constant:T | warmup:START:END:TAU_s | "
-        "cycle:START:PEAK:TAU_s[:SWITCH_s] | mesh-warmup:START:END:TAU_s:HOUSING_SHARE:HOUSING_LAG_s "
-        "(recorded at the worm mesh; the housing lags and rises less).")] = "constant:20",
+        "cycle:START:PEAK:TAU_s[:SWITCH_s] | mesh-warmup:START:END:TAU_s:SHARE:LAG_s (recorded at the "
+        "worm mesh; the housing rises SHARE of it, LAG_s behind).")] = "constant:20",
     load: Annotated[str, typer.Option("--load", help="Load programme [N m]: constant:L | steps:L1:L2:... "
                                       "(one level per run, cycling).")] = "constant:0",
     random_phases: Annotated[bool, typer.Option("--random-phases", help="Draw every source phase from the "
