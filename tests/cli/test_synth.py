@@ -91,8 +91,9 @@ def test_truth_file_and_clean_data(runner, tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    (["--temperature", "warmup:20:30"], "error: --temperature: expected constant:T, warmup:START:END:TAU_s or "
-                                        "cycle:START:PEAK:TAU_s[:SWITCH_s], got 'warmup:20:30'"),
+    (["--temperature", "warmup:20:30"], "error: --temperature: expected constant:T, warmup:START:END:TAU_s, "
+                                        "cycle:START:PEAK:TAU_s[:SWITCH_s] or "
+                                        "mesh-warmup:START:END:TAU_s:HOUSING_SHARE:HOUSING_LAG_s, got 'warmup:20:30'"),
     (["--temperature", "warmup:20:30:0"], "error: --temperature: TAU_s must be > 0, got 0 in 'warmup:20:30:0'"),
     (["--temperature", "warmup:20:x:5"], "error: --temperature: expected a number, got 'x' in 'warmup:20:x:5'"),
     (["--load", "steps"], "error: --load: expected constant:L or steps:L1:L2:... [N m], got 'steps'"),

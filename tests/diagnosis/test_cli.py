@@ -47,8 +47,13 @@ def test_demo_names_thermal_backlash_and_the_gap_shrinks(demo_json):
     assert lo <= k_true <= hi
     assert doc["gap_after"]["rms_arcsec"] < 0.7 * doc["gap_before"]["rms_arcsec"]
     assert doc["gap_after"]["differential_rms_arcsec"] < 0.5 * doc["gap_before"]["differential_rms_arcsec"]
-    # the materials predict the coefficient the demo was made with (synth's default): inside the interval
-    assert found["prediction"]["inside_interval"] is True
+    # diagnose's own prediction assumes uniform warming; the demo's mesh warms 2.5x as far as its housing
+    # (truth "thermal"), and the materials with that housing share predict the coefficient it was made with
+    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+
+    assert found["prediction"]["inside_interval"] is False
+    share = truth["thermal"]["housing_share"]
+    assert lo <= predicted_centre_distance_um_per_K(load_spec(CONFIGS / "mch50.toml"), share) <= hi
     # the CSV gives away nothing of the truth: not its values, not the effect, not the seed
     # (the command that made it is in the truth file and the README)
     text = DEMO.read_text()

@@ -148,6 +148,11 @@ def synth(
         show_default=False)] = None,
     jitter: Annotated[float, typer.Option("--jitter", help="iso plan: target jitter, +/- this fraction of the "
                                           "mean spacing (0 <= J < 0.5).")] = 0.25,
+    cycles: Annotated[int, typer.Option("--cycles", help="Measure the block of --runs runs this many times "
+                                        "(runs numbered on), e.g. repeated as the table warms.", min=1,
+                                        max=1000)] = 1,
+    cycle_gap_s: Annotated[float, typer.Option("--cycle-gap-s", help="Time between cycles [s]; the table "
+                                               "keeps running, no rows are recorded.", min=0.0)] = 0.0,
     effect: Annotated[Optional[list[str]], typer.Option(
         "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
         "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
@@ -162,7 +167,8 @@ def synth(
                                                     case_sensitive=False)] = RunNoiseKind.offset,
     temperature: Annotated[str, typer.Option(
         "--temperature", help="Temperature programme [degC]: constant:T | warmup:START:END:TAU_s | "
-        "cycle:START:PEAK:TAU_s[:SWITCH_s].")] = "constant:20",
+        "cycle:START:PEAK:TAU_s[:SWITCH_s] | mesh-warmup:START:END:TAU_s:SHARE:LAG_s (recorded at the "
+        "worm mesh; the housing rises SHARE of it, LAG_s behind).")] = "constant:20",
     load: Annotated[str, typer.Option("--load", help="Load programme [N m]: constant:L | steps:L1:L2:... "
                                       "(one level per run, cycling).")] = "constant:0",
     random_phases: Annotated[bool, typer.Option("--random-phases", help="Draw every source phase from the "
@@ -187,7 +193,8 @@ def synth(
                                     synthesize)
 
     for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
-                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s)):
+                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s),
+                        ("--cycle-gap-s", cycle_gap_s)):
         if value is not None and not math.isfinite(value):
             raise UsageError(f"{name}: expected a finite number, got {value}")
     temp_prog = parse_temperature(temperature)
@@ -208,7 +215,7 @@ def synth(
     result = synthesize(
         spec,
         plan=Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
-                  dwell_s=dwell_s, jitter=jitter),
+                  dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s),
         effects=effects,
         noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
         seed=seed,
