@@ -129,7 +129,7 @@ def test_output_files_must_differ_and_not_be_the_drive(runner, tmp_path):
     same = tmp_path / "x.csv"
     res = runner.invoke(app, ["synth", str(drive), "-o", str(same), "--truth", str(same)])
     assert res.exit_code == 2
-    assert res.stderr.strip() == "error: -o, --truth and --plot must name different files"
+    assert res.stderr.strip() == f"error: {same}: -o and --truth name the same file"
     assert not same.exists()
 
 

@@ -107,8 +107,9 @@ def simulate(
     spec = load_spec(drive)
     effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
-    if plot is not None and output is not None and Path(plot).resolve() == Path(output).resolve():
-        raise UsageError(f"{plot}: --plot and -o name the same file")
+    from wormgear_cli.io import refuse_same_outputs
+
+    refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if at is not None:
         result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
     else:
@@ -205,9 +206,9 @@ def synth(
 
         check_plot_path(plot)
     outs = [p for p in (output, truth, plot) if p is not None]
-    if len({Path(p).resolve() for p in outs}) < len(outs):
-        raise UsageError("-o, --truth and --plot must name different files")
-    from wormgear_cli.io import refuse_input
+    from wormgear_cli.io import refuse_input, refuse_same_outputs
+
+    refuse_same_outputs([(output, "-o"), (truth, "--truth"), (plot, "--plot")])
 
     for p in outs:
         refuse_input(p, [drive], "name")

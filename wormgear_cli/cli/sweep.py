@@ -83,7 +83,6 @@ def sweep(
     """
     from wormgear_cli import sweep as core
     from wormgear_cli import sweep_limits as limits
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.plots import check_plot_path
     from wormgear_cli.spec import load_spec
 
@@ -94,8 +93,9 @@ def sweep(
                          shard=shard, fmt=fmt, plot=plot is not None)
     if plot is not None:
         check_plot_path(plot)
-        if output is not None and Path(plot).resolve() == Path(output).resolve():
-            raise UsageError(f"{plot}: --plot and -o name the same file")
+        from wormgear_cli.io import refuse_same_outputs
+
+        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     k_n = core.parse_shard(shard) if shard is not None else None
     if params:
         axes = [core.parse_param(p) for p in params]
