@@ -71,6 +71,7 @@ def _copy_tree(dest: Path) -> None:
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "mutants", ".hypothesis")
     shutil.copytree(ROOT / "wormgear_cli", dest / "wormgear_cli", ignore=ignore)
     shutil.copytree(ROOT / "tests", dest / "tests", ignore=ignore)
+    shutil.copytree(ROOT / "configs", dest / "configs", ignore=ignore)
     shutil.copy2(ROOT / "pyproject.toml", dest / "pyproject.toml")
 
 
@@ -83,6 +84,7 @@ def _configure(dest: Path, files, tests) -> None:
     text += (
         "\n[tool.mutmut]\n"
         'source_paths = ["wormgear_cli"]\n'
+        'also_copy = ["configs"]\n'
         f"only_mutate = {_toml_list(files)}\n"
         f"pytest_add_cli_args_test_selection = {_toml_list(tests)}\n"
         'pytest_add_cli_args = ["-p", "no:cacheprovider", "-q", "-x", "-m", "not slow"]\n'
@@ -122,7 +124,7 @@ def main(argv=None) -> int:
         if args.clean or not dest.exists():
             _copy_tree(dest)
         else:  # refresh sources and tests, keep mutmut's cache
-            for sub in ("wormgear_cli", "tests"):
+            for sub in ("wormgear_cli", "tests", "configs"):
                 shutil.rmtree(dest / sub)
                 shutil.copytree(ROOT / sub, dest / sub,
                                 ignore=shutil.ignore_patterns("__pycache__", "*.pyc", ".hypothesis"))
