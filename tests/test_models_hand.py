@@ -238,6 +238,20 @@ def test_iso6336_theoretical_stiffness_tr6336_30_to_the_digits_given():
     assert c_th == pytest.approx(17.856, abs=5e-4)
 
 
+def test_iso6336_theoretical_stiffness_every_term_by_hand():
+    """ISO 6336-1 q' with both profile shifts non-zero (z_n 20/50, x1 0.2, x2 0.4), term by term:
+    C1 0.04723; C2/zn1 0.15551/20 = 0.0077755; C3/zn2 0.25791/50 = 0.0051582;
+    C4 x1 = -0.00635*0.2 = -0.00127; C5 x1/zn1 = -0.11654*0.2/20 = -0.0011654;
+    C6 x2 = -0.00193*0.4 = -0.000772; C7 x2/zn2 = -0.24188*0.4/50 = -0.00193504;
+    C8 x1^2 = 0.00529*0.04 = 0.0002116; C9 x2^2 = 0.00182*0.16 = 0.0002912;
+    q' = 0.05552406 -> c'_th = 18.010210.  Without shifts (defaults x = 0): q' = 0.0601637 -> 16.621318."""
+    assert deformation.iso6336_theoretical_stiffness(20.0, 50.0, x1=0.2, x2=0.4) == pytest.approx(18.010210,
+                                                                                                   rel=1e-7)
+    assert deformation.iso6336_theoretical_stiffness(20.0, 50.0) == pytest.approx(16.621318, rel=1e-7)
+    # a rack (zn2 = inf) drops the C3 and C7 terms: q' = 0.04723 + 0.0077755 = 0.0550055 -> 18.179999
+    assert deformation.iso6336_theoretical_stiffness(20.0, np.inf) == pytest.approx(1 / 0.0550055, rel=1e-9)
+
+
 def test_iso6336_single_stiffness_tr6336_30_to_the_digits_given():
     """The same example: c' = c'_th C_M C_R C_B cos(beta) = 12.370 with C_M 0.8, C_R 1 and the
     example's basic rack h_fP = 1.4 m_n, so C_B = 1 + 0.5 (1.2 - 1.4) = 0.9 (ISO 6336-1, alpha_n 20 deg).
@@ -289,11 +303,12 @@ def test_combined_modulus_by_hand():
 
 
 def test_empirical_deflection_by_hand():
-    """delta = A1 F_N/((eps+1)^B (lambda2+1)^C E b): A1 2, F_N 1000, eps 1.5, lambda2 0.5, B 2, C 1,
-    E 2e5, b 10 -> 2000/(2.5^2 * 1.5 * 2e6) = 2000/1.875e7 = 1.0666667e-4 mm (B and C differ, so
-    swapping the two exponents gives 2000/(2.5 * 2.25 * 2e6) = 1.7777778e-4 instead)."""
-    d = deformation.empirical_deflection(1000.0, 2e5, 10.0, 1.5, 0.5, 2.0, 2.0, 1.0)
-    assert d == pytest.approx(1.0666667e-4, rel=1e-7)
+    """delta = A1 F_N/((eps+1)^B (lambda2+1)^C E b): A1 2, F_N 1000, eps 1.5, lambda2 0.5, B 1, C 2,
+    E 2e5, b 10 -> 2000/(2.5 * 1.5^2 * 2e6) = 2000/1.125e7 = 1.7777778e-4 mm.  B and C differ and
+    neither is 1 where it matters: swapping the exponents gives 2000/(2.5^2 * 1.5 * 2e6) =
+    1.0666667e-4, (lambda2+1)*C instead of ^C gives 2000/(2.5 * 3 * 2e6) = 1.3333333e-4."""
+    d = deformation.empirical_deflection(1000.0, 2e5, 10.0, 1.5, 0.5, 2.0, 1.0, 2.0)
+    assert d == pytest.approx(1.7777778e-4, rel=1e-7)
 
 
 def test_spur_contact_ratio_by_hand():
