@@ -79,7 +79,12 @@ def _toml_list(items) -> str:
     return "[" + ", ".join(f'"{i}"' for i in items) + "]"
 
 
-def _configure(dest: Path, files, tests) -> None:
+#: targets whose mutants live in code run at import time (the catalogue is built when the module
+#: is imported): each mutant then gets a fresh interpreter (slower, but the mutant is seen)
+FRESH_IMPORT = {"effects"}
+
+
+def _configure(dest: Path, files, tests, fresh: bool = False) -> None:
     text = (dest / "pyproject.toml").read_text(encoding="utf-8")
     text += (
         "\n[tool.mutmut]\n"
@@ -90,6 +95,8 @@ def _configure(dest: Path, files, tests) -> None:
         'pytest_add_cli_args = ["-p", "no:cacheprovider", "-q", "-x", "-m", "not slow"]\n'
         "use_git_change_detection = false\n"
     )
+    if fresh:
+        text += 'process_isolation = "forkserver"\nforkserver_warmup = "none"\n'
     (dest / "pyproject.toml").write_text(text, encoding="utf-8")
 
 
@@ -129,7 +136,7 @@ def main(argv=None) -> int:
                 shutil.copytree(ROOT / sub, dest / sub,
                                 ignore=shutil.ignore_patterns("__pycache__", "*.pyc", ".hypothesis"))
             shutil.copy2(ROOT / "pyproject.toml", dest / "pyproject.toml")
-        _configure(dest, files, tests)
+        _configure(dest, files, tests, args.target in FRESH_IMPORT)
         run = subprocess.run(["mutmut", "run", "--max-children", str(args.max_children)], cwd=dest, env=env)
         if run.returncode not in (0, None):
             print(f"mutmut run exited with {run.returncode}", file=sys.stderr)

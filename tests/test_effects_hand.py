@@ -142,3 +142,29 @@ def test_params_to_keys_converts_back_by_hand():
     # the stiffness key: 2 N m/arcsec = 2 / (pi/648000) N m/rad
     assert params_from_keys("torsional_compliance", {"stiffness_Nm_per_arcsec": 2.0})["stiffness"] == \
         pytest.approx(2.0 * 648000.0 / math.pi, rel=1e-12)
+
+
+def test_signals_make_broadcasts_every_signal_as_float():
+    """Scalars broadcast to theta's shape; integers become floats (angles and temperatures are real)."""
+    s = Signals.make(np.array([0, 1, 2]), direction=-1, load=2, temperature=25, time=3)
+    for name, value in (("theta", [0.0, 1.0, 2.0]), ("direction", [-1.0] * 3), ("load", [2.0] * 3),
+                        ("temperature", [25.0] * 3), ("time", [3.0] * 3)):
+        arr = getattr(s, name)
+        assert arr.dtype == np.float64, name
+        np.testing.assert_array_equal(arr, value, err_msg=name)
+    d = Signals.make([0.5, 1.5])
+    np.testing.assert_array_equal(d.direction, [1.0, 1.0])
+    np.testing.assert_array_equal(d.load, [0.0, 0.0])
+    np.testing.assert_array_equal(d.temperature, [20.0, 20.0])
+    np.testing.assert_array_equal(d.time, [0.0, 0.0])
+
+
+def test_phase_parameter_record():
+    """The phase parameter of every periodic effect: key phase_deg, internal name phase, unit deg,
+    scale pi/180, range [-360, 360] deg, default 0 deg."""
+    for name in ("output_gear_runout", "intermediate_shaft_runout", "worm_runout", "gear_mesh_error"):
+        p = EFFECTS[name].param("phase_deg")
+        assert (p.key, p.name, p.unit, p.lo, p.hi, p.default) == ("phase_deg", "phase", "deg", -360.0, 360.0, 0.0)
+        assert p.scale == pytest.approx(math.pi / 180.0, rel=1e-15)
+        assert p.doc == "phase of the error at theta = 0"
+        assert EFFECTS[name].phase == "phase"
