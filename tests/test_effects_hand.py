@@ -168,3 +168,16 @@ def test_phase_parameter_record():
         assert p.scale == pytest.approx(math.pi / 180.0, rel=1e-15)
         assert p.doc == "phase of the error at theta = 0"
         assert EFFECTS[name].phase == "phase"
+
+
+def test_reference_temperature_parameter_record():
+    """The reference temperature of the thermal effects: key reference_temperature_C, internal name
+    reference_temperature, unit degC, scale 1, range [-50, 150] degC, default 20 degC."""
+    for name in ("thermal_backlash", "thermal_drift"):
+        p = EFFECTS[name].param("reference_temperature_C")
+        assert (p.key, p.name, p.unit, p.scale, p.lo, p.hi, p.default) == (
+            "reference_temperature_C", "reference_temperature", "degC", 1.0, -50.0, 150.0, 20.0)
+        assert p.doc == "temperature at which the effect is zero"
+    # used: a drift of 2 arcsec/K seen at 25 degC with the reference at 30 degC is -10 arcsec
+    e = err("thermal_drift", {"arcsec_per_K": 2.0, "reference_temperature_C": 30.0}, [0.0], temperature=25.0)
+    assert e[0] / AS == pytest.approx(-10.0, rel=1e-12)
