@@ -44,9 +44,12 @@ def test_output_gear_runout_by_hand():
 
 
 def test_intermediate_shaft_runout_by_hand():
-    """(e / r_b1) sin(i_c theta + psi): e 20 um, i_c 4, theta 7.5 deg -> sin(30 deg) -> 1.25e-4 rad."""
+    """(e / r_b1) sin(i_c theta + psi): e 20 um, i_c 4, theta 7.5 deg -> sin(30 deg) -> 1.25e-4 rad;
+    psi 30 deg -> sin(60 deg) = 0.8660254 -> 2.1650635e-4 rad."""
     assert err("intermediate_shaft_runout", {"eccentricity_um": 20.0, "phase_deg": 0.0}, math.pi / 24)[0] == \
         pytest.approx(1.25e-4, rel=1e-12)
+    assert err("intermediate_shaft_runout", {"eccentricity_um": 20.0, "phase_deg": 30.0}, math.pi / 24)[0] == \
+        pytest.approx(2.1650635e-4, rel=1e-8)
 
 
 def test_worm_runout_by_hand():
@@ -59,9 +62,12 @@ def test_worm_runout_by_hand():
 
 
 def test_gear_mesh_error_by_hand():
-    """(a / r_1) sin(z1 theta + psi): a 5 um, r_1 100 mm -> 5e-5 rad peak; theta 0.6 deg -> sin(30 deg)."""
+    """(a / r_1) sin(z1 theta + psi): a 5 um, r_1 100 mm -> 5e-5 rad peak; theta 0.6 deg -> sin(30 deg);
+    psi 60 deg -> sin(90 deg): the peak."""
     assert err("gear_mesh_error", {"amplitude_um": 5.0, "phase_deg": 0.0}, math.pi / 300)[0] == \
         pytest.approx(2.5e-5, rel=1e-12)
+    assert err("gear_mesh_error", {"amplitude_um": 5.0, "phase_deg": 60.0}, math.pi / 300)[0] == \
+        pytest.approx(5e-5, rel=1e-12)
 
 
 def test_thermal_backlash_by_hand():

@@ -303,12 +303,12 @@ def test_combined_modulus_by_hand():
 
 
 def test_empirical_deflection_by_hand():
-    """delta = A1 F_N/((eps+1)^B (lambda2+1)^C E b): A1 2, F_N 1000, eps 1.5, lambda2 0.5, B 1, C 2,
-    E 2e5, b 10 -> 2000/(2.5 * 1.5^2 * 2e6) = 2000/1.125e7 = 1.7777778e-4 mm.  B and C differ and
-    neither is 1 where it matters: swapping the exponents gives 2000/(2.5^2 * 1.5 * 2e6) =
-    1.0666667e-4, (lambda2+1)*C instead of ^C gives 2000/(2.5 * 3 * 2e6) = 1.3333333e-4."""
-    d = deformation.empirical_deflection(1000.0, 2e5, 10.0, 1.5, 0.5, 2.0, 1.0, 2.0)
-    assert d == pytest.approx(1.7777778e-4, rel=1e-7)
+    """delta = A1 F_N/((eps+1)^B (lambda2+1)^C E b): A1 2, F_N 1000, eps 1.5, lambda2 0.5, B 2, C 3,
+    E 2e5, b 10 -> 2000/(2.5^2 * 1.5^3 * 2e6) = 2000/(6.25 * 3.375 * 2e6) = 4.7407407e-5 mm.
+    Exponents distinct and neither 1: swapping them gives 2000/(15.625 * 2.25 * 2e6) = 2.8444444e-5,
+    a product (eps+1) B instead of the power 2000/(5 * 3.375 * 2e6) = 5.9259259e-5."""
+    d = deformation.empirical_deflection(1000.0, 2e5, 10.0, 1.5, 0.5, 2.0, 2.0, 3.0)
+    assert d == pytest.approx(4.7407407e-5, rel=1e-7)
 
 
 def test_spur_contact_ratio_by_hand():
