@@ -144,3 +144,67 @@ def test_target_measured_in_one_direction_only():
     assert f.R == pytest.approx(14.0) and f.E_down == pytest.approx(7.0)
     assert math.isnan(f.targets.reversal[1]) and math.isnan(f.targets.r_bi[1])
     assert len(f.notes) == 1 and "one direction only" in f.notes[0]
+
+
+def test_axis_lists_the_thirteen_figures(fig):
+    axis = fig.axis()
+    assert list(axis) == ["A", "A_up", "A_down", "B", "B_signed", "B_mean", "E", "E_up", "E_down", "M", "R",
+                          "R_up", "R_down"]
+    assert axis["A"] == pytest.approx(16.0 + 2 * R3) and axis["B_signed"] == pytest.approx(-8.0)
+    assert axis["R_down"] == pytest.approx(8.0) and axis["E_up"] == pytest.approx(10.0)
+
+
+# --- the notes, word for word -------------------------------------------------------------------
+
+
+def _without(mask):
+    a, e, d = rows()
+    keep = ~mask(a, d)
+    return iso230_figures(a[keep], e[keep], d[keep])
+
+
+def test_note_one_single_run_cell():
+    f = _without(lambda a, d: (a == 2.0) & (d > 0) & (np.cumsum((a == 2.0) & (d > 0)) > 1))
+    assert f.notes == ("1 target/direction cell has a single run: the standard deviation is undefined there, "
+                       "so R and A are not given for the forward direction nor bidirectionally",)
+
+
+def test_note_single_run_cells_in_both_directions():
+    f = _without(lambda a, d: (a == 2.0) & (np.cumsum((a == 2.0) & (d > 0)) > 1) & (d > 0)
+                 | (a == 0.0) & (d < 0) & (np.cumsum((a == 0.0) & (d < 0)) > 1))
+    assert f.notes == ("2 target/direction cells have a single run: the standard deviation is undefined there, "
+                       "so R and A are not given for the forward and reverse directions nor bidirectionally",)
+
+
+def test_note_no_forward_rows():
+    f = _without(lambda a, d: d > 0)
+    assert f.notes == ("no forward (direction +1) rows: reversal B, M and the bidirectional figures are "
+                       "undefined",)
+    assert f.E_down == pytest.approx(11.0) and f.R_down == pytest.approx(8.0) and f.A_down == pytest.approx(17.0)
+    assert math.isnan(f.E_up) and math.isnan(f.R_up) and math.isnan(f.A_up) and math.isnan(f.E)
+
+
+def test_note_no_reverse_rows():
+    f = _without(lambda a, d: d < 0)
+    assert f.notes == ("no reverse (direction -1) rows: reversal B, M and the bidirectional figures are "
+                       "undefined",)
+
+
+def test_note_targets_measured_one_way():
+    f = _without(lambda a, d: (a != 0.0) & (d < 0))
+    assert f.notes == ("2 targets were measured in one direction only: no reversal or bidirectional figures "
+                       "there",)
+    f = _without(lambda a, d: (a == 1.0) & (d < 0))
+    assert f.notes == ("1 target was measured in one direction only: no reversal or bidirectional figures "
+                       "there",)
+
+
+def test_note_no_common_target():
+    """Forward at 0 and 1, reverse at 2 only: E is defined (means of both directions), B, M, R are not."""
+    f = _without(lambda a, d: ((a == 2.0) & (d > 0)) | ((a != 2.0) & (d < 0)))
+    assert f.notes == ("no target was measured in both directions (different angles per direction?): "
+                       "reversal B, M and the bidirectional R are undefined",)
+    assert math.isnan(f.B) and math.isnan(f.M) and math.isnan(f.R)
+    # E over forward means 2, -2 and the reverse mean 3: 3 - (-2) = 5; A: max(4, 3.4641, 5) - min(0, -5.4641, 1)
+    assert f.E == pytest.approx(5.0)
+    assert f.A == pytest.approx(5.0 + 2 + 2 * R3)
