@@ -14,7 +14,7 @@ only the target's file(s) and runs only the target's test selection, runs ``mutm
     target  killed  survived  timeout  no-tests  score
     worm        61         0        0         0  100.0 %
 
-followed by every surviving mutant's diff.  The score counts killed + timeout over every
+followed by the name of every surviving mutant (``--show``: with its diff).  The score counts killed + timeout over every
 mutant that ran; mutants no selected test reaches ("no tests") count as survivors.  A
 surviving mutant is either equivalent (state why in docs/development-testing.md) or a gap
 in the tests (write the test that kills it).  The scratch copy is left in place so
@@ -123,6 +123,8 @@ def main(argv=None) -> int:
     ap.add_argument("--workdir", type=Path, default=Path(tempfile.gettempdir()) / "wormgear-mutation")
     ap.add_argument("--clean", action="store_true", help="start from a fresh scratch copy")
     ap.add_argument("--report-only", action="store_true", help="print the score of the last run")
+    ap.add_argument("--show", action="store_true", help="print each surviving mutant's diff (slow: one "
+                    "mutmut call per mutant)")
     args = ap.parse_args(argv)
     if args.list or not args.target:
         for name, (files, tests, _) in TARGETS.items():
@@ -159,11 +161,12 @@ def main(argv=None) -> int:
     print(f"{'target':12s} {'killed':>7s} {'survived':>9s} {'timeout':>8s} {'no-tests':>9s} {'score':>8s}")
     print(f"{args.target:12s} {count['killed']:7d} {count['survived']:9d} {count['timeout']:8d} "
           f"{count['no tests']:9d} {score:7.1f} %")
-    for name, status in rows:
-        if status in ("survived", "no tests", "suspicious"):
-            print(f"\n--- {status}: {name}")
+    left = [(name, status) for name, status in rows if status in ("survived", "no tests", "suspicious")]
+    for name, status in left:
+        print(f"{status}: {name}")
+        if args.show:
             show = subprocess.run(["mutmut", "show", name], cwd=dest, env=env, capture_output=True, text=True)
-            print(show.stdout.strip())
+            print(show.stdout.strip() + "\n")
     return 0
 
 
