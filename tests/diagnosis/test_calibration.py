@@ -17,6 +17,7 @@ at most 9 of 400 named (P = 0.8 % at a true 1 %, 0.03 % at 5 %).
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -27,11 +28,12 @@ from wormgear_cli.diagnosis import diagnose
 from tests.diagnosis.independent_model import Design, measurement, perfect_spec
 
 CLEARANCE = {"clearance_arcsec": 1.5}
-DRIFT = {"arcsec_per_K": 0.08}
+DRIFT = {"arcsec_per_K": 0.3}
 STIFF = {"stiffness_Nm_per_arcsec": 10.0}
 RUNOUT = {"eccentricity_um": 1.0, "phase_deg": 40.0}
 
-WARM = Design(temperature=(20.0, 30.0, 24.0, 34.0, 22.0, 28.0))  # heating and cooling, not monotonic
+#: ten runs at temperatures that go up and down (not collinear with the run index)
+WARM = Design(runs=10, temperature=(20.0, 30.0, 24.0, 34.0, 22.0, 28.0, 26.0, 32.0, 21.0, 25.0))
 LOADED = Design(loads=(0.0, 20.0, -20.0))
 
 
@@ -109,7 +111,9 @@ def test_adjusted_p_of_two_named_effects(spec):
 
 # --- slow: calibration ------------------------------------------------------------------------------
 
-REPLICATES = 400
+#: 400 in CI; a quick local look at the machinery: WORMGEAR_CALIBRATION_REPLICATES=100 (the bars
+#: below are set for 400 and are then only indicative)
+REPLICATES = int(os.environ.get("WORMGEAR_CALIBRATION_REPLICATES", "400"))
 
 
 def _calibrate(spec, design, name, params, key, truth, seed0, transform=lambda v: v):
@@ -134,8 +138,8 @@ def _calibrate(spec, design, name, params, key, truth, seed0, transform=lambda v
 
 @pytest.mark.slow
 def test_linear_effect_interval_calibration(spec):
-    """thermal_drift (linear, varies between runs: containment df R - 2): coverage and width."""
-    coverage, ratio, named = _calibrate(spec, WARM, "thermal_drift", DRIFT, "arcsec_per_K", 0.08, 20_000)
+    """thermal_drift (linear, varies between runs only: judged on containment df R - 2 = 8)."""
+    coverage, ratio, named = _calibrate(spec, WARM, "thermal_drift", DRIFT, "arcsec_per_K", 0.3, 20_000)
     assert named >= 0.95 * REPLICATES
     assert 0.925 <= coverage <= 0.975, coverage
     assert 0.8 <= ratio <= 1.25, ratio
@@ -182,4 +186,4 @@ def test_false_positive_rate_on_null_data(spec):
     """Null data (nothing hidden, nested run/pass noise): at alpha = 1 % at most 9 of 400 data
     sets may name an effect (a true 5 % gives 20 on average; P(<= 9) = 0.03 %)."""
     named = sum(bool(_one(spec, Design(), {}, 50_000 + i)) for i in range(REPLICATES))
-    assert named <= 9, named
+    assert named <= 9 * REPLICATES / 400, named
