@@ -50,6 +50,7 @@ def test_each_effect_hidden_alone_is_named_bounded_and_shrinks_the_gap(name, mch
     assert any(covered), covered
 
 
+@pytest.mark.slow  # 30 diagnose runs; calibration proper: tests/diagnosis/test_calibration.py
 def test_the_95_percent_interval_covers_the_truth_at_its_nominal_rate(mch50_spec):
     import numpy as np
 
@@ -68,6 +69,7 @@ def test_the_95_percent_interval_covers_the_truth_at_its_nominal_rate(mch50_spec
     assert np.mean(half) < 3.0 * np.std(estimates)
 
 
+@pytest.mark.slow  # many diagnose runs; false-positive rate: tests/diagnosis/test_calibration.py
 def test_null_data_name_nothing_in_at_least_95_percent_of_seeds(mch50_spec):
     # every candidate testable: warm-up, load steps, both directions, jittered targets
     plan = Plan(targets=16, runs=4, warmup=(20.0, 30.0, 900.0), loads=(0.0, 200.0, -200.0))
