@@ -51,12 +51,14 @@ def rows(jitter=0.0, seed=3):
     return angle, np.asarray(error)[order], np.asarray(direction)[order]
 
 
-@pytest.fixture(scope="module")
-def fig():
+def figures():
+    """The table's figures (computed in each test, not in a fixture: mutation testing follows the
+    calls a test makes itself)."""
     return iso230_figures(*rows(jitter=0.3 * TARGET_TOL))
 
 
-def test_axis_figures_by_hand(fig):
+def test_axis_figures_by_hand():
+    fig = figures()
     assert fig.B == pytest.approx(8.0, rel=1e-12)
     assert fig.B_signed == pytest.approx(-8.0, rel=1e-12)
     assert fig.B_mean == pytest.approx(-4.0 / 3.0, rel=1e-12)
@@ -74,11 +76,12 @@ def test_axis_figures_by_hand(fig):
     assert fig.notes == ()
 
 
-def test_target_table_by_hand(fig):
-    t = fig.targets
+def test_target_table_by_hand():
+    t = figures().targets
     assert len(t) == 3
     np.testing.assert_allclose(t.target, [0.0, 1.0, 2.0], atol=TARGET_TOL)
     np.testing.assert_array_equal(t.n_up, [3, 3, 3])
+    assert t.n_up.dtype.kind == "i" and t.n_down.dtype.kind == "i"  # counts of runs
     np.testing.assert_array_equal(t.n_down, [3, 3, 3])
     np.testing.assert_allclose(t.mean_up, [2, -2, 8], rtol=1e-12)
     np.testing.assert_allclose(t.mean_down, [10, -1, 3], rtol=1e-12)
@@ -146,8 +149,8 @@ def test_target_measured_in_one_direction_only():
     assert len(f.notes) == 1 and "one direction only" in f.notes[0]
 
 
-def test_axis_lists_the_thirteen_figures(fig):
-    axis = fig.axis()
+def test_axis_lists_the_thirteen_figures():
+    axis = figures().axis()
     assert list(axis) == ["A", "A_up", "A_down", "B", "B_signed", "B_mean", "E", "E_up", "E_down", "M", "R",
                           "R_up", "R_down"]
     assert axis["A"] == pytest.approx(16.0 + 2 * R3) and axis["B_signed"] == pytest.approx(-8.0)
@@ -174,6 +177,8 @@ def test_note_single_run_cells_in_both_directions():
                  | (a == 0.0) & (d < 0) & (np.cumsum((a == 0.0) & (d < 0)) > 1))
     assert f.notes == ("2 target/direction cells have a single run: the standard deviation is undefined there, "
                        "so R and A are not given for the forward and reverse directions nor bidirectionally",)
+    for name in ("R_up", "R_down", "R", "A_up", "A_down", "A"):
+        assert math.isnan(getattr(f, name)), name
 
 
 def test_note_no_forward_rows():
@@ -208,3 +213,40 @@ def test_note_no_common_target():
     # E over forward means 2, -2 and the reverse mean 3: 3 - (-2) = 5; A: max(4, 3.4641, 5) - min(0, -5.4641, 1)
     assert f.E == pytest.approx(5.0)
     assert f.A == pytest.approx(5.0 + 2 + 2 * R3)
+
+
+def test_largest_reversal_not_at_the_first_target():
+    """Target 0.0 left out: B_i = -1, 5 -> B 5, B signed +5, B mean 2; M = 5.5 - (-1.5) = 7;
+    E_up = 8 - (-2) = 10, E_down = 3 - (-1) = 4, E = 10; R = max(6.9282032, 7) = 7."""
+    f = _without(lambda a, d: a == 0.0)
+    assert (f.B, f.B_signed, f.B_mean, f.M) == pytest.approx((5.0, 5.0, 2.0, 7.0))
+    assert (f.E_up, f.E_down, f.E, f.R) == pytest.approx((10.0, 4.0, 10.0, 7.0))
+
+
+def test_two_runs_are_enough_for_s():
+    """Cells of two runs: s = |x1 - x2| / sqrt(2); up 1, 3 and down 2, 6 at one target, up 0, 2 and
+    down 1, 1 at another: s_up sqrt(2), sqrt(2); s_down 2 sqrt(2), 0 -> R_up = 4 sqrt(2)."""
+    a = np.array([0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0])
+    e = np.array([1.0, 3.0, 2.0, 6.0, 0.0, 2.0, 1.0, 1.0])
+    d = np.array([1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0])
+    f = iso230_figures(a, e, d)
+    np.testing.assert_allclose(f.targets.s_up, [math.sqrt(2), math.sqrt(2)], rtol=1e-12)
+    np.testing.assert_allclose(f.targets.s_down, [2 * math.sqrt(2), 0.0], rtol=1e-12, atol=1e-15)
+    assert f.R_up == pytest.approx(4 * math.sqrt(2)) and f.notes == ()
+
+
+def test_explicit_target_tolerance():
+    """Rows 1e-7 rad apart: one target with tol 1e-6 rad, two with the default (1e-6 deg = 1.7e-8 rad)."""
+    a = np.array([0.0, 1e-7, 0.0, 1e-7, 1.0, 1.0, 1.0, 1.0])
+    e = np.array([1.0, 3.0, 2.0, 6.0, 0.0, 2.0, 1.0, 1.0])
+    d = np.array([1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0])
+    assert len(iso230_figures(a, e, d, tol=1e-6).targets) == 2
+    assert len(iso230_figures(a, e, d).targets) == 3
+
+
+def test_no_error_values_give_undefined_figures():
+    """A measurement without errors (NaN) has no figures, and says nothing false."""
+    a, e, d = rows()
+    f = iso230_figures(a, np.full(e.shape, np.nan), d)
+    for name in ("A", "B", "E", "E_up", "E_down", "M", "R"):
+        assert math.isnan(getattr(f, name)), name

@@ -71,24 +71,25 @@ def anova(y, run, d, w, x_r):
                 sxx=float(xc @ xc), sww=float(w @ w))
 
 
-@pytest.fixture(scope="module")
 def fitted():
+    """Design, fit and ANOVA, computed in each test (not a fixture: mutation testing follows the
+    calls a test makes itself)."""
     X, y, groups, run, d, w, x_r = design()
     cross = Cross.build(X, y, groups)
     vf = reml(cross)
     return X, y, groups, cross, vf, anova(y, run, d, w, x_r)
 
 
-def test_the_design_is_nested_and_balanced(fitted):
-    X, y, groups, *_ = fitted
+def test_the_design_is_nested_and_balanced():
+    X, y, groups, *_ = fitted()
     assert groups.runs == R and groups.passes == P and groups.nested and groups.random
     np.testing.assert_array_equal(groups.pass_size, np.full(P, M))
 
 
-def test_reml_equals_the_anova_estimates(fitted):
+def test_reml_equals_the_anova_estimates():
     """s^2 = MS_white, s_p^2 = (MS_pass - MS_white)/m, s_r^2 = (MS_run - MS_pass)/(2m) when all are
     positive; reml() searches a log grid refined to ~1 %, hence the 3 % tolerance."""
-    *_, vf, a = fitted
+    *_, vf, a = fitted()
     assert a["ms_run"] > a["ms_pass"] > a["ms_white"] > 0  # interior: the identity holds
     assert vf.sigma2 == pytest.approx(a["ms_white"], rel=0.03)
     assert vf.sigma2 * vf.gp == pytest.approx((a["ms_pass"] - a["ms_white"]) / M, rel=0.03)
@@ -96,10 +97,10 @@ def test_reml_equals_the_anova_estimates(fitted):
     assert vf.dof == N - 4
 
 
-def test_gls_estimates_and_variances_equal_the_stratum_ones(fitted):
+def test_gls_estimates_and_variances_equal_the_stratum_ones():
     """beta: the stratum OLS estimates exactly (balanced: GLS = OLS at any variance ratios);
     var(b_x) = MS_run / (2 m S_xx), var(b_d) = MS_pass / N, var(b_w) = MS_white / S_ww."""
-    *_, vf, a = fitted
+    *_, vf, a = fitted()
     assert vf.beta[1] == pytest.approx(a["b_d"], rel=1e-9)
     assert vf.beta[2] == pytest.approx(a["b_x"], rel=1e-9)
     assert vf.beta[3] == pytest.approx(a["b_w"], rel=1e-9)
@@ -109,10 +110,10 @@ def test_gls_estimates_and_variances_equal_the_stratum_ones(fitted):
 
 
 @pytest.mark.parametrize("column, df", [(2, R - 2), (1, R - 1), (3, N - P - 1)])
-def test_satterthwaite_df_are_the_stratum_df(fitted, column, df):
+def test_satterthwaite_df_are_the_stratum_df(column, df):
     """Run-level covariate: R - 2 = 6; direction (pass level): R - 1 = 7; within-pass: N - P - 1 = 79.
     Off by one is 14-17 % at the first two: the 3 % tolerance (REML grid) tells them apart."""
-    _, _, _, cross, vf, _ = fitted
+    _, _, _, cross, vf, _ = fitted()
     assert wald(cross, vf, [column]).df == pytest.approx(df, rel=0.03)
 
 
@@ -129,9 +130,9 @@ def test_fai_cornelius_two_columns_in_one_stratum():
     assert wald(cross, vf, [2, 4]).q == 2
 
 
-def test_wald_f_and_p_by_hand(fitted):
+def test_wald_f_and_p_by_hand():
     """F = b^2 / var(b) for one column, p = upper F tail with (1, df) (scipy, independently)."""
-    _, _, _, cross, vf, _ = fitted
+    _, _, _, cross, vf, _ = fitted()
     t = wald(cross, vf, [2])
     assert t.F == pytest.approx(vf.beta[2] ** 2 / vf.cov[2, 2], rel=1e-9)
     assert t.p == pytest.approx(stats.f.sf(t.F, 1, t.df), rel=1e-6)
@@ -142,8 +143,8 @@ def test_wald_f_and_p_by_hand(fitted):
     assert t2.p == pytest.approx(stats.f.sf(t2.F, 2, t2.df), rel=1e-6)
 
 
-def test_containment_caps_the_satterthwaite_df(fitted):
-    _, _, _, cross, vf, _ = fitted
+def test_containment_caps_the_satterthwaite_df():
+    _, _, _, cross, vf, _ = fitted()
     assert wald(cross, vf, [3], containment=12.0).df == pytest.approx(12.0)
     assert wald(cross, vf, [2], containment=100.0).df == pytest.approx(R - 2, rel=0.03)
 
