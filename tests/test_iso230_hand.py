@@ -250,3 +250,29 @@ def test_no_error_values_give_undefined_figures():
     f = iso230_figures(a, np.full(e.shape, np.nan), d)
     for name in ("A", "B", "E", "E_up", "E_down", "M", "R"):
         assert math.isnan(getattr(f, name)), name
+
+
+def test_one_forward_run_still_counts_as_forward():
+    """A single forward run (values 2, -2, 8 at the three targets) and the three reverse runs: the
+    forward direction is present (E_up = 8 - (-2) = 10, E = 10 - (-2) = 12), only its s is undefined."""
+    a, e, d = rows()
+    first_up = np.zeros(a.shape[0], dtype=bool)
+    for t, v in ((0.0, 2.0), (1.0, -2.0), (2.0, 8.0)):
+        a = np.append(a, t)
+        e = np.append(e, v)
+        d = np.append(d, 1.0)
+        first_up = np.append(first_up, True)
+    keep = (d < 0) | first_up
+    f = iso230_figures(a[keep], e[keep], d[keep])
+    assert f.E_up == pytest.approx(10.0) and f.E == pytest.approx(12.0) and f.B == pytest.approx(8.0)
+    assert math.isnan(f.R_up) and f.R_down == pytest.approx(8.0)
+    assert f.notes[0].startswith("3 target/direction cells have a single run")
+
+
+def test_measurement_figures_passes_the_tolerance_on():
+    a = np.array([0.0, 1e-7, 0.0, 1e-7, 1.0, 1.0, 1.0, 1.0])
+    e = np.array([1.0, 3.0, 2.0, 6.0, 0.0, 2.0, 1.0, 1.0])
+    d = np.array([1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0])
+    m = SimpleNamespace(angle=a, error=e, direction=d)
+    assert len(measurement_figures(m, tol=1e-6).targets) == 2
+    assert len(measurement_figures(m).targets) == 3
