@@ -276,3 +276,15 @@ def test_measurement_figures_passes_the_tolerance_on():
     m = SimpleNamespace(angle=a, error=e, direction=d)
     assert len(measurement_figures(m, tol=1e-6).targets) == 2
     assert len(measurement_figures(m).targets) == 3
+
+
+def test_one_reverse_run_still_counts_as_reverse():
+    """A single reverse run (values 10, -1, 3) and the three forward runs: E_down = 10 - (-1) = 11."""
+    a, e, d = rows()
+    keep = d > 0
+    a = np.concatenate([a[keep], [0.0, 1.0, 2.0]])
+    e = np.concatenate([e[keep], [10.0, -1.0, 3.0]])
+    d = np.concatenate([d[keep], [-1.0, -1.0, -1.0]])
+    f = iso230_figures(a, e, d)
+    assert f.E_down == pytest.approx(11.0) and f.E == pytest.approx(12.0) and f.B == pytest.approx(8.0)
+    assert math.isnan(f.R_down) and f.R_up == pytest.approx(4 * R3)
