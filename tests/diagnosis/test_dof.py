@@ -200,3 +200,26 @@ def test_a_level_needs_more_than_half_the_sum_of_squares():
     for share, want in ((0.4, N - 2), (0.6, R - 2)):
         col = math.sqrt(share) * xs + math.sqrt(1 - share) * ws
         assert containment_df(groups, X[:, :1], col[:, None]) == want
+
+
+def test_containment_df_does_not_depend_on_the_columns_scale():
+    """The level of a column is decided by shares of its sum of squares: scaling the column or the
+    model columns by 1e3 or 1e-3 changes nothing."""
+    X, y, groups, run, d, w, x_r = design()
+    xs = X[:, 2] / np.linalg.norm(X[:, 2])
+    ws = w / np.linalg.norm(w)
+    for share, want in ((0.4, N - 2), (0.6, R - 2)):
+        col = math.sqrt(share) * xs + math.sqrt(1 - share) * ws
+        for scale in (1e-3, 1.0, 1e3):
+            assert containment_df(groups, scale * X[:, :1], scale * col[:, None]) == want, (share, scale)
+
+
+def test_contrast_df_without_variance_information():
+    """No variance information (every random component at zero): the fallback df, else n - k."""
+    from wormgear_cli.diagnosis import contrast_df
+
+    _, _, _, cross, vf, _ = fitted()
+    v = np.zeros(cross.k)
+    v[2] = 1.0
+    assert contrast_df(vf, v, None, fallback=7.5) == 7.5
+    assert contrast_df(vf, v, None) == vf.dof == N - 4
