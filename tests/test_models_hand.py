@@ -344,3 +344,54 @@ def test_predicted_centre_distance_coefficient_by_hand():
                                   wheel=SimpleNamespace(teeth=60)),
         materials=SimpleNamespace(housing_expansion=10.5e-6, worm_expansion=11.5e-6, wheel_expansion=18.5e-6))
     assert thermal.predicted_centre_distance_um_per_K(spec) == pytest.approx(-0.5, rel=1e-9)
+
+
+def _argmax_reference(f, lo=0.0, hi=2 * np.pi):
+    """Location of the maximum by a second method: dense samples, then scipy's bounded optimiser."""
+    from scipy.optimize import minimize_scalar
+
+    phi = np.linspace(lo, hi, 20_001)
+    k = int(np.argmax(f(phi)))
+    res = minimize_scalar(lambda x: -float(f(x)), bounds=(phi[max(k - 1, 0)], phi[min(k + 1, phi.size - 1)]),
+                          method="bounded", options={"xatol": 1e-12})
+    return float(res.x)
+
+
+@pytest.mark.parametrize("r1, r2, de, d1", [
+    (20.0, 80.0, 0.5, 0.002), (20.0, 80.0, 1.0, 0.0), (22.5, 180.0, 0.03, 0.004), (40.0, 60.0, 0.2, 0.05),
+    (10.0, 200.0, 2.0, 0.01),
+])
+def test_location_of_the_maximum_against_an_optimiser(r1, r2, de, d1):
+    """Both maximisers return where the maximum is, not only its value (the value is flat at the
+    peak, so a wrong location hides in it): within 1e-6 rad of scipy's bounded optimiser."""
+    a = math.radians(20.0)
+    want = _argmax_reference(lambda x: gear.gear_te(x, r1, r2, de, a, d1))
+    for fn in (gear.gear_te_max, gear.gear_te_max_fast):
+        _, where = fn(r1, r2, de, a, d1)
+        assert float(where) == pytest.approx(want, abs=1e-6), fn.__name__
+
+
+@pytest.mark.parametrize("l, de", [(100.0, 1.0), (100.0, 0.2), (202.5, 0.03)])
+def test_kinematic_peak_location_against_an_optimiser(l, de):
+    a = math.radians(20.0)
+    want = _argmax_reference(lambda x: gear.kinematic_bracket(x, l, de, a))
+    peak = gear.kinematic_peak(l, de, a)
+    assert float(peak.phi0) == pytest.approx(want, abs=1e-6)
+    assert float(peak.f0) == pytest.approx(float(gear.kinematic_bracket(want, l, de, a)), rel=1e-12)
+    f1, f2 = gear.kinematic_bracket_derivatives(want, l, de, a)
+    assert float(peak.f2) == pytest.approx(float(f2), rel=1e-5)
+
+
+def test_fast_maximum_is_vectorised_like_the_scalar_calls():
+    """Arrays of radii, eccentricities and loads give the same as one call per design."""
+    a = math.radians(20.0)
+    r1 = np.array([20.0, 22.5, 40.0])
+    r2 = np.array([80.0, 180.0, 60.0])
+    de = np.array([0.5, 0.03, 0.2])
+    d1 = np.array([0.002, 0.0, 0.05])
+    v, w = gear.gear_te_max_fast(r1, r2, de, a, d1)
+    for k in range(3):
+        vk, wk = gear.gear_te_max_fast(r1[k], r2[k], de[k], a, d1[k])
+        assert v[k] == pytest.approx(float(vk), rel=1e-12) and w[k] == pytest.approx(float(wk), abs=1e-12)
+        want = _argmax_reference(lambda x: gear.gear_te(x, r1[k], r2[k], de[k], a, d1[k]))
+        assert w[k] == pytest.approx(want, abs=1e-6)
