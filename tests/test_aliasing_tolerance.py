@@ -94,3 +94,46 @@ def test_diagnosis_resolvable_orders_uses_the_same_tolerance():
     assert keep == [1.0] and 25 + INSIDE in aliased
     keep, aliased = resolvable_orders(THETA, [1.0, 25 + OUTSIDE])
     assert keep == [1.0, 25 + OUTSIDE] and not aliased
+
+
+def test_order_and_offset_correlations_by_hand():
+    """On the 24 even angles: C_minus between k and k + N + d is dirichlet(d), 1 on the diagonal;
+    C_plus of 5 and 19 + d is dirichlet(d); the offset correlation of N + d is dirichlet(d), of 1 zero."""
+    from wormgear_cli.harmonics import offset_correlations, order_correlations
+
+    c_minus, c_plus = order_correlations(THETA, [1.0, 25 + OUTSIDE])
+    assert c_minus[0, 1] == pytest.approx(1 - 2e-3, abs=1e-12) and c_minus[1, 0] == pytest.approx(1 - 2e-3, abs=1e-12)
+    np.testing.assert_allclose(np.diag(c_minus), [1.0, 1.0], atol=1e-12)
+    _, c_plus = order_correlations(THETA, [5.0, 19 + INSIDE])
+    assert c_plus[0, 1] == pytest.approx(1 - 5e-4, abs=1e-12)
+    np.testing.assert_allclose(offset_correlations(THETA, [N + INSIDE, 1.0]), [1 - 5e-4, 0.0], atol=1e-12)
+
+
+def test_weights_decide_like_the_weighted_samples():
+    """Five extra angles with weight 0 change nothing: orders 1 and 25 + INSIDE stay aliased; with
+    the same five angles counted (no weights) they are told apart.  Repeating every angle twice
+    (row counts) is the same as once."""
+    extra = np.array([0.3, 1.1, 2.9, 4.2, 5.5])
+    theta = np.concatenate([THETA, extra])
+    weights = np.concatenate([np.ones(N), np.zeros(5)])
+    k2 = 25 + INSIDE
+    assert alias_groups(theta, [1.0, k2], weights=weights) == [(1.0, k2)]
+    assert alias_groups(theta, [1.0, k2]) == []
+    assert folded_orders(theta, [N / 2 + INSIDE / 2], weights=weights) == [N / 2 + INSIDE / 2]
+    assert folded_orders(theta, [N / 2 + INSIDE / 2]) == []
+    assert alias_groups(np.concatenate([THETA, THETA]), [1.0, k2]) == [(1.0, k2)]
+    from wormgear_cli.harmonics import offset_correlations
+
+    np.testing.assert_allclose(offset_correlations(theta, [N + INSIDE], weights=weights), [1 - 5e-4], atol=1e-12)
+
+
+def test_an_order_on_clustered_angles_is_grouped_with_the_offset():
+    """Angles within 0.01 rad of each other: order 1 is (nearly) constant there, grouped with 0.0
+    even though 0.0 was not asked for."""
+    theta = np.linspace(0.0, 0.01, 10)
+    assert alias_groups(theta, [1.0]) == [(0.0, 1.0)]
+
+
+def test_angles_must_be_one_dimensional():
+    with pytest.raises(ValueError, match="^theta must be one-dimensional$"):
+        alias_groups(THETA.reshape(4, 6), [1.0])
