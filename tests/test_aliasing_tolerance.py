@@ -118,6 +118,7 @@ def test_weights_decide_like_the_weighted_samples():
     weights = np.concatenate([np.ones(N), np.zeros(5)])
     k2 = 25 + INSIDE
     assert alias_groups(theta, [1.0, k2], weights=weights) == [(1.0, k2)]
+    assert alias_groups(theta, [1.0, k2], weights=1e-3 * weights) == [(1.0, k2)]  # only ratios count
     assert alias_groups(theta, [1.0, k2]) == []
     assert folded_orders(theta, [N / 2 + INSIDE / 2], weights=weights) == [N / 2 + INSIDE / 2]
     assert folded_orders(theta, [N / 2 + INSIDE / 2]) == []
