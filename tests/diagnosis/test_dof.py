@@ -223,3 +223,20 @@ def test_contrast_df_without_variance_information():
     v[2] = 1.0
     assert contrast_df(vf, v, None, fallback=7.5) == 7.5
     assert contrast_df(vf, v, None) == vf.dof == N - 4
+
+
+def test_white_noise_gives_the_residual_df():
+    """No run or pass scatter at all (noise white): REML puts both components at zero, there is no
+    variance information, and every coefficient is judged on n - k = 92 df."""
+    X, _, groups, *_ = design()
+    y = X @ np.array([1.0, 0.5, 0.2, 0.1]) + np.random.default_rng(3).normal(0, 1.0, N)
+    # remove every trace of pass-level scatter: subtract the pass means of the noise
+    noise = y - X @ np.array([1.0, 0.5, 0.2, 0.1])
+    pid = groups.pass_id
+    noise = noise - (np.bincount(pid, noise) / np.bincount(pid))[pid]
+    cross = Cross.build(X, X @ np.array([1.0, 0.5, 0.2, 0.1]) + noise, groups)
+    vf = reml(cross)
+    assert vf.gp == 0.0 and vf.gr == 0.0
+    for column in (1, 2, 3):
+        assert wald(cross, vf, [column]).df == N - 4
+    assert wald(cross, vf, [1, 2]).df == N - 4
