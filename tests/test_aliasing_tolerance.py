@@ -126,6 +126,10 @@ def test_weights_decide_like_the_weighted_samples():
     from wormgear_cli.harmonics import offset_correlations
 
     np.testing.assert_allclose(offset_correlations(theta, [N + INSIDE], weights=weights), [1 - 5e-4], atol=1e-12)
+    from wormgear_cli.harmonics import order_correlations
+
+    c_minus, _ = order_correlations(theta, [1.0, k2], weights=weights)
+    assert c_minus[0, 1] == pytest.approx(1 - 5e-4, abs=1e-12)
 
 
 def test_an_order_on_clustered_angles_is_grouped_with_the_offset():
