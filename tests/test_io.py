@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 import threading
 
 import pytest
@@ -51,17 +52,25 @@ def test_special_files_are_written_in_place_not_replaced(runner, tmp_path):
     assert received and received[0].startswith("drive,unit,")
 
 
-def test_unwritable_output_is_a_usage_error(tmp_path):
+def test_unwritable_output_is_a_usage_error(tmp_path, monkeypatch):
     with pytest.raises(UsageError, match="does not exist"):
         atomic_write(tmp_path / "no" / "x.txt", "x")
     ro = tmp_path / "ro"
     ro.mkdir()
     ro.chmod(0o500)
     try:
-        if os.access(ro, os.W_OK):  # running as root: permissions do not apply
-            pytest.skip("directory permissions are not enforced for this user")
-        with pytest.raises(UsageError, match="cannot write"):
+        if os.access(ro, os.W_OK):  # running as root: permissions do not apply, so refuse the write here
+            real_open = os.open
+
+            def refuse(path, *args, **kwargs):  # what the kernel says to a non-root user in ro/
+                if Path(path).parent == ro:
+                    raise PermissionError(13, "Permission denied")
+                return real_open(path, *args, **kwargs)
+
+            monkeypatch.setattr(os, "open", refuse)
+        with pytest.raises(UsageError, match=r"cannot write \(Permission denied\)"):
             atomic_write(ro / "x.txt", "x")
+        assert list(ro.iterdir()) == []
     finally:
         ro.chmod(0o700)
 

@@ -103,7 +103,37 @@ def test_gear_common_mode_peak_matches_analyze_kinematic_part(spec):
     assert g.max() == pytest.approx(a.angles["gear_te_eccentricity"], rel=1e-3)
 
 
-def test_max_reversal_equals_total_backlash_when_aligned(spec):
+def test_gear_reversal_by_hand():
+    """Only a gear eccentricity (0.02 mm), no loads: the simulated lost motion is
+    de tan(alpha) (1 + sin phi) / R2, largest 2 de tan(alpha) / R2 = 0.04 * 0.36397023 / 180
+    = 8.088227e-5 rad at the aligned phase -- the paper's 2 Delta C1 / (m z1) with
+    Delta C1 = 2 de tan(alpha) (R2 = m z1 / 2 = 180 mm).  An explicit drive, not the MCH50."""
+    from tests.diagnosis.independent_model import perfect_spec
+
+    s = with_values(perfect_spec(), {"assembly.gear_eccentricity_mm": 0.02})
+    theta = _turn(3200)
+    phases = aligned_phases(s, "reversal")
+    rev = simulate(s, Signals.make(theta, -1.0), phases) - simulate(s, Signals.make(theta, 1.0), phases)
+    assert rev.max() == pytest.approx(8.088227e-5, rel=1e-6)
+    assert rev.min() >= -1e-18
+
+
+def test_worm_reversal_by_hand():
+    """Only tooth thickness deviations T_s1 30, T_s2 60 um (lambda 3.178 deg, cos = 0.99846212):
+    central (T_s1 + T_s2)/(2 cos lambda) = 0.04506931 mm, half-width
+    sqrt((T_s1^2 + T_s2^2)/(36 cos^2 lambda))/2 = 0.00559878 mm, so the lost motion peaks at
+    (0.04506931 + 0.00559878) / (r_wheel i_c = 37.5 * 8) = 1.688936e-4 rad."""
+    from tests.diagnosis.independent_model import perfect_spec
+
+    s = with_values(perfect_spec(), {"worm_pair.worm.thickness_deviation_mm": 0.03,
+                                     "worm_pair.wheel.thickness_deviation_mm": 0.06})
+    assert max_reversal(s, points=3200) == pytest.approx(1.688936e-4, rel=1e-6)
+
+
+def test_consistency_max_reversal_equals_total_backlash_when_aligned(spec):
+    """A consistency check between two paths that share the stage functions (simulate's aligned
+    reversal and analyze's total backlash), not a check of either: the hand-worked checks are
+    test_gear_reversal_by_hand and test_worm_reversal_by_hand above."""
     total = analyze(spec).angles["total_backlash"]
     theta = _turn(3200)
     phases = aligned_phases(spec, "reversal")

@@ -31,7 +31,7 @@ def test_each_effect_hidden_alone_is_named_bounded_and_shrinks_the_gap(name, mch
     assert any(covered), covered
 
 
-@pytest.mark.slow  # 30-45 s: 30 and 40 seeded replicates
+@pytest.mark.slow  # many diagnose runs; false-positive rate: tests/diagnosis/test_calibration.py
 def test_null_data_name_nothing_in_at_least_95_percent_of_seeds(mch50_spec):
     # every candidate testable: warm-up, load steps, both directions, jittered targets
     plan = Plan(targets=16, runs=4, warmup=(20.0, 30.0, 900.0), loads=(0.0, 200.0, -200.0))

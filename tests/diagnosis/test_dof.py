@@ -1,0 +1,242 @@
+"""Degrees of freedom, REML and GLS on a balanced nested runs x passes design, against the
+classical analysis of variance worked out here (no project code on the expected side).
+
+Design: R = 8 runs, each a forward and a reverse pass (P = 16 passes) of m = 6 rows at the same
+angles (N = 96).  Fixed effects: intercept, direction (+-1, a pass-level column), a run-level
+covariate x_r, a within-pass column w (the same zero-mean pattern in every pass).  Noise:
+run, pass and white random intercepts.  In a balanced design the columns are orthogonal
+between the three strata and the REML estimates equal the ANOVA ones when they are interior
+(Searle, Casella & McCulloch 1992, ch. 4 and 6):
+
+* run stratum: run means z_r = (pass mean up + pass mean down)/2, regressed on (1, x_r):
+  MS_run = 2 m SS_res / (R - 2), E[MS_run] = s^2 + m s_p^2 + 2 m s_r^2, df R - 2;
+* pass-within-run stratum: per run the difference of its two pass means, less its mean over the
+  runs (the direction effect): MS_pass = (m/2) sum (d_r - mean d)^2 / (R - 1),
+  E[MS_pass] = s^2 + m s_p^2, df R - 1;
+* within-pass stratum: deviations from the pass means, less their regression on w:
+  MS_white = SS / (N - P - 1), E = s^2, df N - P - 1.
+
+The GLS estimates are the stratum OLS estimates, their variances MS_stratum / (stratum weight x
+sum of squares of the column), and Satterthwaite's df of a coefficient that lives in one
+stratum is that stratum's df (the mean square is the only variance estimate it uses).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from wormgear_cli.diagnosis import Cross, containment_df, make_groups, reml, wald
+
+R, M = 8, 6
+N, P = 2 * R * M, 2 * R
+
+
+def design(seed=1, s_run=2.0, s_pass=1.5, s_white=0.5):
+    rng = np.random.default_rng(seed)
+    run = np.repeat(np.arange(R), 2 * M)
+    d = np.tile(np.repeat([1.0, -1.0], M), R)
+    pattern = np.array([-2.5, -1.5, -0.5, 0.5, 1.5, 2.5])  # zero mean within a pass
+    w = np.tile(pattern, 2 * R)
+    x_r = np.array([-3.0, 1.0, 4.0, -2.0, 0.0, 2.0, -1.0, 3.0])  # run-level covariate
+    x = x_r[run]
+    X = np.column_stack([np.ones(N), d, x, w])
+    pass_index = run * 2 + (d < 0)
+    y = (1.0 + 0.7 * d + 0.4 * x + 0.3 * w + rng.normal(0, s_run, R)[run]
+         + rng.normal(0, s_pass, P)[pass_index] + rng.normal(0, s_white, N))
+    return X, y, make_groups(d, run + 1), run, d, w, x_r
+
+
+def anova(y, run, d, w, x_r):
+    """The three strata by hand: (MS_run, MS_pass, MS_white) and the stratum OLS estimates."""
+    up = np.array([y[(run == r) & (d > 0)].mean() for r in range(R)])
+    dn = np.array([y[(run == r) & (d < 0)].mean() for r in range(R)])
+    z = (up + dn) / 2.0
+    xc = x_r - x_r.mean()
+    b_x = float(xc @ (z - z.mean()) / (xc @ xc))
+    res_run = z - z.mean() - b_x * xc
+    ms_run = 2 * M * float(res_run @ res_run) / (R - 2)
+    diff = up - dn
+    b_d = diff.mean() / 2.0
+    ms_pass = (M / 2.0) * float(np.sum((diff - diff.mean()) ** 2)) / (R - 1)
+    pass_mean = np.where(d > 0, up[run], dn[run])
+    dev = y - pass_mean
+    b_w = float(w @ dev / (w @ w))
+    res_w = dev - b_w * w
+    ms_white = float(res_w @ res_w) / (N - P - 1)
+    return dict(ms_run=ms_run, ms_pass=ms_pass, ms_white=ms_white, b_x=b_x, b_d=b_d, b_w=b_w,
+                sxx=float(xc @ xc), sww=float(w @ w))
+
+
+def fitted():
+    """Design, fit and ANOVA, computed in each test (not a fixture: mutation testing follows the
+    calls a test makes itself)."""
+    X, y, groups, run, d, w, x_r = design()
+    cross = Cross.build(X, y, groups)
+    vf = reml(cross)
+    return X, y, groups, cross, vf, anova(y, run, d, w, x_r)
+
+
+def test_the_design_is_nested_and_balanced():
+    X, y, groups, *_ = fitted()
+    assert groups.runs == R and groups.passes == P and groups.nested and groups.random
+    np.testing.assert_array_equal(groups.pass_size, np.full(P, M))
+
+
+def test_reml_equals_the_anova_estimates():
+    """s^2 = MS_white, s_p^2 = (MS_pass - MS_white)/m, s_r^2 = (MS_run - MS_pass)/(2m) when all are
+    positive; reml() searches a log grid refined to ~1 %, hence the 3 % tolerance."""
+    *_, vf, a = fitted()
+    assert a["ms_run"] > a["ms_pass"] > a["ms_white"] > 0  # interior: the identity holds
+    assert vf.sigma2 == pytest.approx(a["ms_white"], rel=0.03)
+    assert vf.sigma2 * vf.gp == pytest.approx((a["ms_pass"] - a["ms_white"]) / M, rel=0.03)
+    assert vf.sigma2 * vf.gr == pytest.approx((a["ms_run"] - a["ms_pass"]) / (2 * M), rel=0.03)
+    assert vf.dof == N - 4
+
+
+def test_gls_estimates_and_variances_equal_the_stratum_ones():
+    """beta: the stratum OLS estimates exactly (balanced: GLS = OLS at any variance ratios);
+    var(b_x) = MS_run / (2 m S_xx), var(b_d) = MS_pass / N, var(b_w) = MS_white / S_ww."""
+    *_, vf, a = fitted()
+    assert vf.beta[1] == pytest.approx(a["b_d"], rel=1e-9)
+    assert vf.beta[2] == pytest.approx(a["b_x"], rel=1e-9)
+    assert vf.beta[3] == pytest.approx(a["b_w"], rel=1e-9)
+    assert vf.cov[2, 2] == pytest.approx(a["ms_run"] / (2 * M * a["sxx"]), rel=0.03)
+    assert vf.cov[1, 1] == pytest.approx(a["ms_pass"] / N, rel=0.03)
+    assert vf.cov[3, 3] == pytest.approx(a["ms_white"] / a["sww"], rel=0.03)
+
+
+@pytest.mark.parametrize("column, df", [(2, R - 2), (1, R - 1), (3, N - P - 1)])
+def test_satterthwaite_df_are_the_stratum_df(column, df):
+    """Run-level covariate: R - 2 = 6; direction (pass level): R - 1 = 7; within-pass: N - P - 1 = 79.
+    Off by one is 14-17 % at the first two: the 3 % tolerance (REML grid) tells them apart."""
+    _, _, _, cross, vf, _ = fitted()
+    assert wald(cross, vf, [column]).df == pytest.approx(df, rel=0.03)
+
+
+def test_fai_cornelius_two_columns_in_one_stratum():
+    """Two run-level covariates: both eigen-directions have df R - 3 = 5, and Fai-Cornelius gives
+    E = 2 * 5/3, df = 2E/(E - 2) = 5 again."""
+    X, y, groups, run, d, w, x_r = design(seed=4)
+    x2 = np.array([1.0, -2.0, 0.5, 2.0, -1.5, 0.0, 1.0, -1.0])[run]
+    X2 = np.column_stack([X, x2])
+    cross = Cross.build(X2, y + 0.5 * x2, groups)
+    vf = reml(cross)
+    assert vf.gr > 0 and vf.gp > 0
+    assert wald(cross, vf, [2, 4]).df == pytest.approx(R - 3, rel=0.05)
+    assert wald(cross, vf, [2, 4]).q == 2
+
+
+def test_wald_f_and_p_by_hand():
+    """F = b^2 / var(b) for one column, p = upper F tail with (1, df) (scipy, independently)."""
+    _, _, _, cross, vf, _ = fitted()
+    t = wald(cross, vf, [2])
+    assert t.F == pytest.approx(vf.beta[2] ** 2 / vf.cov[2, 2], rel=1e-9)
+    assert t.p == pytest.approx(stats.f.sf(t.F, 1, t.df), rel=1e-6)
+    # two columns: F = b' C^-1 b / 2
+    t2 = wald(cross, vf, [1, 2])
+    b, c = vf.beta[[1, 2]], vf.cov[np.ix_([1, 2], [1, 2])]
+    assert t2.F == pytest.approx(float(b @ np.linalg.solve(c, b)) / 2, rel=1e-9)
+    assert t2.p == pytest.approx(stats.f.sf(t2.F, 2, t2.df), rel=1e-6)
+
+
+def test_containment_caps_the_satterthwaite_df():
+    _, _, _, cross, vf, _ = fitted()
+    assert wald(cross, vf, [3], containment=12.0).df == pytest.approx(12.0)
+    assert wald(cross, vf, [2], containment=100.0).df == pytest.approx(R - 2, rel=0.03)
+
+
+# --- containment degrees of freedom, by counting ---------------------------------------------------
+
+
+def test_containment_df_of_each_level_by_hand():
+    """Units at the level a column varies at, minus the columns (model and tested) living at that
+    level or above.  The intercept lives at run level (its run means carry all of it):
+    run-level x given the intercept: R - 1 - 1 = 6; given intercept and direction: still 6
+    (direction's run means are zero: it lives at pass level);
+    direction given the intercept: P - 1 - 1 = 14 (the intercept also counts at pass level);
+    within-pass w given intercept, direction, x: N - 4 = 92;
+    two run-level columns: R - 1 - 2 = 5."""
+    X, y, groups, run, *_ = design()
+    one, d, x, w = (X[:, [i]] for i in range(4))
+    assert containment_df(groups, one, x) == R - 2
+    assert containment_df(groups, np.hstack([one, d]), x) == R - 2
+    assert containment_df(groups, one, d) == P - 2
+    assert containment_df(groups, np.hstack([one, d, x]), w) == N - 4
+    x2 = np.array([1.0, -2.0, 0.5, 2.0, -1.5, 0.0, 1.0, -1.0])[run][:, None]
+    assert containment_df(groups, one, np.hstack([x, x2])) == R - 3
+    # no model columns at all: a run-level column has R - 1
+    assert containment_df(groups, np.zeros((N, 0)), x) == R - 1
+
+
+def test_containment_df_without_random_structure_is_n_minus_k():
+    """Passes of two rows carry no run-to-run noise (noise taken as white): df = N - k."""
+    d = np.tile([1.0, 1.0, -1.0, -1.0], 5)
+    run = np.repeat(np.arange(5), 4)
+    groups = make_groups(d, run)
+    assert not groups.random
+    x = np.column_stack([np.ones(20), np.repeat(np.arange(5.0), 4)])
+    assert containment_df(groups, x[:, :1], x[:, 1:]) == 20 - 2
+
+
+def test_containment_df_without_nesting_uses_passes():
+    """No run column: every pass is its own run; a pass-level column has P - 1 - q."""
+    d = np.repeat(np.tile([1.0, -1.0], 5), 4)
+    groups = make_groups(d, None)
+    assert groups.passes == 10 and not groups.nested
+    level = np.repeat(np.arange(10.0), 4)[:, None]
+    assert containment_df(groups, np.ones((40, 1)), level) == 10 - 2
+
+
+def test_a_level_needs_more_than_half_the_sum_of_squares():
+    """A column with 40 % of its sum of squares in run means and the rest within passes is judged
+    within passes (N - k); with 60 % in run means, at run level (R - 2)."""
+    X, y, groups, run, d, w, x_r = design()
+    xs = X[:, 2] / np.linalg.norm(X[:, 2])
+    ws = w / np.linalg.norm(w)
+    for share, want in ((0.4, N - 2), (0.6, R - 2)):
+        col = math.sqrt(share) * xs + math.sqrt(1 - share) * ws
+        assert containment_df(groups, X[:, :1], col[:, None]) == want
+
+
+def test_containment_df_does_not_depend_on_the_columns_scale():
+    """The level of a column is decided by shares of its sum of squares: scaling the column or the
+    model columns by 1e3 or 1e-3 changes nothing."""
+    X, y, groups, run, d, w, x_r = design()
+    xs = X[:, 2] / np.linalg.norm(X[:, 2])
+    ws = w / np.linalg.norm(w)
+    for share, want in ((0.4, N - 2), (0.6, R - 2)):
+        col = math.sqrt(share) * xs + math.sqrt(1 - share) * ws
+        for scale in (1e-3, 1.0, 1e3):
+            assert containment_df(groups, scale * X[:, :1], scale * col[:, None]) == want, (share, scale)
+
+
+def test_contrast_df_without_variance_information():
+    """No variance information (every random component at zero): the fallback df, else n - k."""
+    from wormgear_cli.diagnosis import contrast_df
+
+    _, _, _, cross, vf, _ = fitted()
+    v = np.zeros(cross.k)
+    v[2] = 1.0
+    assert contrast_df(vf, v, None, fallback=7.5) == 7.5
+    assert contrast_df(vf, v, None) == vf.dof == N - 4
+
+
+def test_white_noise_gives_the_residual_df():
+    """No run or pass scatter at all (noise white): REML puts both components at zero, there is no
+    variance information, and every coefficient is judged on n - k = 92 df."""
+    X, _, groups, *_ = design()
+    y = X @ np.array([1.0, 0.5, 0.2, 0.1]) + np.random.default_rng(3).normal(0, 1.0, N)
+    # remove every trace of pass-level scatter: subtract the pass means of the noise
+    noise = y - X @ np.array([1.0, 0.5, 0.2, 0.1])
+    pid = groups.pass_id
+    noise = noise - (np.bincount(pid, noise) / np.bincount(pid))[pid]
+    cross = Cross.build(X, X @ np.array([1.0, 0.5, 0.2, 0.1]) + noise, groups)
+    vf = reml(cross)
+    assert vf.gp == 0.0 and vf.gr == 0.0
+    for column in (1, 2, 3):
+        assert wald(cross, vf, [column]).df == N - 4
+    assert wald(cross, vf, [1, 2]).df == N - 4
