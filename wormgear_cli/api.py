@@ -18,8 +18,9 @@ Bad input raises the CLI's errors (:class:`~wormgear_cli.errors.SpecError`,
 :class:`~wormgear_cli.errors.WormgearError`), each with ``.problems``,
 one line per problem.
 
-Importing this module is cheap (numpy and the models load on the first
-call); scipy is loaded only by :func:`diagnose` and :func:`tolerance`.
+Importing this module loads numpy (for :class:`AngleArray`) but no model;
+the models load on the first call, scipy only in :func:`diagnose` and
+:func:`tolerance`.
 Documented with examples in docs/api.md.
 """
 
