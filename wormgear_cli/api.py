@@ -50,6 +50,12 @@ PathLike = Union[str, "os.PathLike[str]"]
 # wormgear_cli.reports.sweep.ratio_distance_json with the same arguments).
 
 
+def _analyze_report(spec, core, unit) -> dict:
+    """The JSON document of ``wormgear analyze`` (after the h-budget merge the command adds the
+    budget and ``values_used``: call the one core function that assembles all three)."""
+    return core.report(unit)
+
+
 def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate`` (dense scan)."""
     from wormgear_cli.cli.simulate import _simulate_dense
@@ -178,10 +184,11 @@ class Analysis:
     ratios: dict
     metrics: dict
     core: object = field(repr=False, compare=False)
+    spec: object = field(repr=False, compare=False, default=None)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear analyze --format json --unit UNIT``."""
-        return _plain(self.core.report(unit))
+        return _plain(_analyze_report(self.spec, self.core, unit))
 
 
 def analyze(spec) -> Analysis:
@@ -209,7 +216,8 @@ def analyze(spec) -> Analysis:
     """
     from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze as run
 
-    core = run(_spec(spec))
+    spec = _spec(spec)
+    core = run(spec)
     a, i = {k: Angle(v) for k, v in core.angles.items()}, core.info
     rad = core.report("rad")  # the CLI's document in radians: one source for the structure
     gear, worm = rad["stages"]["gear"], rad["stages"]["worm"]
@@ -232,6 +240,7 @@ def analyze(spec) -> Analysis:
         ratios=dict(rad["ratios"]),
         metrics=metrics,
         core=core,
+        spec=spec,
     )
 
 
