@@ -99,10 +99,16 @@ def test_analyze_metrics_need_no_unit_and_match_the_csv(runner):
         assert r.metrics[c] == pytest.approx(float(row[c]), rel=1e-12)
 
 
-def test_simulate_matches_cli(runner):
-    s = wg.simulate(MCH50, points=360, revs=2.0, temperature_c=30.0, load_nm=5.0, phases="aligned-error")
+@pytest.mark.parametrize("phases, effects, option", [
+    ("aligned-error", None, []),
+    ("spec", {"thermal_backlash": {"centre_distance_um_per_K": -0.3}},
+     ["-e", "thermal_backlash:centre_distance_um_per_K=-0.3"]),
+    ("aligned-reversal", {"thermal_backlash": {}}, ["-e", "thermal_backlash"]),
+])
+def test_simulate_matches_cli(runner, phases, effects, option):
+    s = wg.simulate(MCH50, points=360, revs=2.0, temperature_c=30.0, load_nm=5.0, phases=phases, effects=effects)
     doc = cli_json(runner, "simulate", MCH50, "--points", "360", "--revs", "2", "--temperature-C", "30",
-                   "--load-Nm", "5", "--phases", "aligned-error", "--format", "json", "--unit", "arcmin")
+                   "--load-Nm", "5", "--phases", phases, *option, "--format", "json", "--unit", "arcmin")
     assert s.to_dict("arcmin") == doc
     np.testing.assert_array_equal(s.angle_deg, doc["curve"]["angle_deg"])
     np.testing.assert_allclose(s.forward.arcmin, doc["curve"]["forward"], rtol=1e-13, atol=1e-15)

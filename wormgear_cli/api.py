@@ -378,9 +378,20 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
         return SimulationAt(spec.drive.name, c["angle_deg"], c["direction"], AngleArray(c["simulated"]),
                             None if c["measured"] is None else AngleArray(c["measured"]), args)
     args = (spec, int(points), float(revs), float(temperature_c), float(load_nm), phases, eff)
-    _, c = _simulate_report(*args[:3], "rad", *args[3:])
-    f, r = c["forward"], c["reverse"]
-    return Simulation(spec.drive.name, c["angle_deg"], AngleArray(f), AngleArray(r), AngleArray(0.5 * (f + r)),
+    # the curves straight from the core model (the report builder would also format the whole
+    # curve as text, 20x the cost); to_dict() asks the report builder, and tests/test_api.py
+    # checks that both give the same curve
+    import numpy as np
+
+    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.simulation import aligned_phases, simulate as run
+
+    phase_map = None if phases == "spec" else aligned_phases(spec, "error" if phases == "aligned-error"
+                                                             else "reversal")
+    angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
+    theta = np.radians(angle_deg)
+    f, r = (run(spec, Signals.make(theta, d, args[4], args[3], 0.0), phase_map, effects=eff) for d in (1.0, -1.0))
+    return Simulation(spec.drive.name, angle_deg, AngleArray(f), AngleArray(r), AngleArray(0.5 * (f + r)),
                       AngleArray(r - f), args)
 
 
