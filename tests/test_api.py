@@ -257,6 +257,14 @@ def test_tolerance_matches_cli(runner, unit):
     assert t.yields == doc["yield"]
 
 
+def test_tolerance_allocation_matches_cli(runner):
+    t = wg.tolerance(MCH50, samples=300, seed=2, metrics="paper", target_yield=0.999)
+    doc = cli_json(runner, "tolerance", MCH50, "-n", "300", "--seed", "2", "--metrics", "paper",
+                   "--target-yield", "0.999", "--format", "json")
+    assert t.to_dict() == doc
+    assert t.allocation is not None and t.allocation == doc["allocation"]
+
+
 def test_tolerance_target_yield_without_limits(tmp_path):
     text = MCH50.read_text(encoding="utf-8")
     assert "[requirements]" in text

@@ -830,6 +830,7 @@ def _tolerance_doc(spec, options, target_yield):
     summarize): see the report to the lead, this sequence belongs in the tolerance package."""
     from dataclasses import replace
 
+    from wormgear_cli.cli.tolerance import ALLOCATION_SAMPLES  # to move into the core with this sequence
     from wormgear_cli.errors import UsageError
     from wormgear_cli.tolerance import engine, report
 
@@ -840,7 +841,7 @@ def _tolerance_doc(spec, options, target_yield):
     if target is not None and engine.metrics_for_limits(spec) is not None:
         from wormgear_cli.tolerance.allocation import allocate
 
-        allocation = allocate(spec, replace(options, samples=min(options.samples, 100_000)), float(target))
+        allocation = allocate(spec, replace(options, samples=min(options.samples, ALLOCATION_SAMPLES)), float(target))
     elif target_yield is not None:
         raise UsageError("target_yield needs a limit in [requirements] (max_transmission_error_arcsec or "
                          "max_backlash_arcsec) to count the yield against")
