@@ -69,22 +69,44 @@ def geometry(spec):
     )
 
 
-def deflections(spec, gear_force=None, worm_force=None) -> Deflections:
+def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=False) -> Deflections:
     """delta1 and delta2 [mm] from the spec's loads and its selected stiffness model.
 
     ``gear_force``/``worm_force`` override the spec's normal forces [N]
     (arrays allowed; used by sweeps that hold torque instead of force).
+    ``linear_at_spec_load``: evaluate ISO 6336-1's low-load reduction of c'
+    at the spec's own loads and keep it fixed, so the deflection is linear in
+    the given forces (the compliance about the operating point; a spec without
+    load uses the unreduced c').  Otherwise c' follows the given forces.
     """
     st, mat = spec.stiffness, spec.materials
     f1 = spec.loads.gear_normal_force if gear_force is None else gear_force
     f2 = spec.loads.worm_normal_force if worm_force is None else worm_force
     e_gear = mat.gear_elastic_modulus  # both spur gears share one material
     e_worm = deformation.combined_modulus(mat.worm_elastic_modulus, mat.wheel_elastic_modulus)
-    d1, d2 = _DEFLECTION_ADAPTERS[st.model](spec, f1, f2, e_gear, e_worm)
+    d1, d2 = _DEFLECTION_ADAPTERS[st.model](spec, f1, f2, e_gear, e_worm, linear_at_spec_load)
     return Deflections(float(d1) if np.ndim(d1) == 0 else d1, float(d2) if np.ndim(d2) == 0 else d2, st.model)
 
 
-def _empirical(spec, f1, f2, e_gear, e_worm):
+def gear_tangential_force(spec, normal_force):
+    """F_t = F_N cos(alpha) [N] of the spur mesh."""
+    return normal_force * math.cos(spec.gear_pair.pressure_angle)
+
+
+def worm_tangential_force(spec, normal_force):
+    """F_t = F_N cos(alpha_n) cos(lambda) [N] at the wheel (transverse, wheel plane)."""
+    wp = spec.worm_pair
+    return normal_force * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle)
+
+
+def line_loads(spec) -> tuple[float, float]:
+    """F_t K_A / b [N/mm] of the spur and the worm mesh at the spec's loads (ISO 6336-1)."""
+    ka = spec.stiffness.iso_ka
+    return (gear_tangential_force(spec, spec.loads.gear_normal_force) * ka / spec.gear_pair.face_width,
+            worm_tangential_force(spec, spec.loads.worm_normal_force) * ka / spec.worm_pair.face_width)
+
+
+def _empirical(spec, f1, f2, e_gear, e_worm, linear_at_spec_load=False):
     """The paper's empirical form for both meshes, with the spec's constants."""
     st = spec.stiffness
     const = (st.contact_ratio, st.empirical_lambda2, st.empirical_a1, st.empirical_b, st.empirical_c)
@@ -92,19 +114,41 @@ def _empirical(spec, f1, f2, e_gear, e_worm):
             deformation.empirical_deflection(f2, e_worm, spec.worm_pair.face_width, *const))
 
 
-def _iso6336(spec, f1, f2, e_gear, e_worm):
+def _iso6336(spec, f1, f2, e_gear, e_worm, linear_at_spec_load=False):
     """ISO 6336-1 single stiffness for the spur mesh; for the worm mesh the wheel
-    (z3 / cos^3 lambda virtual teeth) against a rack, scaled by the pair's modulus."""
+    (z3 / cos^3 lambda virtual teeth) against a rack, scaled by the pair's modulus.
+
+    Below a line load F_t K_A / b of 100 N/mm c' is scaled by ((F_t K_A / b)/100)^0.25
+    (ISO 6336-1:2006 clause 9, method B; :func:`deformation.iso6336_low_load_factor`)."""
     gp, wp, st = spec.gear_pair, spec.worm_pair, spec.stiffness
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     c_gear = deformation.iso6336_single_stiffness(
         deformation.iso6336_theoretical_stiffness(z2, z1), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_gear)
-    d1 = deformation.iso6336_deflection(f1 * math.cos(gp.pressure_angle), gp.face_width, c_gear)
     zn_wheel = wp.wheel.teeth / math.cos(wp.lead_angle) ** 3
     c_worm = deformation.iso6336_single_stiffness(
         deformation.iso6336_theoretical_stiffness(np.inf, zn_wheel), st.iso_cm, st.iso_cr, st.iso_cb, 0.0, e_worm)
-    ft2 = f2 * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle)
-    return d1, deformation.iso6336_deflection(ft2, wp.face_width, c_worm)
+    ft1, ft2 = gear_tangential_force(spec, f1), worm_tangential_force(spec, f2)
+    if linear_at_spec_load:
+        k1, k2 = (float(deformation.iso6336_low_load_factor(w)) for w in line_loads(spec))
+        k1, k2 = (k if k > 0.0 else 1.0 for k in (k1, k2))
+        return (deformation.iso6336_deflection(ft1, gp.face_width, c_gear * k1),
+                deformation.iso6336_deflection(ft2, wp.face_width, c_worm * k2))
+    return (deformation.iso6336_loaded_deflection(ft1, gp.face_width, c_gear, st.iso_ka),
+            deformation.iso6336_loaded_deflection(ft2, wp.face_width, c_worm, st.iso_ka))
+
+
+def gear_eccentricity(spec) -> float:
+    """The gear-stage eccentricity Delta e [mm] the chosen kinematics uses.
+
+    ``paper``: the spec's ``assembly.gear_eccentricity_mm`` (which defaults to the
+    centre-distance error, as the paper reads Table 1).  ``involute``: only an
+    eccentricity written in the spec; a centre-distance error is static and gives
+    backlash, not TE, so it does not default into the eccentricity."""
+    if spec.gear_pair.kinematics == "paper":
+        return spec.assembly.gear_eccentricity
+    from wormgear_cli.spec import value_origin
+
+    return spec.assembly.gear_eccentricity if value_origin(spec, "assembly.gear_eccentricity_mm") == "spec" else 0.0
 
 
 #: deflection model name (``[stiffness] model``, see models.deformation.DEFORMATION_MODELS) -> spec adapter
@@ -147,7 +191,10 @@ class Analysis:
                     "backlash_parts": {
                         "eccentricity": a["gear_backlash_eccentricity"],
                         "deformation": a["gear_backlash_deformation"],
+                        "thickness": a["gear_backlash_thickness"],
                     },
+                    "kinematics": i["kinematics"],
+                    "line_load_N_per_mm": i["gear_line_load_N_per_mm"],
                     "phi_at_max_deg": i["gear_te_phi_deg"],
                     "load_share_pct": i["gear_load_share_pct"],
                     "deflection_um": i["gear_deflection_um"],
@@ -174,6 +221,7 @@ class Analysis:
                         "lower_bound": a["worm_backlash"] - 2.0 * a["worm_backlash_envelope"],
                     },
                     "deflection_um": i["worm_deflection_um"],
+                    "line_load_N_per_mm": i["worm_line_load_N_per_mm"],
                     "contribution": {
                         "transmission_error": a["worm_transmission_error"] / i["gear_ratio"],
                         "backlash": a["worm_backlash"] / i["gear_ratio"],
@@ -200,17 +248,27 @@ def analyze(spec) -> Analysis:
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     r_gear, r_pinion = gp.module * z1 / 2.0, gp.module * z2 / 2.0
     i_c = z1 / z2
-    de, alpha = asm.gear_eccentricity, gp.pressure_angle
+    de, alpha = gear_eccentricity(spec), gp.pressure_angle
     defl = deflections(spec)
 
     # --- gear stage -------------------------------------------------------------
-    _, phi_star = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, defl.gear)
-    te_kin_only, _ = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, 0.0)
-    te_kin_part = gear.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
-    te_def_part = gear.gear_deformation_te(phi_star, r_pinion, r_gear, de, alpha, defl.gear)
+    bl_thk = 0.0
+    if gp.kinematics == "paper":
+        _, phi_star = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, defl.gear)
+        te_kin_only, _ = gear.gear_te_max_fast(r_pinion, r_gear, de, alpha, 0.0)
+        te_kin_part = gear.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
+        te_def_part = gear.gear_deformation_te(phi_star, r_pinion, r_gear, de, alpha, defl.gear)
+        bl = gear.gear_backlash_max(gp.module, z1, de, alpha, defl.gear)
+        bl_def = gear.pitch_arc_to_angle(2.0 * defl.gear, gp.module, z1)
+    else:
+        inv = gear.involute_stage(r_gear, alpha, de, asm.gear_centre_distance_error, defl.gear,
+                                  gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
+        phi_star = 0.5 * np.pi  # e sin(phi) peaks at a quarter turn of the pinion
+        te_kin_only = te_kin_part = inv.te_eccentricity
+        te_def_part = inv.te_deformation
+        bl = inv.backlash
+        bl_def, bl_thk = inv.backlash_deformation, inv.backlash_thickness
     te_max = te_kin_part + te_def_part
-    bl = gear.gear_backlash_max(gp.module, z1, de, alpha, defl.gear)
-    bl_def = gear.pitch_arc_to_angle(2.0 * defl.gear, gp.module, z1)
 
     # --- worm stage -------------------------------------------------------------
     lam, a2 = wp.lead_angle, wp.transverse_pressure_angle
@@ -241,8 +299,9 @@ def analyze(spec) -> Analysis:
         "total_backlash": float(total_bl),
         "gear_te_eccentricity": float(te_kin_part),
         "gear_te_deformation": float(te_def_part),
-        "gear_backlash_eccentricity": float(bl - bl_def),
+        "gear_backlash_eccentricity": float(bl - bl_def - bl_thk),
         "gear_backlash_deformation": float(bl_def),
+        "gear_backlash_thickness": float(bl_thk),
         "worm_te_deformation": arc(defl.worm),
         "worm_te_envelope": arc(h_te),
         "worm_backlash_deformation": arc(j_def),
@@ -255,6 +314,9 @@ def analyze(spec) -> Analysis:
         "worm_ratio": z3 / wp.worm.starts,
         "total_ratio": i_c * z3 / wp.worm.starts,
         "deflection_model": defl.model,
+        "kinematics": gp.kinematics,
+        "gear_line_load_N_per_mm": line_loads(spec)[0],
+        "worm_line_load_N_per_mm": line_loads(spec)[1],
         "gear_te_phi_deg": float(np.degrees(phi_star)),
         # the paper's "load adds ~0.11 %": increase of the maximum caused by the deflection
         # (undefined, None, when there is no eccentric part to increase: Delta e = 0)

@@ -193,6 +193,31 @@ def _remember_input(path: Path) -> None:
 # --- what an output path is -------------------------------------------------------------
 
 
+def refuse_same_outputs(outputs) -> None:
+    """The one check that a run's outputs name different files.
+
+    Parameters
+    ----------
+    outputs : iterable of (path or None, option name)
+        The outputs named by the user, e.g. ``[(output, "-o"), (plot, "--plot")]``; None and
+        ``-`` (stdout) are skipped.
+
+    Raises
+    ------
+    UsageError
+        Two options name the same file (same path, or the same file through a link).
+    """
+    named = [(Path(p), opt) for p, opt in outputs if p is not None and str(p) != "-"]
+    for i, (a, opt_a) in enumerate(named):
+        for b, opt_b in named[i + 1:]:
+            try:
+                same = _same_file(a, b) or a.resolve() == b.resolve()
+            except OSError:
+                same = False
+            if same:
+                raise UsageError(f"{b}: {opt_a} and {opt_b} name the same file")
+
+
 def check_output_path(path: str | Path | None, option: str = "-o") -> None:
     """Refuse early (before any work) an output path that can never be written.
 
@@ -376,6 +401,7 @@ class _Transaction:
         self.staged: list[tuple[str, Path]] = []  # (temporary file, destination)
         self.direct: list[tuple[Path, bytes]] = []  # special files (FIFO, device): written at commit
         self.read: list[Path] = []  # input files read in this run (never overwritten)
+        self.committed: list = []  # callbacks run once every output is in place
 
     def commit(self) -> None:
         """Write the special files, then rename the staged files into place.  A failure
@@ -398,12 +424,25 @@ class _Transaction:
                 raise UsageError(f"{dest}: cannot write ({exc.strerror})") from None
             raise
         self.staged, self.direct = [], []
+        callbacks, self.committed = self.committed, []
+        for callback in callbacks:
+            callback()
 
     def discard(self) -> None:
         with signals_deferred():
             for tmp, _ in self.staged:
                 _unlink_quietly(tmp)
-            self.staged, self.direct = [], []
+            self.staged, self.direct, self.committed = [], [], []
+
+
+def after_commit(callback) -> None:
+    """Run ``callback()`` once the run's outputs are all in place (at once outside an
+    :func:`output_transaction`; never when the run fails).  "wrote FILE" messages use it, so
+    a run that fails or is stopped never claims a file it did not leave."""
+    if _CURRENT is None:
+        callback()
+    else:
+        _CURRENT.committed.append(callback)
 
 
 _CURRENT: _Transaction | None = None

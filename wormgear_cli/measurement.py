@@ -196,6 +196,18 @@ def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: in
     return read_text_file(path, expected, DataError, encoding="utf-8-sig", max_bytes=limit)
 
 
+def time_restarts(time) -> np.ndarray | None:
+    """(N,) bool, True where ``time`` [s] goes backwards from the previous row (sessions joined
+    end to end, each restarting its clock): the start of a new pass.  None without a time column.
+    The one definition, used by the reader (derived runs) and by diagnose's run structure."""
+    if time is None:
+        return None
+    t = np.asarray(time, dtype=float)
+    out = np.zeros(t.shape[0], dtype=bool)
+    out[1:] = t[1:] < t[:-1]
+    return out
+
+
 def read_measurement(path: str | Path, require_error: bool = True, options: ReadOptions | None = None) -> Measurement:
     """Read and validate a measurement file (see the module doc).
 
@@ -643,7 +655,7 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
     derived = set()
     run = col("run").astype(np.int64)
     if "run" not in values and "time_s" in values and n > 1:
-        back = np.flatnonzero(np.diff(values["time_s"]) < 0)
+        back = np.flatnonzero(time_restarts(values["time_s"])) - 1
         if back.size:
             run = np.zeros(n, dtype=np.int64)
             run[back + 1] = 1

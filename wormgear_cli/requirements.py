@@ -14,6 +14,10 @@ REQUIREMENT_METRICS = {
     "max_gear_backlash": "gear_backlash",
     "max_worm_transmission_error": "worm_transmission_error",
     "max_worm_backlash": "worm_backlash",
+    # the full budget's TE at the output under each combination rule (wormgear_cli.budget.Rule)
+    "max_budget_linear": "budget:linear",
+    "max_budget_rss": "budget:rss",
+    "max_budget_peak": "budget:peak",
 }
 
 
@@ -33,6 +37,7 @@ class Verdict:
 def evaluate(spec, analysis) -> list[Verdict]:
     """Every requirement present in ``spec`` with its verdict (in TOML order of the schema)."""
     out = []
+    full = None
     for attr, metric in REQUIREMENT_METRICS.items():
         limit = getattr(spec.requirements, attr)
         if limit is None:
@@ -40,5 +45,13 @@ def evaluate(spec, analysis) -> list[Verdict]:
         key = f"{attr}_arcsec"
         written = spec.raw.get("requirements", {}).get(key)  # echo the limit exactly as the user wrote it
         limit_arcsec = float(written) if written is not None else float(to_unit(limit, "arcsec"))
-        out.append(Verdict(f"requirements.{key}", limit_arcsec, float(to_unit(analysis.angles[metric], "arcsec"))))
+        if metric.startswith("budget:"):
+            if full is None:
+                from wormgear_cli.budget import budget
+
+                full = budget(spec, analysis)
+            value = full.total(metric.split(":", 1)[1])
+        else:
+            value = analysis.angles[metric]
+        out.append(Verdict(f"requirements.{key}", limit_arcsec, float(to_unit(value, "arcsec"))))
     return out

@@ -19,6 +19,13 @@ The simulated error is
     eccentricity/clearance sqrt(S2^2+C2^2)/cos(alpha_2) at the wheel order
     i_c.  Each is a sinusoid of amplitude (value / 2) on the wheel pitch
     circle, i.e. the paper's +/- 1/2 envelope term by term, reduced by i_c.
+  - the full budget's pitch deviations (only when the spec gives them a size;
+    docs/budget.md): cumulative pitch F_p of the output gear (order 1), of the
+    pinion and of the wheel (order i_c), each a sinusoid of amplitude F_p/(2r) at
+    its shaft reduced by the ratios; single pitch f_p of either spur gear at the
+    mesh order z1.  With ``gear_pair.kinematics = "involute"`` the gear
+    eccentricity is the sinusoid e/r_b1 sin(i_c theta + psi) instead of the
+    paper's curve, and e is only an eccentricity the spec states.
 * lost motion (reversal), never negative (each part is clipped at 0):
   - gear: Delta e tan(alpha) (1 + sin phi) / R2, between 0 and the paper's
     eccentric Delta phi_ch part;
@@ -65,7 +72,7 @@ from typing import Callable
 
 import numpy as np
 
-from wormgear_cli.analysis import deflections, geometry
+from wormgear_cli.analysis import deflections, gear_eccentricity, geometry
 from wormgear_cli.models import gear as gear_model
 from wormgear_cli.models import worm as worm_model
 from wormgear_cli.models.effects import EFFECTS, DriveGeometry, Signals
@@ -89,45 +96,107 @@ class Source:
     phase: float
     curve: Callable
     lost_motion: Callable | None = None
+    #: ``"gear"`` or ``"worm"``: the stage the source belongs to
+    stage: str = "gear"
+    #: ``"shaft"`` (once per turn of a shaft) or ``"mesh"`` (tooth-mesh order)
+    kind: str = "shaft"
+    #: spec keys its size comes from (for the budget's origin: spec / grade / default)
+    size_paths: tuple = ()
+    #: largest value of ``curve`` over a turn [rad] (the amplitude for a sinusoid)
+    peak: float | None = None
 
 
 def _sine(amplitude, order):
     return lambda theta, phase: amplitude * np.sin(order * theta + phase)
 
 
-def periodic_sources(spec) -> list[Source]:
-    """The spec's periodic sources, in a fixed order (zero-amplitude ones included)."""
+#: the full budget's sources beyond the paper's five (docs/budget.md)
+BUDGET_SOURCES = ("output_gear_cumulative_pitch", "pinion_cumulative_pitch", "wheel_cumulative_pitch",
+                  "output_gear_single_pitch", "pinion_single_pitch")
+
+
+def periodic_sources(spec, all_budget_sources: bool = False) -> list[Source]:
+    """The spec's periodic sources, in a fixed order.
+
+    The paper's five sources are always listed (zero-amplitude ones included); the
+    budget's pitch-deviation sources (:data:`BUDGET_SOURCES`) only when the spec gives
+    them a size, or always with ``all_budget_sources`` (the budget lists every line).
+    So a spec without pitch deviations simulates, synthesises and diagnoses exactly
+    as before they existed."""
     g = geometry(spec)
     gp, wp, asm = spec.gear_pair, spec.worm_pair, spec.assembly
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     r1, r2 = gp.module * z2 / 2.0, gp.module * z1 / 2.0  # pinion R1, gear R2 (paper's notation)
-    de, alpha, i_c = asm.gear_eccentricity, gp.pressure_angle, g.gear_ratio
+    de, alpha, i_c = gear_eccentricity(spec), gp.pressure_angle, g.gear_ratio
     to_out = 1.0 / (g.wheel_pitch_radius * i_c)  # mm of arc on the wheel pitch circle -> rad at the output
+    ecc_paths = ("assembly.gear_eccentricity_mm", "assembly.gear_centre_distance_error_mm")
 
-    def gear_curve(theta, phase):
-        return gear_model.gear_kinematic_te(i_c * theta + phase, r1, r2, de, alpha)
+    if gp.kinematics == "paper":
+        def gear_curve(theta, phase):
+            return gear_model.gear_kinematic_te(i_c * theta + phase, r1, r2, de, alpha)
 
-    def gear_lost(theta, phase):
-        return de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase)) / r2
+        def gear_lost(theta, phase):
+            return de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase)) / r2
 
-    gear_amp = _first_harmonic(lambda phi: gear_model.gear_kinematic_te(phi, r1, r2, de, alpha))
+        gear_amp = _first_harmonic(lambda phi: gear_model.gear_kinematic_te(phi, r1, r2, de, alpha))
+        gear_peak = float(gear_model.gear_te_max(r1, r2, de, alpha, 0.0)[0])
+    else:
+        # involute: e/r_b at the pinion's order, i.e. e/r_b1 at the output (models.gear.involute_stage);
+        # the static part of the lost motion (centre distance, thickness allowances) is constant
+        gear_amp = gear_peak = de / g.output_base_radius
+        gear_curve = _sine(gear_amp, i_c)
+        static = (2.0 * asm.gear_centre_distance_error * math.tan(alpha)
+                  + gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
+        ecc_paths = ("assembly.gear_eccentricity_mm",)
+
+        def gear_lost(theta, phase):
+            return (static + de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase))) / r2
 
     worm_ecc = math.hypot(asm.worm_eccentricity, asm.worm_bearing_clearance) / math.cos(wp.lead_angle)
     wheel_ecc = math.hypot(asm.wheel_eccentricity, asm.wheel_bearing_clearance) / math.cos(
         wp.transverse_pressure_angle)
-    return [
+    og, pn, wh = gp.output_gear, gp.pinion, wp.wheel
+
+    def sine_source(name, phase_path, order, amplitude, phase, stage, kind, paths, lost=None):
+        return Source(name, phase_path, order, amplitude, phase, _sine(amplitude, order), lost, stage, kind,
+                      paths, amplitude)
+
+    out = [
         Source("gear_eccentricity", "assembly.gear_eccentricity_phase_deg", i_c, gear_amp,
-               asm.gear_eccentricity_phase, gear_curve, gear_lost),
-        Source("worm_lead_error", "worm_pair.lead_error_phase_deg", g.worm_order, wp.lead_error / 2.0 * to_out,
-               wp.lead_error_phase, _sine(wp.lead_error / 2.0 * to_out, g.worm_order)),
-        Source("worm_eccentricity", "assembly.worm_eccentricity_phase_deg", g.worm_order, worm_ecc / 2.0 * to_out,
-               asm.worm_eccentricity_phase, _sine(worm_ecc / 2.0 * to_out, g.worm_order)),
-        Source("wheel_radial_composite", "worm_pair.wheel.radial_composite_phase_deg", i_c,
-               wp.wheel.radial_composite_error / 2.0 * to_out, wp.wheel.radial_composite_phase,
-               _sine(wp.wheel.radial_composite_error / 2.0 * to_out, i_c), _worm_lost_motion(spec, g)),
-        Source("wheel_eccentricity", "assembly.wheel_eccentricity_phase_deg", i_c, wheel_ecc / 2.0 * to_out,
-               asm.wheel_eccentricity_phase, _sine(wheel_ecc / 2.0 * to_out, i_c)),
+               asm.gear_eccentricity_phase, gear_curve, gear_lost, "gear", "shaft", ecc_paths, gear_peak),
+        sine_source("worm_lead_error", "worm_pair.lead_error_phase_deg", g.worm_order,
+                    wp.lead_error / 2.0 * to_out, wp.lead_error_phase, "worm", "shaft",
+                    ("worm_pair.lead_error_mm",)),
+        sine_source("worm_eccentricity", "assembly.worm_eccentricity_phase_deg", g.worm_order,
+                    worm_ecc / 2.0 * to_out, asm.worm_eccentricity_phase, "worm", "shaft",
+                    ("assembly.worm_eccentricity_mm", "assembly.worm_bearing_clearance_mm")),
+        sine_source("wheel_radial_composite", "worm_pair.wheel.radial_composite_phase_deg", i_c,
+                    wh.radial_composite_error / 2.0 * to_out, wh.radial_composite_phase, "worm", "shaft",
+                    ("worm_pair.wheel.radial_composite_error_mm",), _worm_lost_motion(spec, g)),
+        sine_source("wheel_eccentricity", "assembly.wheel_eccentricity_phase_deg", i_c, wheel_ecc / 2.0 * to_out,
+                    asm.wheel_eccentricity_phase, "worm", "shaft",
+                    ("assembly.wheel_eccentricity_mm", "assembly.wheel_bearing_clearance_mm")),
+        # --- the full budget's sources (docs/budget.md): pitch deviations, each F_p a once-per-turn
+        # TE of peak-to-peak F_p / r (amplitude F_p / (2 r)) at its shaft, reduced by the ratios
+        sine_source("output_gear_cumulative_pitch", "gear_pair.output_gear.cumulative_pitch_phase_deg", 1.0,
+                    og.cumulative_pitch_deviation / (2.0 * r2), og.cumulative_pitch_phase, "gear", "shaft",
+                    ("gear_pair.output_gear.cumulative_pitch_deviation_mm",)),
+        sine_source("pinion_cumulative_pitch", "gear_pair.pinion.cumulative_pitch_phase_deg", i_c,
+                    pn.cumulative_pitch_deviation / (2.0 * r1) / i_c, pn.cumulative_pitch_phase, "gear", "shaft",
+                    ("gear_pair.pinion.cumulative_pitch_deviation_mm",)),
+        sine_source("wheel_cumulative_pitch", "worm_pair.wheel.cumulative_pitch_phase_deg", i_c,
+                    wh.cumulative_pitch_deviation / (2.0 * g.wheel_pitch_radius) / i_c, wh.cumulative_pitch_phase,
+                    "worm", "shaft", ("worm_pair.wheel.cumulative_pitch_deviation_mm",)),
+        # single pitch deviation f_p: a tooth-to-tooth TE of peak-to-peak f_p on that gear's pitch circle,
+        # at the mesh order z1 (both gears: z2 i_c = z1); f_p / (2 r2) = f_p,pinion / (2 R1 i_c) at the output
+        sine_source("output_gear_single_pitch", "gear_pair.output_gear.single_pitch_phase_deg", float(z1),
+                    og.single_pitch_deviation / (2.0 * r2), og.single_pitch_phase, "gear", "mesh",
+                    ("gear_pair.output_gear.single_pitch_deviation_mm",)),
+        sine_source("pinion_single_pitch", "gear_pair.pinion.single_pitch_phase_deg", float(z1),
+                    pn.single_pitch_deviation / (2.0 * r1) / i_c, pn.single_pitch_phase, "gear", "mesh",
+                    ("gear_pair.pinion.single_pitch_deviation_mm",)),
     ]
+    return [src for src in out if all_budget_sources or src.name not in BUDGET_SOURCES or src.amplitude != 0.0]
 
 
 def _first_harmonic(curve, samples: int = 256) -> float:
@@ -164,6 +233,8 @@ def _worm_lost_motion(spec, g: DriveGeometry):
 def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
     """Source phases [rad] that make the sources peak together at theta = 0.
 
+    (The budget's pitch-deviation sources are sinusoids: phase 90 deg.)
+
     ``quantity="error"``: every sinusoidal source at phase 90 deg and the
     gear eccentricity at the pinion angle of its kinematic maximum, so the
     common mode reaches the linear sum of the peaks at theta = 0.
@@ -178,8 +249,9 @@ def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
     if quantity == "error":
         gp = spec.gear_pair
         r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-        _, phi_star = gear_model.gear_te_max(r1, r2, spec.assembly.gear_eccentricity, gp.pressure_angle, 0.0)
-        out["gear_eccentricity"] = float(phi_star)
+        if gp.kinematics == "paper":
+            _, phi_star = gear_model.gear_te_max(r1, r2, gear_eccentricity(spec), gp.pressure_angle, 0.0)
+            out["gear_eccentricity"] = float(phi_star)
     return out
 
 
@@ -198,8 +270,10 @@ def compliance(spec) -> Compliance:
     r2 = gp.module * gp.output_gear.teeth / 2.0
     i_c, r_w = g.gear_ratio, g.wheel_pitch_radius
     spec_defl = deflections(spec)
-    unit_defl = deflections(spec, gear_force=1.0, worm_force=1.0)  # mm per N (both models are linear)
-    gear_angle_per_mm = 1.0 / r2
+    # mm per N about the operating point (ISO 6336-1's c' held at the spec's line load)
+    unit_defl = deflections(spec, gear_force=1.0, worm_force=1.0, linear_at_spec_load=True)
+    # paper: 2 delta1 on the pitch arc (its Delta phi_ch); involute: along the line of action, 1/r_b1
+    gear_angle_per_mm = 1.0 / r2 if gp.kinematics == "paper" else 1.0 / g.output_base_radius
     worm_angle_per_mm = 1.0 / (math.cos(wp.lead_angle) * r_w * i_c)
     lag = spec_defl.gear * gear_angle_per_mm + spec_defl.worm * worm_angle_per_mm
     # external torque T [N m] on the output: gear normal force T/r_b1, worm normal force from the wheel torque

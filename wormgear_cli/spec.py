@@ -128,6 +128,27 @@ def _phase(path, attr, doc):
     return _f(path, attr, "deg", 0.0, doc, lo=-360.0, hi=360.0)
 
 
+#: gear-stage kinematics readings (``gear_pair.kinematics``)
+KINEMATICS = ("paper", "involute")
+
+
+def _gear_grade_fields(section, name):
+    """ISO 1328-1 grade and the pitch deviations it sets (explicit keys win over the grade)."""
+    return (
+        Field(f"{section}.accuracy_grade", "accuracy_grade", "int", "-", "",
+              f"ISO 1328-1:2013 flank tolerance class A of {name}; sets the deviations below (and the "
+              "profile error) unless given explicitly", 1, 11),
+        _f(f"{section}.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation", "mm", "derived",
+           f"cumulative pitch deviation F_p of {name} (default: F_pT of accuracy_grade, else 0)", **TOLERANCE),
+        _f(f"{section}.single_pitch_deviation_mm", "single_pitch_deviation", "mm", "derived",
+           f"single pitch deviation f_p of {name} (default: f_pT of accuracy_grade, else 0)", **TOLERANCE),
+        _phase(f"{section}.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
+               f"phase of the cumulative pitch deviation of {name} (once per turn of its shaft)"),
+        _phase(f"{section}.single_pitch_phase_deg", "single_pitch_phase",
+               f"phase of the single pitch (mesh-order) error of {name}"),
+    )
+
+
 #: The drive-spec schema.  Order = order in the template and the README.
 FIELDS: tuple[Field, ...] = (
     Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
@@ -138,12 +159,19 @@ FIELDS: tuple[Field, ...] = (
        table1="20"),
     _f("gear_pair.face_width_mm", "face_width", "mm", "derived",
        "face width b of the spur mesh (default: 10 x module)", **FACE_WIDTH),
+    Field("gear_pair.kinematics", "kinematics", "str", "", "paper",
+          "gear-stage kinematics: paper (the paper's Delta phi_cc/Delta phi_ch as printed) or involute "
+          "(eccentricity e -> TE e/r_b; centre-distance error -> backlash 2 Delta a tan(alpha), no TE; "
+          "tooth-thickness allowances in the backlash; see docs/budget.md)",
+          choices=KINEMATICS),
     _teeth("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
+    *_gear_grade_fields("gear_pair.output_gear", "gear 1"),
     _tol("gear_pair.output_gear.profile_error_mm", "profile_error",
          "profile error of gear 1 (not used by the paper's gear-stage equations)", "0.007"),
     _tol("gear_pair.output_gear.thickness_deviation_mm", "thickness_deviation",
          "tooth thickness deviation of gear 1 (not used by the paper's gear-stage equations)", "0.055"),
     _teeth("gear_pair.pinion.teeth", "teeth", "teeth z2 of the pinion (gear 2)", "18"),
+    *_gear_grade_fields("gear_pair.pinion", "gear 2"),
     _tol("gear_pair.pinion.profile_error_mm", "profile_error", "profile error of gear 2 (not used by the paper's "
          "gear-stage equations)", "0.008"),
     _tol("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
@@ -174,6 +202,11 @@ FIELDS: tuple[Field, ...] = (
          "0.036"),
     _phase("worm_pair.wheel.radial_composite_phase_deg", "radial_composite_phase",
            "phase of the radial composite error (once per wheel turn)"),
+    _tol("worm_pair.wheel.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation",
+         "cumulative pitch deviation F_p of the wheel (budget source, order i_c; part of what F_i "
+         "measures, so leave 0 unless measured separately)"),
+    _phase("worm_pair.wheel.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
+           "phase of the wheel's cumulative pitch deviation (once per wheel turn)"),
     # --- assembly ----------------------------------------------------------------
     _tol("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
          "centre-distance error of the spur pair", "0.030"),
@@ -204,6 +237,9 @@ FIELDS: tuple[Field, ...] = (
     _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", **FACTOR),
     _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", **FACTOR),
     _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", **FACTOR),
+    _f("stiffness.iso_ka", "iso_ka", "-", 1.0,
+       "ISO 6336 K_A (application factor) in the line load F_t K_A / b that scales c' below 100 N/mm",
+       **FACTOR),
     _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (see README for the calibration)",
        lo=0.0, hi=1000.0),
     _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
@@ -236,6 +272,9 @@ FIELDS: tuple[Field, ...] = (
             ("gear_backlash", "the gear-stage backlash"),
             ("worm_transmission_error", "the worm-stage TE at the wheel"),
             ("worm_backlash", "the worm-stage backlash at the wheel"),
+            ("budget_linear", "the full budget's TE at the output, linear sum of the lines' maxima"),
+            ("budget_rss", "the full budget's TE at the output, static lines + root-sum-square of the periodic"),
+            ("budget_peak", "the full budget's TE at the output, exact peak of the phased curve"),
         )
     ),
     _f("requirements.min_yield", "min_yield", "-", "", "least fraction of built drives meeting every limit "
@@ -385,10 +424,72 @@ def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "driv
             values[f.path] = val
 
     effects = _load_effects(data.get("effects"), problems, source)
+    _apply_grades(values, bad)
 
     if problems:
         raise SpecError(problems)
     return _build(values, effects, source, default_name, data)
+
+
+#: keys a user may reasonably try that no standard here covers -> the message (exit 2)
+_NOT_COVERED = {
+    f"worm_pair.{part}.accuracy_grade": (
+        "worm pairs are not covered by ISO 1328-1/-2 (cylindrical involute gears only) and no public, "
+        "citable worm-gear grade system (DIN 3974) is available here; give the worm pair's tolerances "
+        "explicitly (lead_error_mm, profile_error_mm, radial_composite_error_mm, ...)")
+    for part in ("worm", "wheel")
+}
+
+
+def _apply_grades(values: dict, bad) -> None:
+    """Fill the spur gears' pitch deviations (and profile error) from ``accuracy_grade``
+    where the spec does not give them (ISO 1328-1:2013; explicit keys win).  A gear
+    outside the standard's scope is a problem naming the grade key and the range."""
+    module = values["gear_pair.module_mm"]
+    if module is _MISSING:
+        return
+    face = values["gear_pair.face_width_mm"]
+    face = 10.0 * module if face is _MISSING else face
+    for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
+        grade = values[f"{sec}.accuracy_grade"]
+        if grade is _MISSING or grade is None:
+            continue
+        teeth = values[f"{sec}.teeth"]
+        if teeth is _MISSING:
+            continue
+        from wormgear_cli.models.iso1328 import GradeError, flank_tolerances
+
+        try:
+            tol = flank_tolerances(grade, module, module * teeth, face, teeth)
+        except GradeError as exc:
+            bad(f"{sec}.accuracy_grade", f"{exc}; give the deviations explicitly instead")
+            continue
+        for key, um in (("cumulative_pitch_deviation_mm", tol.F_pT), ("single_pitch_deviation_mm", tol.f_pT),
+                        ("profile_error_mm", tol.F_alphaT)):
+            if values[f"{sec}.{key}"] is _MISSING:
+                values[f"{sec}.{key}"] = um * 1e-3
+
+
+def value_origin(spec: "Spec", path: str) -> str:
+    """Where the value of ``path`` came from: ``"spec"`` (written in the file),
+    ``"grade"`` (derived from the part's ``accuracy_grade``) or ``"default"``."""
+    node: Any = spec.raw
+    for part in path.split("."):
+        if not hasattr(node, "get") or part not in node:
+            node = None
+            break
+        node = node[part]
+    if node is not None:
+        return "spec"
+    section, key = path.rsplit(".", 1)
+    grade_keys = ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm")
+    if key in grade_keys and section in ("gear_pair.output_gear", "gear_pair.pinion"):
+        raw_sec: Any = spec.raw
+        for part in section.split("."):
+            raw_sec = raw_sec.get(part) if hasattr(raw_sec, "get") else None
+        if hasattr(raw_sec, "get") and raw_sec.get("accuracy_grade") is not None:
+            return "grade"
+    return "default"
 
 
 class _Missing:
@@ -496,6 +597,9 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
     for key, value in data.items():
         shown_key = key if key.isprintable() and key.strip() == key and key else _quote(key)
         path = f"{prefix}.{shown_key}" if prefix else shown_key
+        if key not in known and path in _NOT_COVERED:
+            problems.append(f"{source}: {path}: {_NOT_COVERED[path]}")
+            continue
         if key not in known:
             candidates = sorted(known)
             near = difflib.get_close_matches(key, candidates, n=1, cutoff=0.6)
@@ -588,6 +692,9 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
         v["worm_pair.transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
     if v["assembly.gear_eccentricity_mm"] is _MISSING:
         v["assembly.gear_eccentricity_mm"] = v["assembly.gear_centre_distance_error_mm"]
+    for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
+        for key in ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm"):
+            v[f"{sec}.{key}"] = take(f"{sec}.{key}", 0.0)
     if v["stiffness.contact_ratio"] is _MISSING:
         from wormgear_cli.models.deformation import spur_contact_ratio
 

@@ -285,6 +285,16 @@ class RatioDistanceSweep:
         p = np.arange(start, stop, dtype=np.int64)
         return p // self.l_values.size, p % self.l_values.size
 
+    def run_bounds(self, shard: Optional[tuple[int, int]] = None) -> tuple[int, int]:
+        """Point indices [start, stop) of a run (all points, or part K of N for ``shard``).
+
+        Raises UsageError for a snapped grid (``module``) of which no design is left."""
+        start, stop = shard_bounds(self.size, *shard) if shard else (0, self.size)
+        if self.module is not None and shard is None and self.kept_count() == 0:
+            raise UsageError(f"no design left: at --module-mm {self.module:g} every point of the grid has a gear "
+                             f"with fewer than {self.min_teeth} teeth; raise l, or lower --min-pinion-teeth")
+        return start, stop
+
     # -- snapping ----------------------------------------------------------------------------------
 
     def snap(self, i, l):
@@ -448,6 +458,18 @@ class RatioDistanceSweep:
     def gear_te(self, i, l) -> np.ndarray:
         """Gear-stage TE [rad] of the continuous model at arbitrary (i, l)."""
         return self.continuous().evaluate(i, l)["gear_transmission_error"]
+
+
+def ratio_distance_sweep(spec, i_range: Optional[RangeSpec], l_range: Optional[RangeSpec],
+                         hold: Optional[str] = None, module: Optional[float] = None,
+                         min_teeth: Optional[int] = None) -> RatioDistanceSweep:
+    """The (i, l) sweep of ``spec`` over checked ranges; an axis not given is the spec's own
+    value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold`` None means "force"."""
+    gp = spec.gear_pair
+    i_values = i_range.values() if i_range is not None else np.array([gp.output_gear.teeth / gp.pinion.teeth])
+    l_values = l_range.values() if l_range is not None else \
+        np.array([gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2.0])
+    return RatioDistanceSweep(spec, i_values, l_values, hold=hold or "force", module=module, min_teeth=min_teeth)
 
 
 def best_points(data: dict) -> dict:

@@ -48,7 +48,7 @@ DECIMALS = {"angle_deg": 6, "error_arcsec": 4, "load_Nm": 4, "temperature_C": 3,
 
 PLAN_KINDS = ("iso", "dense")
 RUN_NOISE_KINDS = ("offset", "drift")
-TEMPERATURE_KINDS = ("constant", "warmup", "cycle")
+TEMPERATURE_KINDS = ("constant", "warmup", "cycle", "mesh-warmup")
 LOAD_KINDS = ("constant", "steps")
 
 
@@ -62,7 +62,10 @@ class Plan:
     passes per direction); ``revolutions``: output turns spanned [-];
     ``dwell_s``: time per point [s] (None: 10 s for iso, 0.5 s for dense);
     ``jitter``: half-width of the iso target jitter as a fraction of the
-    mean spacing (0 <= jitter < 0.5).
+    mean spacing (0 <= jitter < 0.5); ``cycles``: the block of ``runs`` runs
+    is measured this many times (runs numbered on, 1 .. cycles x runs);
+    ``cycle_gap_s``: time between two cycles [s] (the table keeps running, so
+    the temperature programme goes on; no rows are recorded).
     """
 
     kind: str = "iso"
@@ -72,6 +75,8 @@ class Plan:
     revolutions: float = 1.0
     dwell_s: float | None = None
     jitter: float = 0.25
+    cycles: int = 1
+    cycle_gap_s: float = 0.0
 
     @property
     def dwell(self) -> float:
@@ -94,6 +99,10 @@ class Plan:
             raise UsageError(f"--dwell-s: expected a number >= 0 [s], got {self.dwell_s:g}")
         if not (0.0 <= self.jitter < 0.5):
             raise UsageError(f"--jitter: expected a number in [0, 0.5), got {self.jitter:g}")
+        if not 1 <= self.cycles <= 1000:
+            raise UsageError(f"--cycles: expected an integer in [1, 1000], got {self.cycles}")
+        if not (math.isfinite(self.cycle_gap_s) and 0.0 <= self.cycle_gap_s <= 1e7):
+            raise UsageError(f"--cycle-gap-s: expected a number in [0, 1e7] [s], got {self.cycle_gap_s:g}")
 
 
 @dataclass(frozen=True)
@@ -127,7 +136,12 @@ class Programme:
     T(t) = T0 + (T1 - T0)(1 - exp(-t / tau)); ``cycle`` (T0, T1, tau_s
     [, t_switch_s]): the warm-up until t_switch (default: half the test),
     then cooling back towards T0 with the same tau,
-    T(t) = T0 + (T(t_switch) - T0) exp(-(t - t_switch) / tau).
+    T(t) = T0 + (T(t_switch) - T0) exp(-(t - t_switch) / tau);
+    ``mesh-warmup`` (T0, T1, tau_s, share, lag_s): the recorded temperature
+    is the worm mesh's (sensor at the mesh / in its oil) and warms as
+    ``warmup``; the housing rises towards ``share`` of the mesh's rise,
+    lagging it by a first-order lag ``lag_s``
+    (:func:`wormgear_cli.models.thermal.mesh_housing_warmup`).
     Load kinds: ``constant`` (L); ``steps`` (L1, L2, ...): run j (1-based)
     at L[(j - 1) mod n].
     """
@@ -145,12 +159,21 @@ class Programme:
             return levels[(run - 1) % len(levels)]
         t0, t1, tau = v[0], v[1], v[2]
         warm = t0 + (t1 - t0) * -np.expm1(-t / tau)
-        if self.kind == "warmup":
+        if self.kind in ("warmup", "mesh-warmup"):
             return warm
         switch = v[3] if len(v) > 3 else 0.5 * duration
         at_switch = t0 + (t1 - t0) * -math.expm1(-switch / tau)
         cool = t0 + (at_switch - t0) * np.exp(-np.maximum(t - switch, 0.0) / tau)
         return np.where(t <= switch, warm, cool)
+
+    def housing(self, t: np.ndarray) -> np.ndarray | None:
+        """The housing temperature [degC] at times ``t`` [s] of a ``mesh-warmup``, else None."""
+        if self.kind != "mesh-warmup":
+            return None
+        from wormgear_cli.models.thermal import mesh_housing_warmup
+
+        t0, t1, tau, share, lag = self.values
+        return t0 + mesh_housing_warmup(t, t1 - t0, tau, share, lag)[1]
 
     def describe(self, unit: str) -> str:
         v = self.values
@@ -158,6 +181,8 @@ class Programme:
             return f"constant {v[0]:g} {unit}"
         if self.kind == "steps":
             return "steps per run: " + ", ".join(f"{x:g}" for x in v) + f" {unit}"
+        if self.kind == "mesh-warmup":  # the housing is not recorded: say where the sensor is, nothing more
+            return f"warmup {v[0]:g} -> {v[1]:g} {unit}, tau {v[2]:g} s (sensor at the worm mesh)"
         text = f"{self.kind} {v[0]:g} -> {v[1]:g} {unit}, tau {v[2]:g} s"
         if self.kind == "cycle":
             text += f", cooling from t = {v[3]:g} s" if len(v) > 3 else ", cooling from half-time"
@@ -165,7 +190,8 @@ class Programme:
 
     def to_dict(self) -> dict:
         names = {"constant": ("value",), "warmup": ("start", "end", "tau_s"),
-                 "cycle": ("start", "end", "tau_s", "switch_s")}.get(self.kind)
+                 "cycle": ("start", "end", "tau_s", "switch_s"),
+                 "mesh-warmup": ("start", "end", "tau_s", "housing_share", "housing_lag_s")}.get(self.kind)
         if names is None:
             return {"kind": self.kind, "levels": list(self.values)}
         return {"kind": self.kind, **{n: x for n, x in zip(names, self.values)}}
@@ -188,12 +214,14 @@ def _numbers(text: str, option: str, parts: list[str]) -> tuple[float, ...]:
 
 
 def parse_temperature(text: str, option: str = "--temperature") -> Programme:
-    """``constant:T`` | ``warmup:T0:T1:TAU_s`` | ``cycle:T0:T1:TAU_s[:SWITCH_s]`` -> Programme."""
+    """``constant:T`` | ``warmup:T0:T1:TAU_s`` | ``cycle:T0:T1:TAU_s[:SWITCH_s]`` |
+    ``mesh-warmup:T0:T1:TAU_s:SHARE:LAG_s`` -> Programme."""
     kind, *parts = text.strip().split(":")
-    forms = "constant:T, warmup:START:END:TAU_s or cycle:START:PEAK:TAU_s[:SWITCH_s]"
+    forms = ("constant:T, warmup:START:END:TAU_s, cycle:START:PEAK:TAU_s[:SWITCH_s] or "
+             "mesh-warmup:START:END:TAU_s:HOUSING_SHARE:HOUSING_LAG_s")
     if kind not in TEMPERATURE_KINDS:
         raise UsageError(f"{option}: expected {forms}, got {text!r}")
-    counts = {"constant": (1,), "warmup": (3,), "cycle": (3, 4)}[kind]
+    counts = {"constant": (1,), "warmup": (3,), "cycle": (3, 4), "mesh-warmup": (5,)}[kind]
     if len(parts) not in counts:
         raise UsageError(f"{option}: expected {forms}, got {text!r}")
     values = _numbers(text, option, parts)
@@ -204,6 +232,12 @@ def parse_temperature(text: str, option: str = "--temperature") -> Programme:
         raise UsageError(f"{option}: TAU_s must be > 0, got {values[2]:g} in {text!r}")
     if kind == "cycle" and len(values) == 4 and values[3] < 0.0:
         raise UsageError(f"{option}: SWITCH_s must be >= 0, got {values[3]:g} in {text!r}")
+    if kind == "mesh-warmup":
+        if not 0.0 <= values[3] <= 1.0:
+            raise UsageError(f"{option}: HOUSING_SHARE must be in [0, 1] (the housing rises less than the mesh), "
+                             f"got {values[3]:g} in {text!r}")
+        if values[4] < 0.0:
+            raise UsageError(f"{option}: HOUSING_LAG_s must be >= 0, got {values[4]:g} in {text!r}")
     return Programme(kind, values)
 
 
@@ -247,6 +281,16 @@ def parse_effect(text: str, option: str = "--effect") -> tuple[str, dict]:
         except ValueError:
             raise UsageError(f"{option}: {name}.{key}: expected a number, got {value.strip()!r}") from None
     return name, values
+
+
+def parse_effects(texts, option: str = "--effect") -> dict[str, dict]:
+    """Every ``--effect`` text (:func:`parse_effect`) merged: name -> {key: value}; a later
+    text's keys override an earlier one's for the same effect."""
+    effects: dict = {}
+    for text in texts or []:
+        name, values = parse_effect(text, option)
+        effects.setdefault(name, {}).update(values)
+    return effects
 
 
 def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True) -> dict[str, dict]:
@@ -360,8 +404,17 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
     noise.check()
     if not isinstance(seed, (int, np.integer)) or seed < 0:
         raise UsageError(f"--seed: expected a non-negative integer, got {seed!r}")
+    two_temperature = temperature.kind == "mesh-warmup"
+    if two_temperature and "centre_distance_um_per_K" in ((effects or {}).get("thermal_backlash") or {}):
+        raise UsageError("--effect thermal_backlash: with a mesh-warmup temperature the centre-distance growth "
+                         "follows from the spec's [materials] and the housing's share of the warm-up; give a bare "
+                         "--effect thermal_backlash")
     resolved = resolve_effects(spec, effects, include_spec_effects)
     internal = {name: params_from_keys(name, values) for name, values in resolved.items()}
+    # a mesh-warmup makes thermal_backlash from the two temperatures (see _two_temperature_backlash)
+    physical_backlash = two_temperature and "thermal_backlash" in internal
+    if physical_backlash:
+        internal.pop("thermal_backlash")
 
     rng_targets, rng_phases, rng_white, rng_run = (
         np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(4))
@@ -374,21 +427,27 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
 
     targets = plan_angles(plan, rng_targets)
     n_t = len(targets)
+    runs = plan.runs * plan.cycles
     one_run = np.concatenate([targets, targets[::-1]])
-    direction = np.tile(np.concatenate([np.ones(n_t), -np.ones(n_t)]), plan.runs)
-    angle = np.tile(one_run, plan.runs)
-    run = np.repeat(np.arange(1, plan.runs + 1), 2 * n_t)
+    direction = np.tile(np.concatenate([np.ones(n_t), -np.ones(n_t)]), runs)
+    angle = np.tile(one_run, runs)
+    run = np.repeat(np.arange(1, runs + 1), 2 * n_t)
     n = angle.size
-    time = np.round(np.arange(n) * plan.dwell, DECIMALS["time_s"])
+    cycle = (run - 1) // plan.runs  # 0-based cycle of each row; cycles are cycle_gap_s apart
+    time = np.round(np.arange(n) * plan.dwell + cycle * plan.cycle_gap_s, DECIMALS["time_s"])
     duration = float(time[-1]) if n else 0.0
     temp = np.round(temperature.evaluate(time, run, duration), DECIMALS["temperature_C"])
     torque = np.round(load.evaluate(time, run, duration), DECIMALS["load_Nm"])
 
     signals = Signals(np.radians(angle), direction, torque, temp, time)
     model = simulate(spec, signals, used, offset_arcsec * ARCSEC, internal) / ARCSEC
+    thermal_truth = None
+    if physical_backlash:
+        term, thermal_truth = _two_temperature_backlash(spec, signals, temperature)
+        model = model + term / ARCSEC
 
     white = rng_white.normal(0.0, noise.white_arcsec, n) if noise.white_arcsec > 0 else np.zeros(n)
-    run_values = rng_run.normal(0.0, noise.run_arcsec, plan.runs) if noise.run_arcsec > 0 else np.zeros(plan.runs)
+    run_values = rng_run.normal(0.0, noise.run_arcsec, runs) if noise.run_arcsec > 0 else np.zeros(runs)
     if noise.run_kind == "offset":
         correlated = run_values[run - 1]
     else:
@@ -426,6 +485,13 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
         "load": load.to_dict(),
         "offset_arcsec": float(offset_arcsec),
     }
+    if plan.cycles == 1:  # the single-cycle truth stays as it was before cycles existed
+        truth["plan"].pop("cycles")
+        truth["plan"].pop("cycle_gap_s")
+    if thermal_truth is not None:
+        truth["effects"]["thermal_backlash"] = {"centre_distance_um_per_K": thermal_truth["predicted_um_per_K"],
+                                               "reference_temperature_C": temperature.values[0]}
+        truth["thermal"] = thermal_truth
     if plan.kind == "dense":
         truth["plan"].pop("targets")
         truth["plan"].pop("jitter")
@@ -435,16 +501,78 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
     return Synthesis(columns, truth, comments)
 
 
+def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
+    """``thermal_backlash`` from the two temperatures of a ``mesh-warmup`` [rad], and its truth.
+
+    Worm and wheel are at the recorded (mesh) temperature T_m, the housing at
+    T_H (:meth:`Programme.housing`); the centre distance changes by
+    Delta a(t) = a alpha_H dT_H - (r_1 alpha_1 + r_2 alpha_2) dT_m
+    (:func:`wormgear_cli.models.thermal.centre_distance_change_mm`), and the
+    catalogue signature turns Delta a into the output error: the backlash
+    changes by 2 Delta a tan(alpha_x) at the wheel pitch circle.  The
+    temperatures are those of the rounded time column; dT from the
+    programme's start temperature.
+
+    The truth's ``thermal_backlash`` coefficient is the physics' own,
+    a alpha_H s - (r_1 alpha_1 + r_2 alpha_2)
+    (:func:`~wormgear_cli.models.thermal.predicted_centre_distance_um_per_K`
+    with q = the housing share s: exact once the lag has settled).  The
+    ``thermal`` block adds the linear equivalent over this test (least
+    squares of Delta a on dT_m through the start) and the non-linearity the
+    lag leaves (the physical term minus the linear one, RMS and max over the
+    rows [arcsec]).
+    """
+    from wormgear_cli.analysis import geometry
+    from wormgear_cli.models.thermal import (centre_distance_change_mm, predicted_centre_distance_um_per_K,
+                                             worm_pair_radii)
+
+    t0, _t1, _tau, share, lag = temperature.values
+    mesh_dt = signals.temperature - t0
+    housing_dt = temperature.housing(signals.time) - t0
+    delta_a = centre_distance_change_mm(spec, mesh_dt, housing_dt)  # [mm]
+    g = geometry(spec)
+    fn = EFFECTS["thermal_backlash"].function
+    # the signature is linear in k (T - T_ref): k = 1 mm/K and T - T_ref = Delta a [mm] give Delta a itself
+    unit = Signals(signals.theta, signals.direction, signals.load, delta_a, signals.time)
+    term = fn(unit, g, coefficient=1.0, reference_temperature=0.0)
+    ss = float(mesh_dt @ mesh_dt)
+    k_lin = float(delta_a @ mesh_dt) / ss if ss > 0 else 0.0  # [mm/K]
+    linear = fn(signals, g, coefficient=k_lin, reference_temperature=t0)
+    dev = (term - linear) / ARCSEC
+    a, r1, r2 = worm_pair_radii(spec)
+    mat = spec.materials
+    truth = {
+        "model": "two-temperature: worm and wheel at the recorded (mesh) temperature, housing lagging "
+                 "(models/thermal.py mesh_housing_warmup, centre_distance_change_mm)",
+        "recorded_temperature": "worm mesh / oil",
+        "housing_share": float(share),
+        "housing_lag_s": float(lag),
+        "housing_temperature_C": [float(t0 + housing_dt.min()), float(t0 + housing_dt.max())],
+        "centre_distance_mm": a, "worm_radius_mm": r1, "wheel_radius_mm": r2,
+        "expansion_ppm_per_K": {"housing": mat.housing_expansion * 1e6, "worm": mat.worm_expansion * 1e6,
+                                "wheel": mat.wheel_expansion * 1e6},
+        "centre_distance_change_um": [float(delta_a.min() * 1000.0), float(delta_a.max() * 1000.0)],
+        "predicted_um_per_K": predicted_centre_distance_um_per_K(spec, share),
+        "linear_equivalent_um_per_K": k_lin * 1000.0,
+        "nonlinearity_rms_arcsec": float(np.sqrt(np.mean(dev * dev))),
+        "nonlinearity_max_arcsec": float(np.max(np.abs(dev))),
+    }
+    return term, truth
+
+
 def _comments(spec, plan: Plan, n_t: int, temperature: Programme, load: Programme) -> tuple[str, ...]:
     span = 360.0 * plan.revolutions
     if plan.kind == "iso":
         layout = f"iso, {n_t} targets over {span:g} deg (irregular spacing)"
     else:
         layout = f"dense, {n_t} evenly spaced angles over {span:g} deg"
+    runs = f"{plan.runs} run{'s' if plan.runs != 1 else ''}, each"
+    if plan.cycles > 1:
+        runs = (f"{plan.cycles} cycles of {plan.runs} run{'s' if plan.runs != 1 else ''} "
+                f"({plan.cycle_gap_s:g} s between cycles), each run")
     return (
         f"# synthetic measurement made by wormgear synth from drive {spec.drive.name}",
-        f"# plan: {layout}; {plan.runs} run{'s' if plan.runs != 1 else ''}, each forward (+1) then "
-        f"reverse (-1); {plan.dwell:g} s per point",
+        f"# plan: {layout}; {runs} forward (+1) then reverse (-1); {plan.dwell:g} s per point",
         f"# temperature: {temperature.describe('degC')}; load: {load.describe('N m')}",
         "# the model settings, effects, noise and seed are kept in a separate truth file",
     )

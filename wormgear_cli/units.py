@@ -18,6 +18,9 @@ RAD_PER_UNIT: dict[str, float] = {
     "urad": 1e-6,
 }
 
+#: one second of arc [rad]
+ARCSEC = RAD_PER_UNIT["arcsec"]
+
 #: units offered on the command line (``--unit``)
 ANGLE_UNITS = ("deg", "arcmin", "arcsec", "urad")
 

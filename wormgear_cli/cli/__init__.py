@@ -18,6 +18,7 @@ from wormgear_cli.cli import simulate  # noqa: F401  (simulate, synth)
 from wormgear_cli.cli import measure  # noqa: F401
 from wormgear_cli.cli import diagnose  # noqa: F401
 from wormgear_cli.cli import tolerance  # noqa: F401
+from wormgear_cli.cli import grade  # noqa: F401
 
 
 def main() -> None:

@@ -39,18 +39,76 @@ def analyze(
     from wormgear_cli.analysis import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
     from wormgear_cli.spec import load_spec
 
+    from wormgear_cli.budget import budget
+
     spec = load_spec(drive)
     result = run(spec)
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
-    if fmt == "json":
-        emit(json_text(result.report(unit)), output, [drive])
-    elif fmt == "csv":
+    if fmt == "csv":
         m = result.metrics(unit)
         cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
         emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
+        return
+    report = {**result.report(unit), **budget(spec, result).report(unit), "values_used": _values_used(spec)}
+    if fmt == "json":
+        emit(json_text(report), output, [drive])
     else:
-        render(_tables(result.report(unit), unit), output, [drive])
+        render(_tables(report, unit) + _budget_tables(report, unit), output, [drive])
+
+
+#: spec keys whose value and origin analyze lists (the tolerances the budget and the paper use)
+_LISTED_KEYS = (
+    "gear_pair.output_gear.cumulative_pitch_deviation_mm", "gear_pair.output_gear.single_pitch_deviation_mm",
+    "gear_pair.output_gear.profile_error_mm", "gear_pair.output_gear.thickness_deviation_mm",
+    "gear_pair.pinion.cumulative_pitch_deviation_mm", "gear_pair.pinion.single_pitch_deviation_mm",
+    "gear_pair.pinion.profile_error_mm", "gear_pair.pinion.thickness_deviation_mm",
+    "worm_pair.lead_error_mm", "worm_pair.wheel.radial_composite_error_mm",
+    "worm_pair.wheel.cumulative_pitch_deviation_mm", "assembly.gear_centre_distance_error_mm",
+    "assembly.gear_eccentricity_mm",
+)
+
+
+def _values_used(spec) -> list:
+    """``[{"key", "value_um", "origin"}]`` for :data:`_LISTED_KEYS` (origin: spec / grade / default)."""
+    from wormgear_cli.spec import FIELD_BY_PATH, value_origin
+
+    out = []
+    for path in _LISTED_KEYS:
+        f = FIELD_BY_PATH[path]
+        node = spec
+        for part in f.section.split("."):
+            node = getattr(node, part)
+        value = getattr(node, f.attr)
+        origin = value_origin(spec, path)
+        if path == "assembly.gear_eccentricity_mm" and origin == "default":
+            origin = "spec" if value_origin(spec, "assembly.gear_centre_distance_error_mm") == "spec" else origin
+        out.append({"key": path, "value_um": round(float(value) * 1000.0, 6), "origin": origin})
+    return out
+
+
+def _budget_tables(r: dict, unit: str) -> list:
+    from rich.markup import escape
+    from rich.table import Table
+
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    bt = Table(title=escape(f"full error budget, TE at the output [{unit}] ({r['stages']['gear']['kinematics']} "
+                            "kinematics)"), title_justify="left")
+    for col in ("source", "kind", "order", "amplitude", "origin", "share"):
+        bt.add_column(col, justify="left" if col in ("source", "kind", "origin") else "right")
+    for ln in r["budget"]:
+        bt.add_row(ln["source"], ln["kind"], f"{ln['order']:g}", a(ln["amplitude"]), ln["origin"],
+                   f"{ln['share_pct']:.1f} %")
+    t = r["total_with_budget"]
+    note = escape(f"total_with_budget: linear sum {a(t['transmission_error_linear'])}, root-sum-square "
+                  f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
+                  "(docs/budget.md); the paper's total above is unchanged")
+    vt = Table(title="values used [um]", title_justify="left")
+    for col in ("key", "value", "origin"):
+        vt.add_column(col, justify="right" if col == "value" else "left")
+    for v in r["values_used"]:
+        vt.add_row(v["key"], f"{v['value_um']:g}", v["origin"])
+    return [bt, note, vt]
 
 
 def _tables(r: dict, unit: str) -> list:
@@ -73,6 +131,9 @@ def _tables(r: dict, unit: str) -> list:
     gear_note = escape(f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
                   f"{share} to it (delta1 = {g['deflection_um']:.3f} um, "
                   f"{r['deflection_model']})")
+    if g["backlash_parts"].get("thickness", 0.0) > 0.0:
+        gear_note += escape(f"; {g['kinematics']} kinematics: backlash includes the tooth-thickness allowances "
+                            f"{a(g['backlash_parts']['thickness'])}")
     out += [gt, gear_note]
     wt = Table(title=escape(f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]"),
                title_justify="left")
@@ -188,8 +249,9 @@ def new(
 ):
     """Write a complete, commented drive template to start from.
 
-    The template holds the paper's MCH50 values where Table 1 gives them and
-    the documented defaults elsewhere; it never overwrites an existing file.
+    The template is the paper's MCH50 drive (the values of configs/mch50.toml:
+    Table 1, the paper's loads, and that file's assumptions); derived keys are
+    comments holding their derived value.  It never overwrites an existing file.
 
     Example: wormgear new my-table.toml && wormgear analyze my-table.toml
     """
@@ -201,5 +263,9 @@ def new(
         raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    from wormgear_cli.cli.common import announce_written
+    from wormgear_cli.io import after_commit
+
     atomic_write(path, template(name or path.stem))
-    typer.echo(f"wrote {path}; edit it, then run: wormgear check {path}", err=True)
+    announce_written(path)
+    after_commit(lambda: typer.echo(f"edit it, then run: wormgear check {path}", err=True))

@@ -1,22 +1,28 @@
 """What every command shares: output options, writing results, rendering.
 
-One set of options (``--format``, ``--unit``, ``-o``) defined once, as
-sqlite-utils does.  rich is imported only when a table is drawn.
+One set of options (``--format``, ``--unit``, ``-o``) defined once, as sqlite-utils does.
+Every byte a command puts on stdout goes through :func:`write_stdout`; every file it writes
+is announced on stderr by :func:`announce_written`.  Text formats (numbers, CSV, JSON,
+tables as data) are the core's (:mod:`wormgear_cli.formats`); here they are only drawn.
+rich is imported only when a table is drawn.
+
+Tables follow one rule (:func:`render`): they fit the width (80 columns at COLUMNS=80)
+without cutting a word or a number.  Text wraps at spaces; a table too wide for its
+numbers is split into parts that repeat its first column.  Colour and styles (bold,
+italic, dim) only on a terminal without NO_COLOR.
 """
 
 from __future__ import annotations
 
-import csv
-import io
-import json
-import math
 import os
 import sys
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Iterable, Optional
+from typing import Annotated, Iterable, Optional, Union
 
 import typer
+
+from wormgear_cli.formats import csv_text, fmt_angle, fmt_number, json_text  # noqa: F401  (re-exported)
 
 
 class TableFormat(str, Enum):
@@ -65,59 +71,46 @@ OutputOption = Annotated[Optional[Path], typer.Option("--output", "-o", help="Wr
 DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False)]
 
 
-def emit(text: str, output: Optional[Path], inputs: Iterable = ()) -> None:
-    """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``."""
-    from wormgear_cli.io import atomic_write, write_stdout
+# --- writing ---------------------------------------------------------------------------------
 
-    if output is None or str(output) == "-":
-        write_stdout(text)  # checked and completed: a full disk is exit 2, a closed pipe a quiet stop
+
+def write_stdout(data: Union[str, bytes]) -> None:
+    """Write ``data`` (text, or bytes of ASCII/UTF-8 text) to stdout and flush.
+
+    The one place a command's result reaches stdout: :func:`wormgear_cli.io.write_stdout`
+    checks and completes every write (a full disk is exit 2, a closed pipe a quiet stop)."""
+    from wormgear_cli.io import write_stdout as checked_write
+
+    checked_write(data)
+
+
+def is_stdout(output: Optional[Path]) -> bool:
+    """True when ``-o`` means stdout (not given, or ``-``)."""
+    return output is None or str(output) == "-"
+
+
+def announce_written(path: Union[str, Path]) -> None:
+    """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
+    writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
+    and only once the run's outputs are committed (a failed run claims no file)."""
+    from wormgear_cli.io import after_commit
+
+    after_commit(lambda: typer.echo(f"wrote {path}", err=True))
+
+
+def emit(data: Union[str, bytes], output: Optional[Path], inputs: Iterable = ()) -> None:
+    """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``
+    (refusing to overwrite any of ``inputs``) and announce it."""
+    if is_stdout(output):
+        write_stdout(data)
         return
+    from wormgear_cli.io import atomic_write
 
-    atomic_write(output, text, tuple(inputs))
-
-
-def json_text(doc) -> str:
-    """Deterministic JSON (key order as built, shortest round-trip floats)."""
-    return json.dumps(_clean(doc), indent=2, allow_nan=False) + "\n"
+    atomic_write(output, data, tuple(inputs))
+    announce_written(output)
 
 
-def _clean(obj):
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    if hasattr(obj, "item") and not isinstance(obj, (str, bytes)):
-        return _clean(obj.item())
-    return obj
-
-
-def fmt_number(x) -> str:
-    """CSV number: shortest repr that round-trips; integers as integers; None (undefined) empty."""
-    if x is None:
-        return ""
-    if isinstance(x, bool):
-        return str(int(x))
-    if isinstance(x, int):
-        return str(x)
-    if isinstance(x, float):
-        if not math.isfinite(x):
-            return ""
-        return repr(x)
-    if hasattr(x, "item"):
-        return fmt_number(x.item())
-    return str(x)
-
-
-def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    if header:
-        w.writerow(columns)
-    for row in rows:
-        w.writerow([fmt_number(v) for v in row])
-    return buf.getvalue()
+# --- terminals -------------------------------------------------------------------------------
 
 
 def text_width() -> int:
@@ -130,36 +123,170 @@ def text_width() -> int:
     return width if 40 <= width <= 1000 else 100
 
 
-def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
-    """Draw rich renderables to stdout (colour only on a terminal without
-    NO_COLOR) or, as plain text, to ``output``."""
-    from rich.console import Console
-
-    if output is None and sys.stdout.isatty():
-        console = Console(no_color="NO_COLOR" in os.environ, highlight=False,
-                          width=text_width() if "COLUMNS" in os.environ else None)
-        for r in renderables:
-            console.print(r)
-        return
-    buf = io.StringIO()
-    console = Console(file=buf, width=text_width(), no_color=True, color_system=None,
-                      highlight=False, force_terminal=False, soft_wrap=False)
-    for r in renderables:
-        console.print(r)
-    text = "\n".join(line.rstrip() for line in buf.getvalue().splitlines()) + "\n"  # no padding spaces
-    emit(text, output, inputs)
+def stdout_is_terminal() -> bool:
+    return sys.stdout.isatty()
 
 
 def stderr_is_terminal() -> bool:
     return sys.stderr.isatty()
 
 
-def fmt_angle(x: float, unit: str) -> str:
-    """Angle for tables: 4 significant digits beyond the unit's natural scale."""
-    if unit == "deg":
-        return f"{x:.5f}"
-    if unit == "arcmin":
-        return f"{x:.3f}"
-    if unit == "arcsec":
-        return f"{x:.2f}"
-    return f"{x:.1f}"
+def no_color() -> bool:
+    """NO_COLOR set (https://no-color.org): no colour and no other styles either."""
+    return "NO_COLOR" in os.environ
+
+
+def terminal_console(stderr: bool = False, width: Optional[int] = None):
+    """A rich console for a terminal: styled unless NO_COLOR is set, in which case it writes
+    no escape code at all (``color_system=None`` drops bold, italic and dim too)."""
+    from rich.console import Console
+
+    if no_color():
+        return Console(stderr=stderr, highlight=False, width=width, color_system=None, no_color=True)
+    return Console(stderr=stderr, highlight=False, width=width)
+
+
+class Progress:
+    """A rich progress bar on stderr when it is a terminal and the work may take > 1 s
+    (none under NO_COLOR: a live bar cannot be drawn without escape codes)."""
+
+    def __init__(self, total: int, seconds: float, label: str):
+        self.bar = None
+        if total > 0 and seconds > 1.0 and stderr_is_terminal() and not no_color():
+            from rich.progress import BarColumn, MofNCompleteColumn, TimeRemainingColumn
+            from rich.progress import Progress as Bar
+
+            self.bar = Bar("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
+                           TimeRemainingColumn(), console=terminal_console(stderr=True), transient=True)
+            self.task = self.bar.add_task(label, total=total)
+
+    def __enter__(self):
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc):
+        if self.bar is not None:
+            self.bar.stop()
+
+    def advance(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.advance(self.task, n)
+
+
+# --- tables ----------------------------------------------------------------------------------
+
+
+def _rich_table(t):
+    """A :class:`wormgear_cli.formats.Table` as a rich Table (text is never read as markup)."""
+    from rich.markup import escape
+    from rich.table import Table
+    from rich.text import Text
+
+    from wormgear_cli.formats import Cell
+
+    out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header)
+    for c in t.columns:
+        out.add_column(escape(c.header), justify=c.justify)
+    for row in t.rows:
+        out.add_row(*(Text(c.text, style=c.style or "") if isinstance(c, Cell) else escape(str(c)) for c in row))
+    if t.caption:
+        out.caption = escape(t.caption)
+        out.caption_justify = "left"
+    return out
+
+
+def _longest_word(column) -> int:
+    """Longest unbreakable run (word or number) among a rich column's body cells."""
+    from rich.text import Text
+
+    longest = 0
+    for cell in column.cells:
+        text = cell.plain if isinstance(cell, Text) else Text.from_markup(str(cell)).plain
+        longest = max([longest] + [len(w) for w in text.split()])
+    return longest
+
+
+def _fits(table, console, width: int) -> bool:
+    """True when rich lays ``table`` out in ``width`` columns without narrowing any column
+    below its longest word (so nothing is cut: text wraps at spaces)."""
+    try:
+        options = console.options.update_width(width - table._extra_width)
+        widths = table._calculate_column_widths(console, options)
+    except Exception:  # pragma: no cover - a rich without these internals: split by words
+        return False
+    if sum(widths) + table._extra_width > width:
+        return False
+    return all(w >= _longest_word(c) + table._get_padding_width(c._index) for w, c in zip(widths, table.columns))
+
+
+def _part(table, columns: list, title, caption):
+    from dataclasses import replace
+
+    from rich.table import Table
+
+    part = Table(title=title, title_justify=table.title_justify, caption=caption,
+                 caption_justify=table.caption_justify, show_header=table.show_header, box=table.box,
+                 show_edge=table.show_edge, padding=table.padding, show_lines=table.show_lines)
+    part.columns = [replace(c, _index=k, _cells=list(c._cells)) for k, c in enumerate(columns)]
+    part.rows = list(table.rows)
+    return part
+
+
+def fit_table(table, console, width: int) -> list:
+    """``table`` as one or more rich Tables that each fit ``width`` without cutting a word or
+    number: columns wrap at spaces (overflow 'fold', never '...'); when the numbers alone
+    are too wide, the columns are split into consecutive parts, each repeating the first
+    (label) column, titled "(continued)" after the first and captioned on the last."""
+    for c in table.columns:
+        c.overflow = "fold"
+        c.no_wrap = False
+    if _fits(table, console, width) or len(table.columns) <= 2:
+        return [table]
+    key, rest = table.columns[0], table.columns[1:]
+    for n_parts in range(2, len(rest) + 1):  # the fewest parts of balanced size that all fit
+        size = -(-len(rest) // n_parts)
+        groups = [rest[k:k + size] for k in range(0, len(rest), size)]
+        if all(_fits(_part(table, [key, *g], None, None), console, width) for g in groups):
+            break
+    parts = []
+    for n, g in enumerate(groups):
+        title = table.title if n == 0 else (f"{table.title} (continued)" if table.title else None)
+        parts.append(_part(table, [key, *g], title, table.caption if n == len(groups) - 1 else None))
+    return parts
+
+
+def _draw(console, renderables: list, width: int) -> None:
+    from rich.table import Table as RichTable
+
+    from wormgear_cli.formats import Table
+
+    for r in renderables:
+        if isinstance(r, Table):
+            r = _rich_table(r)
+        for part in fit_table(r, console, width) if isinstance(r, RichTable) else [r]:
+            console.print(part)
+
+
+def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
+    """Draw tables (:class:`wormgear_cli.formats.Table` or rich renderables) to stdout
+    (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
+    import io
+
+    from rich.console import Console
+
+    if output is None and stdout_is_terminal():
+        probe = terminal_console(width=text_width() if "COLUMNS" in os.environ else None)
+        buf = io.StringIO()
+        console = Console(file=buf, width=probe.width, force_terminal=True, highlight=False,
+                          color_system=None if no_color() else probe.color_system, no_color=no_color())
+        _draw(console, renderables, console.width)
+        write_stdout(buf.getvalue())
+        return
+    buf = io.StringIO()
+    width = text_width()
+    console = Console(file=buf, width=width, no_color=True, color_system=None,
+                      highlight=False, force_terminal=False, soft_wrap=False)
+    _draw(console, renderables, width)
+    text = "\n".join(line.rstrip() for line in buf.getvalue().splitlines()) + "\n"  # no padding spaces
+    emit(text, output, inputs)

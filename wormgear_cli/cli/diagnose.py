@@ -11,13 +11,18 @@ from wormgear_cli.cli.app import app
 from wormgear_cli.cli.common import (
     AngleUnit,
     DriveArgument,
+    OutputOption,
     TableJsonFormat,
+    announce_written,
     emit,
     fmt_angle,
     json_text,
+    no_color,
     render,
     stderr_is_terminal,
+    terminal_console,
 )
+from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
 
 #: rows above which a progress display is shown (when stderr is a terminal)
 PROGRESS_ROWS = 20_000
@@ -34,14 +39,17 @@ def diagnose(
     data: Annotated[Path, typer.Argument(
         help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
         "time_s).", show_default=False)],
-    output: Annotated[Optional[Path], typer.Option(
-        "--output", "-o", help="Write the augmented drive spec to FILE (TOML written from the parsed spec: the "
-        "fitted phases and an [effects.NAME] table per named effect; the input's comments are not kept); never "
-        "the input files.",
-        show_default=False)] = None,
+    output: OutputOption = None,
+    write_spec: Annotated[Optional[Path], typer.Option(
+        "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "
+        "spec: the fitted phases and an [effects.NAME] table per named effect; the input's comments are not "
+        "kept); never the input files.", show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
                                                     case_sensitive=False)] = "table",
     unit: DiagnoseUnitOption = "arcsec",
+    column_map: MapOption = None,
+    error_unit: ErrorUnitOption = None,
+    angle_unit: AngleUnitOption = None,
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
@@ -67,9 +75,9 @@ def diagnose(
     data support, refits and shows the gap shrink.  Exit 0 whether or not an
     effect is found; 2 for bad input.
 
-    Example: wormgear diagnose configs/mch50.toml configs/mch50-warm.csv -o mch50-warm.toml
+    Example: wormgear diagnose configs/mch50.toml configs/mch50-warm.csv --write-spec mch50-warm.toml
     """
-    from wormgear_cli.diagnosis import augmented_toml, diagnose as run, report
+    from wormgear_cli.diagnosis.report import run_diagnose
     from wormgear_cli.errors import UsageError
     from wormgear_cli.measurement import read_measurement
     from wormgear_cli.spec import load_spec
@@ -77,12 +85,15 @@ def diagnose(
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
     inputs = (drive, data)
-    from wormgear_cli.io import refuse_input
+    from wormgear_cli.io import check_output_path, refuse_input, refuse_same_outputs
 
-    for target, what in ((output, "-o"), (plot, "--plot")):
+    if output is not None and str(output) == "-":
+        output = None
+    targets = [(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")]
+    for target, what in targets:
+        check_output_path(target, what)
         refuse_input(target, inputs, what)
-    if output is not None and plot is not None and Path(output).resolve() == Path(plot).resolve():
-        raise UsageError(f"{plot}: -o and --plot name the same file")
+    refuse_same_outputs(targets)
     if plot is not None:
         import importlib.util
 
@@ -91,46 +102,39 @@ def diagnose(
         check_plot_path(plot)
         if importlib.util.find_spec("matplotlib") is None:
             raise UsageError(INSTALL_HINT)
-    if output is not None and Path(output).suffix.lower() != ".toml":
-        raise UsageError(f"{output}: -o writes a drive spec; expected a file name ending in .toml")
+    if write_spec is not None and Path(write_spec).suffix.lower() != ".toml":
+        raise UsageError(f"{write_spec}: --write-spec writes a drive spec; expected a file name ending in .toml")
 
     spec = load_spec(drive)
-    meas = read_measurement(data)
-    if len(meas) > PROGRESS_ROWS and stderr_is_terminal():
-        from rich.console import Console
-
-        console = Console(stderr=True)
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit))
+    options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
+                   data_name=str(data), write_spec=None if write_spec is None else str(write_spec))
+    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
+        console = terminal_console(stderr=True)
         with console.status("diagnosing") as status:
-            diag = run(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
-                       resamples=resamples, progress=lambda text: status.update(text))
+            result = run_diagnose(spec, meas, progress=lambda text: status.update(text), **options)
     else:
-        diag = run(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
-                   resamples=resamples)
-    doc = report(diag)
+        result = run_diagnose(spec, meas, **options)
+    doc = result.document
     figure = None
     if plot is not None:
         from wormgear_cli.plots.diagnose import draw
 
-        figure = draw(diag, doc, unit)
-    if output is not None:
+        figure = draw(result.diagnosis, doc, unit)
+    if write_spec is not None:
         from wormgear_cli.io import atomic_write
 
-        atomic_write(output, augmented_toml(diag, str(data)), inputs)
-        doc["augmented_spec"] = str(output)
-    else:
-        doc["augmented_spec"] = None
+        atomic_write(write_spec, result.spec_toml, inputs)
+        announce_written(write_spec)
     if figure is not None:
         from wormgear_cli.plots.diagnose import save
 
         save(figure, plot)
+        announce_written(plot)
     if fmt == "json":
-        emit(json_text(doc), None, inputs)
+        emit(json_text(doc), output, inputs)
     else:
-        render(_tables(doc, unit), None, inputs)
-    if output is not None:
-        typer.echo(f"wrote {output}", err=True)
-    if plot is not None:
-        typer.echo(f"wrote {plot}", err=True)
+        render(_tables(doc, unit), output, inputs)
 
 
 def _tables(doc: dict, unit: str) -> list:
@@ -139,9 +143,9 @@ def _tables(doc: dict, unit: str) -> list:
     from rich.markup import escape
     from rich.table import Table
 
-    from wormgear_cli.units import RAD_PER_UNIT
+    from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
-    factor = RAD_PER_UNIT["arcsec"] / RAD_PER_UNIT[unit]
+    factor = ARCSEC / RAD_PER_UNIT[unit]
 
     def a(x):
         return "-" if x is None else fmt_angle(x * factor, unit)
@@ -293,4 +297,19 @@ def _tables(doc: dict, unit: str) -> list:
                        ("R", "R repeatability")):
         it.add_row(label, a(iso["measured"][key]), a(iso["simulated_before"][key]), a(iso["simulated_after"][key]))
     out.append(it)
+    for t in out:
+        if isinstance(t, Table):
+            _keep_numbers_whole(t)
     return out
+
+
+def _keep_numbers_whole(t) -> None:
+    """Let a narrow terminal fold words and headers, never cut a number: every column folds
+    instead of ending in an ellipsis, and the number columns (right-aligned) are at least as
+    wide as their longest cell, so only the text columns give way."""
+    for col in t.columns:
+        col.overflow = "fold"
+        if col.justify == "right":
+            cells = [c for c in col._cells if isinstance(c, str)]
+            if cells:
+                col.min_width = max(len(c) for c in cells)

@@ -79,9 +79,10 @@ def measure(
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-        from wormgear_cli.io import refuse_input
+        from wormgear_cli.io import refuse_input, refuse_same_outputs
 
         refuse_input(plot, inputs, "--plot")
+        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     options = read_options(column_map, error_unit, angle_unit)
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)

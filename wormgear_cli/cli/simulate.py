@@ -14,6 +14,7 @@ from wormgear_cli.cli.common import (
     DriveArgument,
     OutputOption,
     UnitOption,
+    announce_written,
     emit,
     json_text,
 )
@@ -84,7 +85,9 @@ def simulate(
     import math
 
     from wormgear_cli.errors import UsageError
+    from wormgear_cli.reports import simulate as report
     from wormgear_cli.spec import load_spec
+    from wormgear_cli.synth import parse_effects
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -100,165 +103,26 @@ def simulate(
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-    from wormgear_cli.synth import parse_effect
-
-    requested: dict = {}
-    for text in effect or []:
-        name, values = parse_effect(text)
-        requested.setdefault(name, {}).update(values)
+    requested = parse_effects(effect)
     spec = load_spec(drive)
-    effects = None
-    if requested:
-        from wormgear_cli.models.effects import params_from_keys
-        from wormgear_cli.synth import resolve_effects
-
-        effects = {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
+    effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
-    if plot is not None and output is not None and Path(plot).resolve() == Path(output).resolve():
-        raise UsageError(f"{plot}: --plot and -o name the same file")
+    from wormgear_cli.io import refuse_same_outputs
+
+    refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if at is not None:
-        text, curves = _simulate_at(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
+        result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
     else:
-        text, curves = _simulate_dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
+        result = report.dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_simulation
 
         from wormgear_cli.io import refuse_input
 
         refuse_input(plot, inputs, "--plot")
-        plot_simulation(curves, plot)
-    emit(text, output, inputs)
-
-
-def _phases(spec, which: str):
-    from wormgear_cli.simulation import aligned_phases
-
-    if which == "spec":
-        return None
-    return aligned_phases(spec, "error" if which == "aligned-error" else "reversal")
-
-
-def _summary(values, to):
-    import numpy as np
-
-    v = to(values)
-    return {"min": float(np.min(v)), "max": float(np.max(v)), "peak_to_peak": float(np.ptp(v)),
-            "rms": float(np.sqrt(np.mean(v * v)))}
-
-
-def _context(spec, unit, phase_map, effects):
-    """Spec-level facts shared by both JSON documents."""
-    import math
-
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.models.effects import params_to_keys
-    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
-    from wormgear_cli.simulation import periodic_sources
-    from wormgear_cli.units import to_unit
-
-    a = analyze(spec)
-    sources = {}
-    for src in periodic_sources(spec):
-        ph = src.phase if phase_map is None else phase_map.get(src.name, src.phase)
-        sources[src.name] = {"order": src.order, "amplitude": float(to_unit(src.amplitude, unit)),
-                             "phase_deg": math.degrees(ph), "phase_key": src.phase_path}
-    return {
-        "sources": sources,
-        "effects": {name: params_to_keys(name, p)
-                    for name, p in (spec.effects if effects is None else effects).items()},
-        "analyze": {"total_transmission_error": float(to_unit(a.angles["total_transmission_error"], unit)),
-                    "total_backlash": float(to_unit(a.angles["total_backlash"], unit))},
-        "predicted": {"centre_distance_um_per_K": predicted_centre_distance_um_per_K(spec)},
-    }
-
-
-def _simulate_dense(spec, points, revs, unit, fmt, temperature_c, load_nm, which, effects):
-    import numpy as np
-
-    from wormgear_cli.cli.common import csv_text
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import simulate as run
-    from wormgear_cli.units import to_unit
-
-    phase_map = _phases(spec, which)
-    angle_deg = np.arange(points) * (360.0 * revs / points)
-    theta = np.radians(angle_deg)
-    fwd = run(spec, Signals.make(theta, 1.0, load_nm, temperature_c, 0.0), phase_map, effects=effects)
-    rev = run(spec, Signals.make(theta, -1.0, load_nm, temperature_c, 0.0), phase_map, effects=effects)
-    f_u, r_u = to_unit(fwd, unit), to_unit(rev, unit)
-    common, lost = 0.5 * (f_u + r_u), r_u - f_u
-    curves = {"kind": "dense", "drive": spec.drive.name, "unit": unit, "angle_deg": angle_deg,
-              "forward": f_u, "reverse": r_u}
-    if fmt == "json":
-        doc = {
-            "drive": spec.drive.name,
-            "unit": unit,
-            "points": int(points),
-            "revolutions": float(revs),
-            "conditions": {"temperature_C": float(temperature_c), "load_Nm": float(load_nm), "time_s": 0.0},
-            "phases": which,
-            **_context(spec, unit, phase_map, effects),
-            "summary": {
-                "forward": _summary(f_u, lambda v: v),
-                "reverse": _summary(r_u, lambda v: v),
-                "common": _summary(common, lambda v: v),
-                "lost_motion": {"min": float(lost.min()), "max": float(lost.max()), "mean": float(lost.mean())},
-            },
-            "curve": {"angle_deg": angle_deg.tolist(), "forward": f_u.tolist(), "reverse": r_u.tolist()},
-        }
-        return json_text(doc), curves
-    cols = ["angle_deg", f"forward_{unit}", f"reverse_{unit}", f"common_{unit}", f"lost_motion_{unit}"]
-    rows = zip(angle_deg.tolist(), f_u.tolist(), r_u.tolist(), common.tolist(), lost.tolist())
-    return csv_text(cols, rows), curves
-
-
-def _simulate_at(spec, at, unit, fmt, temperature_c, load_nm, which, effects):
-    import csv
-    import io
-
-    import numpy as np
-
-    from wormgear_cli.cli.common import fmt_number
-    from wormgear_cli.measurement import read_measurement
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import simulate as run
-    from wormgear_cli.units import to_unit
-
-    data = read_measurement(at, require_error=False)
-    phase_map = _phases(spec, which)
-    load = data.load if "load_Nm" in data.present else np.full(len(data), float(load_nm))
-    temp = data.temperature if "temperature_C" in data.present else np.full(len(data), float(temperature_c))
-    signals = Signals(data.angle, data.direction, load, temp, data.time)
-    sim = to_unit(run(spec, signals, phase_map, effects=effects), unit)
-    column = f"simulated_error_{unit}"
-    has_error = not np.all(np.isnan(data.error))
-    curves = {"kind": "at", "drive": spec.drive.name, "unit": unit, "angle_deg": data.angle_deg,
-              "direction": data.direction, "simulated": sim,
-              "measured": to_unit(data.error, unit) if has_error else None, "source": str(at)}
-    if fmt == "json":
-        doc = {"drive": spec.drive.name, "data": str(at), "unit": unit, "rows": len(data), "phases": which,
-               **_context(spec, unit, phase_map, effects), "simulated_error": sim.tolist()}
-        if has_error:
-            resid = to_unit(data.error, unit) - sim
-            doc["measured_minus_simulated"] = {"mean": float(resid.mean()),
-                                               "rms": float(np.sqrt(np.mean(resid * resid)))}
-        return json_text(doc), curves
-    header = list(data.header)
-    values = [fmt_number(v) for v in sim.tolist()]
-    buf = io.StringIO()
-    for line in data.comments:
-        buf.write(line + "\n")
-    w = csv.writer(buf, lineterminator="\n")
-    if column in header:  # re-simulating a file that already has the column: replace it
-        j = header.index(column)
-        w.writerow(header)
-        for row, v in zip(data.rows, values):
-            w.writerow([*row[:j], v, *row[j + 1:]])
-    else:
-        w.writerow(header + [column])
-        for row, v in zip(data.rows, values):
-            w.writerow([*row, v])
-    return buf.getvalue(), curves
+        plot_simulation(result.curves, plot)
+        announce_written(plot)
+    emit(result.text, output, inputs)
 
 
 @app.command()
@@ -285,6 +149,11 @@ def synth(
         show_default=False)] = None,
     jitter: Annotated[float, typer.Option("--jitter", help="iso plan: target jitter, +/- this fraction of the "
                                           "mean spacing (0 <= J < 0.5).")] = 0.25,
+    cycles: Annotated[int, typer.Option("--cycles", help="Measure the block of --runs runs this many times "
+                                        "(runs numbered on), e.g. repeated as the table warms.", min=1,
+                                        max=1000)] = 1,
+    cycle_gap_s: Annotated[float, typer.Option("--cycle-gap-s", help="Time between cycles [s]; the table "
+                                               "keeps running, no rows are recorded.", min=0.0)] = 0.0,
     effect: Annotated[Optional[list[str]], typer.Option(
         "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
         "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
@@ -299,7 +168,8 @@ def synth(
                                                     case_sensitive=False)] = RunNoiseKind.offset,
     temperature: Annotated[str, typer.Option(
         "--temperature", help="Temperature programme [degC]: constant:T | warmup:START:END:TAU_s | "
-        "cycle:START:PEAK:TAU_s[:SWITCH_s].")] = "constant:20",
+        "cycle:START:PEAK:TAU_s[:SWITCH_s] | mesh-warmup:START:END:TAU_s:SHARE:LAG_s (recorded at the "
+        "worm mesh; the housing rises SHARE of it, LAG_s behind).")] = "constant:20",
     load: Annotated[str, typer.Option("--load", help="Load programme [N m]: constant:L | steps:L1:L2:... "
                                       "(one level per run, cycling).")] = "constant:0",
     random_phases: Annotated[bool, typer.Option("--random-phases", help="Draw every source phase from the "
@@ -320,26 +190,25 @@ def synth(
 
     from wormgear_cli.errors import UsageError
     from wormgear_cli.spec import load_spec
-    from wormgear_cli.synth import Noise, Plan, format_csv, parse_effect, parse_load, parse_temperature, synthesize
+    from wormgear_cli.synth import (Noise, Plan, format_csv, parse_effects, parse_load, parse_temperature,
+                                    synthesize)
 
     for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
-                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s)):
+                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s),
+                        ("--cycle-gap-s", cycle_gap_s)):
         if value is not None and not math.isfinite(value):
             raise UsageError(f"{name}: expected a finite number, got {value}")
     temp_prog = parse_temperature(temperature)
     load_prog = parse_load(load)
-    effects: dict = {}
-    for text in effect or []:
-        name, values = parse_effect(text)
-        effects.setdefault(name, {}).update(values)
+    effects = parse_effects(effect)
     if plot is not None:
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
     outs = [p for p in (output, truth, plot) if p is not None]
-    if len({Path(p).resolve() for p in outs}) < len(outs):
-        raise UsageError("-o, --truth and --plot must name different files")
-    from wormgear_cli.io import refuse_input
+    from wormgear_cli.io import refuse_input, refuse_same_outputs
+
+    refuse_same_outputs([(output, "-o"), (truth, "--truth"), (plot, "--plot")])
 
     for p in outs:
         refuse_input(p, [drive], "name")
@@ -347,7 +216,7 @@ def synth(
     result = synthesize(
         spec,
         plan=Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
-                  dwell_s=dwell_s, jitter=jitter),
+                  dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s),
         effects=effects,
         noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
         seed=seed,
@@ -362,9 +231,7 @@ def synth(
         from wormgear_cli.plots.simulate import plot_synthesis
 
         plot_synthesis(result, spec.drive.name, plot)
+        announce_written(plot)
     emit(text, output, [drive])
     if truth is not None:
         emit(json_text(result.truth), truth, [drive] + ([output] if output is not None else []))
-    if output is not None:
-        n = len(result.columns["angle_deg"])
-        typer.echo(f"wrote {n} rows to {output}" + (f", truth to {truth}" if truth else ""), err=True)

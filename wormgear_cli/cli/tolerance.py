@@ -88,14 +88,14 @@ def tolerance(
         "concatenate, header once, to the whole run's CSV).", show_default=False)] = None,
     summarize: Annotated[Optional[Path], typer.Option(
         "--summarize", help="Report on the samples of this CSV (concatenated --format csv parts) instead of "
-        "drawing; give the run's --seed, --plan, --targets and --unit.", dir_okay=False,
+        "drawing; give the run's --seed, --plan, --targets and --unit.",
         show_default=False)] = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
     plot: Annotated[Optional[Path], typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", dir_okay=False, show_default=False)] = None,
+        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
 ):
     """Statistical tolerance analysis: what fraction of built drives passes, and which tolerance to tighten.
 
@@ -124,9 +124,12 @@ def tolerance(
     if summarize is not None and fmt == "csv":
         raise UsageError("--summarize reports on samples: use --format table or json")
     if plot is not None:
+        from wormgear_cli.io import refuse_input, refuse_same_outputs
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
+        refuse_input(plot, [drive] + ([summarize] if summarize is not None else []), "--plot")
+        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if target_yield is not None and not 0.0 < target_yield < 1.0:
         raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
     if fmt == "csv" and output is not None and str(output) != "-" and summarize is None:

@@ -64,6 +64,47 @@ def iso6336_single_stiffness(c_th, cm=0.8, cr=1.0, cb=0.975, helix_angle=0.0, mo
     return c_th * cm * cr * cb * np.cos(helix_angle) * (modulus / E_STEEL)
 
 
+#: line load F_t K_A / b [N/mm] at and above which ISO 6336-1 applies c' as computed
+ISO6336_FULL_LINE_LOAD = 100.0
+
+
+def iso6336_low_load_factor(line_load):
+    """((F_t K_A / b) / 100)^0.25 below 100 N/mm, else 1  [-] (ISO 6336-1:2006, clause 9, method B).
+
+    ISO 6336-1 gives c' = c'_th C_M C_R C_B cos(beta) for F_t K_A / b >= 100 N/mm
+    and, below that line load, the same value multiplied by
+    ((F_t K_A / b) / 100)^0.25: at light load the teeth do not bear over the full
+    face and the mesh is softer.  (Confirmed against an independent open
+    implementation of ISO 6336-1; the exponent is 0.25, not a linear scaling.)
+
+    Parameters
+    ----------
+    line_load : F_t K_A / b [N/mm], >= 0 (arrays broadcast)
+    """
+    w = np.maximum(np.asarray(line_load, dtype=float), 0.0)
+    return np.minimum(w / ISO6336_FULL_LINE_LOAD, 1.0) ** 0.25
+
+
+def iso6336_loaded_deflection(tangential_force, face_width, single_stiffness, application_factor=1.0):
+    """delta = F_t / (b c'(F_t))  [mm] with the low-load reduction of c' applied.
+
+    c'(F_t) = c' * :func:`iso6336_low_load_factor` (F_t K_A / b); so for line
+    loads below 100 N/mm delta = F_t / (b c') * (100 b / (F_t K_A))^0.25, i.e.
+    it grows as F_t^0.75, and it is 0 at F_t = 0.
+
+    Parameters
+    ----------
+    tangential_force : F_t [N], >= 0 (arrays broadcast)
+    face_width : b [mm], > 0
+    single_stiffness : c' at full line load [N/(mm um)], > 0
+    application_factor : K_A [-], > 0 (ISO 6336-1 application factor)
+    """
+    ft = np.asarray(tangential_force, dtype=float)
+    factor = iso6336_low_load_factor(ft * application_factor / face_width)
+    safe = np.where(factor > 0.0, factor, 1.0)
+    return np.where(factor > 0.0, iso6336_deflection(ft, face_width, single_stiffness) / safe, 0.0)
+
+
 def iso6336_deflection(tangential_force, face_width, single_stiffness):
     """delta = F_t / (b c')  [mm], deflection in the single-pair zone.
 

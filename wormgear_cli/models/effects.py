@@ -109,13 +109,24 @@ class Effect:
 
 def output_gear_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
     """(e / r_b1) sin(theta + psi)  [rad]: eccentricity e [mm] of the output gear,
-    r_b1 its base radius [mm]; once per output revolution."""
+    r_b1 its base radius [mm]; once per output revolution.
+
+    The involute rule (docs/budget.md, ``gear_pair.kinematics = "involute"``): an
+    eccentric gear moves its base circle by e sin(theta) along the line of action,
+    a TE of e / r_b at its own shaft."""
     return eccentricity / g.output_base_radius * np.sin(s.theta + phase)
 
 
 def intermediate_shaft_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
-    """(e / r_b1) sin(i_c theta + psi)  [rad]: eccentricity e [mm] of the pinion
-    (or wheel: same shaft, same order i_c)."""
+    """(e / r_b1) sin(i_c theta + psi)  [rad]: eccentricity e [mm] of the pinion, order i_c.
+
+    By the involute rule the pinion's eccentricity gives e / r_b2 at the pinion,
+    i.e. e / (r_b2 i_c) = e / r_b1 at the output (r_b2 i_c = r_b1).  The worm wheel
+    sits on the same shaft (same order) but converts through its own radius: a
+    wheel eccentricity e_w gives e_w / (r_b,wheel i_c) at the output, not e_w / r_b1;
+    enter it here as the equivalent e = e_w r_b1 / (r_b,wheel i_c).  (The spec's
+    ``assembly.wheel_eccentricity_mm`` follows the paper's rule instead, see
+    docs/budget.md.)"""
     return eccentricity / g.output_base_radius * np.sin(g.gear_ratio * s.theta + phase)
 
 

@@ -425,3 +425,60 @@ def gear_te_max_fast(pinion_radius, gear_radius, eccentricity, pressure_angle, d
     value = np.maximum(value, 0.0)
     phi = np.mod(phi, 2.0 * np.pi)
     return value.reshape(shape), phi.reshape(shape)
+
+
+# --- involute reading of the gear stage (``gear_pair.kinematics = "involute"``) -----------------
+
+
+class InvoluteStage(tuple):
+    """``(te_eccentricity, te_deformation, backlash, backlash_deformation, backlash_thickness)``
+    [rad at the output] of :func:`involute_stage`."""
+
+    __slots__ = ()
+
+    def __new__(cls, *values):
+        return super().__new__(cls, values)
+
+    te_eccentricity = property(lambda self: self[0])
+    te_deformation = property(lambda self: self[1])
+    backlash = property(lambda self: self[2])
+    backlash_deformation = property(lambda self: self[3])
+    backlash_thickness = property(lambda self: self[4])
+
+
+def involute_stage(gear_radius, pressure_angle, eccentricity, centre_distance_error, deflection,
+                   thickness_allowances):
+    """The spur stage read by involute theory, at the output gear  [rad].
+
+    * An eccentricity e of the pinion moves its base circle by e sin(phi) along the
+      line of action: TE e/r_b2 at the pinion's order, i.e. e/(r_b2 i_c) = e/r_b1 at
+      the output (r_b = r cos(alpha)); amplitude e/r_b1.
+    * A static centre-distance error Delta a leaves the involute action conjugate:
+      no TE, a circumferential backlash change j_t = 2 Delta a tan(alpha) at the pitch
+      circle; the eccentricity adds up to 2 e tan(alpha) once per pinion turn.
+    * Tooth deflection delta along the line of action: TE delta/r_b1 under load and a
+      lost motion 2 delta/r_b1 between the two directions.
+    * Tooth-thickness allowances E_sn1 + E_sn2 (ISO/TR 10064-2: j_bn = |E_sns1 + E_sns2|
+      cos(alpha_n), j_wt = j_bn / cos(alpha_wt) = |E_sns1 + E_sns2| for a standard spur
+      pair) add to the circumferential backlash.
+
+    Parameters
+    ----------
+    gear_radius : r1, output-gear pitch radius [mm], > 0
+    pressure_angle : alpha [rad]
+    eccentricity : e [mm], >= 0
+    centre_distance_error : Delta a [mm], >= 0
+    deflection : delta [mm] along the line of action, >= 0
+    thickness_allowances : E_sn1 + E_sn2 in magnitude [mm], >= 0
+
+    Returns :class:`InvoluteStage`.  Backlash angles are circumferential arcs on the
+    output's pitch circle divided by r1, deflection angles divided by r_b1.
+    """
+    rb = gear_radius * np.cos(pressure_angle)
+    t = np.tan(pressure_angle)
+    te_e = eccentricity / rb
+    te_d = deflection / rb
+    bl_d = 2.0 * deflection / rb
+    bl_t = thickness_allowances / gear_radius
+    bl = 2.0 * (centre_distance_error + eccentricity) * t / gear_radius + bl_t + bl_d
+    return InvoluteStage(float(te_e), float(te_d), float(bl), float(bl_d), float(bl_t))

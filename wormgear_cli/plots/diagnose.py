@@ -14,10 +14,10 @@ def draw(diag, doc: dict, unit: str):
     """A 2 x 2 figure: top, measured and simulated error per direction before
     (phases and offset fitted) and after (effects added); bottom, the residual.
     Every angle is converted from arcsec to ``unit``.  Returns the figure."""
-    from wormgear_cli.units import RAD_PER_UNIT
+    from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
     plt = pyplot()
-    factor = RAD_PER_UNIT["arcsec"] / RAD_PER_UNIT[unit]
+    factor = ARCSEC / RAD_PER_UNIT[unit]
     meas = diag.meas
     x = meas.angle_deg
     d = meas.direction

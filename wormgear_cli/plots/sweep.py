@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from wormgear_cli.plots import pyplot, save_figure
+from wormgear_cli.reports.sweep import grid2d, subsample
 from wormgear_cli.units import to_unit
 
 #: line cuts drawn per panel
@@ -18,13 +19,11 @@ _CUTS = 4
 
 
 def _cut_indices(n: int, k: int = _CUTS) -> np.ndarray:
-    return np.unique(np.linspace(0, n - 1, min(n, k)).round().astype(int))
+    return subsample(n, k)
 
 
 def _grid(sweep, data, name, unit):
-    grid = np.full(sweep.size, np.nan)
-    grid[data["_point"]] = data[name]
-    return to_unit(grid.reshape(sweep.i_values.size, sweep.l_values.size), unit)
+    return to_unit(grid2d(sweep, data, name), unit)
 
 
 def check_ratio_distance_plot(n_i: int, n_l: int) -> None:

@@ -7,7 +7,7 @@ own model (what ``diagnose`` fits against) comes from
 ``wormgear_cli.simulation.simulate``.  Noise: white per point plus one
 offset per run (both directions of a run share it).
 
-The tests in this file check the hand-written formulas against the
+tests/diagnosis/test_data.py checks the hand-written formulas against the
 registry, so the two paths must agree before the data are trusted.
 """
 
@@ -18,9 +18,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pytest
 
-ARCSEC = math.pi / 648000.0
+from wormgear_cli.diagnosis import diagnose, report
+from wormgear_cli.measurement import parse_measurement
+from wormgear_cli.spec import with_values
+from wormgear_cli.units import ARCSEC
 
 # --- MCH50 geometry from Table 1 (module 2.5 mm; z1 = 144, z2 = 18, wheel z3 = 30, single-start worm) --------------
 MODULE = 2.5
@@ -170,27 +172,58 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_hand_written_formula_matches_the_registry(name, mch50_spec):
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys
+# --- plans and helpers shared by the diagnosis tests ------------------------------------------------------------
 
-    rng = np.random.default_rng(5)
-    theta = rng.uniform(0, 2 * np.pi, 500)
-    d = np.where(rng.uniform(size=500) < 0.5, 1.0, -1.0)
-    load = rng.uniform(-300, 300, 500)
-    temp = rng.uniform(15, 40, 500)
-    sig = Signals(theta, d, load, temp, np.zeros(500))
-    reg = EFFECTS[name].function(sig, geometry(mch50_spec), **params_from_keys(name, CASES[name])) / ARCSEC
-    mine = hidden_error(name, CASES[name], theta, d, load, temp)
-    assert np.allclose(mine, reg, rtol=1e-9, atol=1e-9)
+WARM = (20.0, 35.0, 1200.0)
+STEPS = (0.0, 250.0, -250.0)
+
+#: each catalogue effect hidden alone at a realistic size, with the signals it needs varying:
+#: name -> (spec changes, plan, parameters in catalogue units, keys to check against the 95 % interval)
+HIDDEN = {
+    "output_gear_runout": ({}, Plan(), {"eccentricity_um": 8.0, "phase_deg": 40.0}, ("eccentricity_um", "phase_deg")),
+    "intermediate_shaft_runout": (NO_ORDER_8, Plan(), {"eccentricity_um": 6.0, "phase_deg": -110.0},
+                                  ("eccentricity_um", "phase_deg")),
+    "worm_runout": (NO_ORDER_240, Plan(kind="dense", targets=1000, runs=2, dwell_s=1.0),
+                    {"amplitude_um": 3.0, "phase_deg": 75.0}, ("amplitude_um", "phase_deg")),
+    "gear_mesh_error": ({}, Plan(kind="dense", targets=1000, runs=2, dwell_s=1.0),
+                        {"amplitude_um": 2.0, "phase_deg": -20.0}, ("amplitude_um", "phase_deg")),
+    "thermal_backlash": ({}, Plan(warmup=WARM), {"centre_distance_um_per_K": -0.8}, ("centre_distance_um_per_K",)),
+    "thermal_drift": ({}, Plan(warmup=WARM), {"arcsec_per_K": 0.45}, ("arcsec_per_K",)),
+    "torsional_compliance": ({}, Plan(runs=6, loads=STEPS), {"stiffness_Nm_per_arcsec": 30.0},
+                             ("stiffness_Nm_per_arcsec",)),
+    "bearing_clearance": ({}, Plan(), {"clearance_arcsec": 3.0}, ("clearance_arcsec",)),
+}
 
 
-def test_plan_rows_follow_the_iso_cycle():
-    rows = make_rows(Plan(runs=2, warmup=(20, 30, 100), loads=(0, 50)), np.random.default_rng(0))
-    assert rows["angle_deg"].shape == (96,)
-    # each run: forward ascending then reverse descending over the same targets
-    fwd, rev = rows["angle_deg"][:24], rows["angle_deg"][24:48]
-    assert np.all(np.diff(fwd) > 0) and np.array_equal(rev, fwd[::-1])
-    assert list(np.unique(rows["load_Nm"][rows["run"] == 2])) == [50.0]
-    assert rows["temperature_C"][0] == 20.0 and rows["temperature_C"][-1] > 29.0
+def spec_with(mch50_spec, changes):
+    return with_values(mch50_spec, changes) if changes else mch50_spec
+
+
+WARM_SLOW = (20.0, 34.0, 1500.0)
+TB = {"thermal_backlash": {"centre_distance_um_per_K": -0.3225}}
+REMEDY = "at least 3 runs in each direction"
+
+
+def drop_column(text: str, name: str) -> str:
+    lines = text.splitlines()
+    header = lines[1].split(",")
+    j = header.index(name)
+    return "\n".join(lines[:1] + [",".join(c for i, c in enumerate(line.split(",")) if i != j)
+                                  for line in lines[1:]]) + "\n"
+
+
+def set_column(text: str, name: str, value: str) -> str:
+    lines = text.splitlines()
+    j = lines[1].split(",").index(name)
+    return "\n".join(lines[:2] + [",".join(value if i == j else c for i, c in enumerate(line.split(",")))
+                                  for line in lines[2:]]) + "\n"
+
+
+def diagnose_doc(spec, text, **kw):
+    return report(diagnose(spec, parse_measurement(text, "<test>"), resamples=kw.pop("resamples", 20), **kw))
+
+
+def gap_never_grows(doc):
+    for e in doc["effects_found"]:
+        assert e["gap_share_pct"] > 0.0, e
+    assert doc["gap_after"]["rms_arcsec"] <= doc["gap_before"]["rms_arcsec"] + 1e-9

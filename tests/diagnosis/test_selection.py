@@ -1,43 +1,24 @@
-"""diagnose on data with hidden effects: named, bounded, gap shrinks; null data; decoys; what cannot be seen."""
+"""Forward selection on data with hidden effects: named, bounded, the gap shrinks; null data, decoys,
+drifting run noise, one run: nothing named that the data do not support."""
 
 from __future__ import annotations
 
+import io
+import math
+
+import numpy as np
 import pytest
 
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.spec import with_values
 
-from tests.test_diagnose_data import NO_ORDER_8, NO_ORDER_240, R_B1, Plan, make_measurement
-
-WARM = (20.0, 35.0, 1200.0)
-STEPS = (0.0, 250.0, -250.0)
-
-#: each catalogue effect hidden alone at a realistic size, with the signals it needs varying:
-#: name -> (spec changes, plan, parameters in catalogue units, keys to check against the 95 % interval)
-HIDDEN = {
-    "output_gear_runout": ({}, Plan(), {"eccentricity_um": 8.0, "phase_deg": 40.0}, ("eccentricity_um", "phase_deg")),
-    "intermediate_shaft_runout": (NO_ORDER_8, Plan(), {"eccentricity_um": 6.0, "phase_deg": -110.0},
-                                  ("eccentricity_um", "phase_deg")),
-    "worm_runout": (NO_ORDER_240, Plan(kind="dense", targets=1000, runs=2, dwell_s=1.0),
-                    {"amplitude_um": 3.0, "phase_deg": 75.0}, ("amplitude_um", "phase_deg")),
-    "gear_mesh_error": ({}, Plan(kind="dense", targets=1000, runs=2, dwell_s=1.0),
-                        {"amplitude_um": 2.0, "phase_deg": -20.0}, ("amplitude_um", "phase_deg")),
-    "thermal_backlash": ({}, Plan(warmup=WARM), {"centre_distance_um_per_K": -0.8}, ("centre_distance_um_per_K",)),
-    "thermal_drift": ({}, Plan(warmup=WARM), {"arcsec_per_K": 0.45}, ("arcsec_per_K",)),
-    "torsional_compliance": ({}, Plan(runs=6, loads=STEPS), {"stiffness_Nm_per_arcsec": 30.0},
-                             ("stiffness_Nm_per_arcsec",)),
-    "bearing_clearance": ({}, Plan(), {"clearance_arcsec": 3.0}, ("clearance_arcsec",)),
-}
-
-
-def _spec(mch50_spec, changes):
-    return with_values(mch50_spec, changes) if changes else mch50_spec
+from tests.diagnosis.data import (HIDDEN, R_B1, REMEDY, STEPS, WARM, Plan, diagnose_doc, gap_never_grows, make_csv,
+                                  make_measurement, spec_with)
 
 
 @pytest.mark.parametrize("name", sorted(HIDDEN))
 def test_each_effect_hidden_alone_is_named_bounded_and_shrinks_the_gap(name, mch50_spec):
     changes, plan, params, check = HIDDEN[name]
-    spec = _spec(mch50_spec, changes)
+    spec = spec_with(mch50_spec, changes)
     covered = []
     for seed in (11, 12):
         meas, _ = make_measurement(spec, plan, hidden={name: params}, seed=seed)
@@ -50,24 +31,7 @@ def test_each_effect_hidden_alone_is_named_bounded_and_shrinks_the_gap(name, mch
     assert any(covered), covered
 
 
-def test_the_95_percent_interval_covers_the_truth_at_its_nominal_rate(mch50_spec):
-    import numpy as np
-
-    _, plan, params, _ = HIDDEN["thermal_backlash"]
-    inside, estimates, half = [], [], []
-    for seed in range(30):
-        meas, _ = make_measurement(mch50_spec, plan, hidden={"thermal_backlash": params}, seed=500 + seed)
-        found = diagnose(mch50_spec, meas, resamples=0).found
-        assert [f.name for f in found] == ["thermal_backlash"]
-        lo, hi = found[0].intervals["centre_distance_um_per_K"]
-        inside.append(lo <= -0.8 <= hi)
-        estimates.append(found[0].params["coefficient"] * 1e3)
-        half.append((hi - lo) / 2)
-    assert sum(inside) >= 26, sum(inside)  # P(<= 25 of 30 | 95 %) ~ 1.6 %
-    # and not by being needlessly wide: the half-width is about 1.96 times the scatter of the estimates
-    assert np.mean(half) < 3.0 * np.std(estimates)
-
-
+@pytest.mark.slow  # 30-45 s: 30 and 40 seeded replicates
 def test_null_data_name_nothing_in_at_least_95_percent_of_seeds(mch50_spec):
     # every candidate testable: warm-up, load steps, both directions, jittered targets
     plan = Plan(targets=16, runs=4, warmup=(20.0, 30.0, 900.0), loads=(0.0, 200.0, -200.0))
@@ -111,6 +75,22 @@ def test_a_decoy_outside_the_catalogue_is_reported_unexplained_not_named(mch50_s
     assert orders[0]["amplitude_arcsec"] == pytest.approx(2.5, rel=0.15)
 
 
+def test_a_decoy_correlated_with_the_warm_up_is_not_forced_onto_thermal_drift(mch50_spec):
+    # a 1 arcsec order-1 differential pattern (outside the catalogue) in a warm-up: within each pass it
+    # correlates with the temperature rise, so a GLS test of thermal_drift finds it, but the fitted drift
+    # makes the gap several times larger
+    text, _ = make_csv(mch50_spec, Plan(runs=5, warmup=(20.0, 30.0, 1500.0)), seed=2,
+                       decoy=lambda theta, d: d * np.sin(theta))
+    doc = diagnose_doc(mch50_spec, text)
+    assert doc["effects_found"] == []
+    gap_never_grows(doc)
+    order1 = [u for u in doc["unexplained"] if u["kind"] == "order" and u["order"] == 1.0]
+    assert order1 and order1[0]["mode"] == "differential"
+    assert order1[0]["amplitude_arcsec"] == pytest.approx(1.0, rel=0.2)
+    rejected = [c for c in doc["candidates"] if c["status"] == "rejected"]
+    assert all("makes the RMS gap larger" in c["reason"] for c in rejected)
+
+
 def test_same_order_effect_absorbed_by_fitted_phases_is_reported_unobservable(mch50_spec):
     # MCH50's wheel eccentricity is a pure sinusoid at order i_c = 8 of fixed size A (its phase is fitted).
     # Rotating it from 0 to 60 deg adds the chord A (sin(8t + 60) - sin(8t)) = A sin(8t + 120): an
@@ -140,42 +120,6 @@ def test_same_order_effect_absorbed_by_fitted_phases_is_reported_unobservable(mc
     assert "wheel_eccentricity" in doc["effects_found"][0]["indistinguishable_from"]
 
 
-def test_same_order_excess_beyond_the_spec_sources_is_named_with_its_rivals(mch50_spec):
-    # 40 um (49 arcsec) is more than the order-8 sources can produce together (about 42 arcsec)
-    meas, _ = make_measurement(mch50_spec, Plan(), hidden={"intermediate_shaft_runout":
-                                                           {"eccentricity_um": 40.0, "phase_deg": 30.0}}, seed=9)
-    doc = report(diagnose(mch50_spec, meas, resamples=30))
-    found = {e["name"]: e for e in doc["effects_found"]}
-    assert "intermediate_shaft_runout" in found
-    rivals = found["intermediate_shaft_runout"]["indistinguishable_from"]
-    assert {"gear_eccentricity", "wheel_radial_composite", "wheel_eccentricity"} <= set(rivals)
-
-
-def test_orders_aliased_by_even_target_spacing_are_unobservable(mch50_spec):
-    # 24 evenly spaced targets: orders 144 and 240 fall on a constant (144 x 15 deg = 6 turns)
-    meas, _ = make_measurement(mch50_spec, Plan(kind="even"), hidden={"gear_mesh_error":
-                                                                      {"amplitude_um": 2.0, "phase_deg": 0.0}}, seed=2)
-    doc = report(diagnose(mch50_spec, meas, resamples=30))
-    status = {c["name"]: c for c in doc["candidates"]}
-    for name in ("gear_mesh_error", "worm_runout"):
-        assert status[name]["status"] == "unobservable"
-        assert "aliased" in status[name]["reason"]
-        assert "dense scan" in status[name]["remedy"] or "irregular" in status[name]["remedy"]
-    assert "gear_mesh_error" not in [e["name"] for e in doc["effects_found"]]
-
-
-def test_signals_that_do_not_vary_make_their_effects_unobservable(mch50_spec):
-    # one direction, no temperature column, no load column
-    meas, _ = make_measurement(mch50_spec, Plan(directions=(1,), runs=4), seed=4)
-    doc = report(diagnose(mch50_spec, meas, resamples=20))
-    status = {c["name"]: c for c in doc["candidates"]}
-    for name in ("thermal_backlash", "thermal_drift", "torsional_compliance", "bearing_clearance"):
-        assert status[name]["status"] == "unobservable", name
-    assert "temperature_C" in status["thermal_drift"]["reason"] and "warm-up" in status["thermal_drift"]["remedy"]
-    assert "load" in status["torsional_compliance"]["reason"] + status["torsional_compliance"]["remedy"]
-    assert "direction" in status["bearing_clearance"]["reason"]
-
-
 def test_less_lost_motion_than_modelled_is_not_forced_onto_bearing_clearance(mch50_spec):
     meas, _ = make_measurement(mch50_spec, Plan(), hidden={"bearing_clearance": {"clearance_arcsec": -4.0}}, seed=6)
     doc = report(diagnose(mch50_spec, meas, resamples=20))
@@ -184,3 +128,35 @@ def test_less_lost_motion_than_modelled_is_not_forced_onto_bearing_clearance(mch
     assert status["status"] == "unphysical"
     assert "less lost motion" in status["remedy"]
     assert any(u["kind"] == "reversal" for u in doc["unexplained"])
+
+
+def test_drifting_run_noise_does_not_make_a_thermal_backlash(mch50_spec):
+    from wormgear_cli.synth import Noise, Programme, synthesize
+    from wormgear_cli.synth import Plan as SynthPlan
+
+    cols, _ = synthesize(mch50_spec, SynthPlan(kind="dense", points=720, runs=3), noise=Noise(0.3, 0.5, "drift"),
+                         seed=205, random_phases=True, temperature=Programme("cycle", (20.0, 30.0, 600.0)))
+    names = ["angle_deg", "error_arcsec", "direction", "run", "temperature_C", "time_s"]
+    out = io.StringIO()
+    out.write(",".join(names) + "\n")
+    for row in np.column_stack([cols[c] for c in names]):
+        out.write(",".join(repr(float(v)) for v in row) + "\n")
+    doc = diagnose_doc(mch50_spec, out.getvalue())
+    gap_never_grows(doc)
+    assert "thermal_backlash" not in [e["name"] for e in doc["effects_found"]]
+
+
+def test_one_run_warm_up_names_nothing_and_reports_the_residual(mch50_spec):
+    # a single run through a warm-up: angle, time and temperature move together, the pass-to-pass scatter
+    # cannot be estimated; the hidden thermal_backlash must not be pinned on an order-1 runout
+    for seed in (1, 2):
+        text, _ = make_csv(mch50_spec, Plan(runs=1, targets=48, warmup=(20.0, 34.0, 500.0)), seed=seed, run_sd=0.0,
+                           hidden={"thermal_backlash": {"centre_distance_um_per_K": -1.0}})
+        doc = diagnose_doc(mch50_spec, text)
+        assert doc["effects_found"] == []
+        status = {c["name"]: c for c in doc["candidates"]}
+        assert status["thermal_backlash"]["status"] == "untestable"
+        assert REMEDY in status["thermal_backlash"]["remedy"]
+        assert doc["noise"]["before"]["run_arcsec"] is None and doc["noise"]["before"]["pass_arcsec"] is None
+        assert doc["unexplained"] and "untestable" in doc["verdict"]
+        assert any(u.get("untestable_candidate") == "thermal_backlash" for u in doc["unexplained"])

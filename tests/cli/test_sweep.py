@@ -1,0 +1,428 @@
+"""Tests of ``wormgear sweep`` (the command: options, outputs, limits, messages)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import sys
+
+import numpy as np
+import pytest
+
+from wormgear_cli.cli import app
+from wormgear_cli.spec import FIELD_BY_PATH
+
+
+def run(runner, *args):
+    return runner.invoke(app, ["sweep", *map(str, args)])
+
+
+def parse_csv(text):
+    rows = list(csv.reader(io.StringIO(text)))
+    return rows[0], [[float(v) for v in r] for r in rows[1:]]
+
+
+def test_csv_columns_and_values_match_json(runner, mch50_path):
+    args = (mch50_path, "--i", "2:10:5", "--l-mm", "100:300:4", "--unit", "deg")
+    r_csv = run(runner, *args, "--format", "csv")
+    r_json = run(runner, *args, "--format", "json")
+    assert r_csv.exit_code == 0 and r_json.exit_code == 0
+    assert r_csv.stderr == "" and r_json.stderr == ""
+    header, rows = parse_csv(r_csv.stdout)
+    assert header[:5] == ["i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash"]
+    doc = json.loads(r_json.stdout)
+    assert doc["unit"] == "deg" and doc["columns"] == header and len(doc["points"]) == 20 == len(rows)
+    for row, point in zip(rows, doc["points"]):
+        for name, v in zip(header, row):
+            assert v == pytest.approx(point[name], rel=1e-11)
+    assert [p["i"] for p in doc["points"][:5]] == [2.0, 2.0, 2.0, 2.0, 4.0]  # row-major, i outermost
+    assert {f["id"] for f in doc["summary"]["findings"]} == {"l_more_sensitive_than_i", "l_gain_fades_beyond_200mm",
+                                                            "i_matters_below_6"}
+
+
+def test_units_scale(runner, mch50_path):
+    a = json.loads(run(runner, mch50_path, "--i", "8:8:1", "--l-mm", "202.5:202.5:1", "--format", "json",
+                       "--unit", "deg").stdout)["points"][0]
+    b = json.loads(run(runner, mch50_path, "--i", "8:8:1", "--l-mm", "202.5:202.5:1", "--format", "json",
+                       "--unit", "arcsec").stdout)["points"][0]
+    assert b["total_backlash"] == pytest.approx(3600 * a["total_backlash"], rel=1e-13)
+    assert b["gear_te_phi_deg"] == a["gear_te_phi_deg"]
+
+
+def test_table_is_deterministic_and_summarises(runner, mch50_path):
+    args = (mch50_path, "--i", "2:10:30", "--l-mm", "100:300:40")
+    r1, r2 = run(runner, *args), run(runner, *args)
+    assert r1.exit_code == 0 and r1.stdout_bytes == r2.stdout_bytes and r1.stderr == ""
+    out = r1.stdout
+    assert "showing 12 of 30 i values and 8 of 40 l values" in out
+    assert out.count("holds") == 3
+    assert "gear TE falls 50.2 % from l = 100 to 200 mm and" in out and "33.4 % from 200 to 300 mm" in out
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:0"), '--i "2:10:0": N must be at least 1, got 0'),
+    (("--i", "2:10:-3"), '--i "2:10:-3": N must be at least 1, got -3'),
+    (("--i", "2:10:2.5"), '--i "2:10:2.5": N "2.5" is not a whole number'),
+    (("--l-mm", "300:100:5"), '--l-mm "300:100:5": STOP (100) is less than START (300)'),
+    (("--i", "two:10:5"), '--i "two:10:5": START "two" is not a number'),
+    (("--l-mm", "100:x:5"), '--l-mm "100:x:5": STOP "x" is not a number'),
+    (("--i", "0:10:5"), '--i "0:10:5": values must be > 0 (START is 0)'),
+    (("--l-mm", "-50:100:3"), '--l-mm "-50:100:3": values must be > 0 (START is -50)'),
+    (("--i", "2:10:1"), '--i "2:10:1": N = 1 needs START = STOP (got 2 and 10)'),
+    (("--i", "2:10"), '--i "2:10": expected START:STOP:N (N values from START to STOP inclusive), e.g. 2:10:9'),
+    (("--i", "inf:10:3"), '--i "inf:10:3": START "inf" is not a finite number'),
+    ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
+    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected 1 <= K <= N'),
+    (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8'),
+    (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module from 0.05 to 100 [mm]"),
+    (("--i", "2:4:3", "--min-pinion-teeth", "12"), "--min-pinion-teeth applies only with --module-mm"),
+    (("--i", "2:4:3", "--l-mm", "10:20:3", "--module-mm", "2.5"),
+     "no design left: at --module-mm 2.5 every point of the grid has a gear with fewer than 17 teeth; raise l, "
+     "or lower --min-pinion-teeth"),
+    (("--param", "worm_pair.lead_eror_mm=0:0.05:3"),
+     "--param worm_pair.lead_eror_mm: unknown spec key (did you mean worm_pair.lead_error_mm?)"),
+    (("--param", "stiffness.model=0:1:2"),
+     '--param stiffness.model: not a numeric key (it takes one of "iso6336", "empirical"); only single numbers '
+     "can be swept"),
+    (("--param", "gear_pair.pressure_angle_deg=10:45:3"),
+     "--param gear_pair.pressure_angle_deg: value 45 is out of range, expected "
+     + FIELD_BY_PATH["gear_pair.pressure_angle_deg"].expected()),
+    (("--param", "gear_pair.pinion.teeth=16:17:3"),
+     '--param gear_pair.pinion.teeth "16:17:3": the key takes whole numbers, but the range gives 16.5; choose N '
+     "so that (STOP - START)/(N - 1) is whole"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--param", "worm_pair.lead_error_mm=0:0.01:2"),
+     "--param worm_pair.lead_error_mm: given twice; give each key once"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--i", "2:3:2"),
+     "--param cannot be combined with --i, --l-mm, --module-mm, --hold or --min-pinion-teeth; run two sweeps"),
+])
+def test_bad_input_exits_2_with_one_message(runner, mch50_path, args, message):
+    r = run(runner, mch50_path, *args, "--format", "csv")
+    assert r.exit_code == 2
+    assert r.stderr == f"error: {message}\n"
+    assert r.stdout == ""
+
+
+def test_missing_drive_file(runner, tmp_path):
+    r = run(runner, tmp_path / "nope.toml", "--i", "2:3:2")
+    assert r.exit_code == 2 and r.stderr == f"error: {tmp_path / 'nope.toml'}: file not found\n"
+
+
+@pytest.mark.parametrize("extra", [(), ("--module-mm", "2.5"), ("--hold", "torque")])
+def test_shards_concatenate_to_the_full_csv(runner, mch50_path, extra):
+    args = (mch50_path, "--i", "2:10:7", "--l-mm", "60:300:13", "--format", "csv", *extra)
+    full = run(runner, *args)
+    assert full.exit_code == 0
+    parts = [run(runner, *args, "--shard", f"{k}/5") for k in range(1, 6)]
+    assert all(p.exit_code == 0 for p in parts)
+    header = parts[0].stdout_bytes.split(b"\n", 1)[0] + b"\n"
+    assert all(p.stdout_bytes.startswith(header) for p in parts)
+    joined = header + b"".join(p.stdout_bytes[len(header):] for p in parts)
+    assert joined == full.stdout_bytes
+    assert len(full.stdout.splitlines()) > 2
+
+
+def test_param_shards_concatenate(runner, mch50_path):
+    args = (mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3", "--param", "gear_pair.pinion.teeth=16:20:3",
+            "--format", "csv")
+    full = run(runner, *args).stdout_bytes
+    parts = [run(runner, *args, "--shard", f"{k}/4").stdout_bytes for k in range(1, 5)]
+    header = full.split(b"\n", 1)[0] + b"\n"
+    assert header + b"".join(p[len(header):] for p in parts) == full
+
+
+def test_json_shard_carries_its_points_only(runner, mch50_path):
+    doc = json.loads(run(runner, mch50_path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "json",
+                         "--shard", "2/2").stdout)
+    assert doc["shard"] == {"k": 2, "n": 2, "first_point": 4, "stop_point": 9, "total_points": 9}
+    assert len(doc["points"]) == 5 and "summary" not in doc
+    assert run(runner, mch50_path, "--i", "2:10:3", "--shard", "1/2").exit_code == 2  # table needs the grid
+
+
+def test_module_mode_reports_whole_teeth(runner, mch50_path):
+    r = run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "40:300:14", "--module-mm", "2.5", "--format", "json")
+    doc = json.loads(r.stdout)
+    assert doc["columns"][-4:] == ["z1", "z2", "i_used", "l_used_mm"] and doc["min_pinion_teeth"] == 17
+    pts = doc["points"]
+    assert len(pts) + doc["skipped"] == 9 * 14 and doc["skipped"] > 0
+    for p in pts:
+        assert isinstance(p["z1"], int) and isinstance(p["z2"], int)
+        assert min(p["z1"], p["z2"]) >= 17
+        assert p["i_used"] == pytest.approx(p["z1"] / p["z2"], rel=1e-15)
+        assert p["l_used_mm"] == pytest.approx(2.5 * (p["z1"] + p["z2"]) / 2, rel=1e-15)
+        assert abs(p["l_used_mm"] - p["l_mm"]) <= 2.5 / 4 + 1e-9  # nearest reachable centre distance
+    low = json.loads(run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "40:300:14", "--module-mm", "2.5",
+                         "--min-pinion-teeth", "12", "--format", "json").stdout)
+    assert len(low["points"]) > len(pts)
+
+
+def test_param_sweep_reproduces_analyze(runner, mch50_path, mch50_spec):
+    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze
+    from wormgear_cli.spec import with_values
+
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3",
+            "--param", "gear_pair.pinion.teeth=16:20:3", "--format", "csv", "--unit", "arcsec")
+    assert r.exit_code == 0 and r.stderr == ""
+    header, rows = parse_csv(r.stdout)
+    keys = ["worm_pair.lead_error_mm", "gear_pair.pinion.teeth"]
+    assert header == keys + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
+    assert [(row[0], row[1]) for row in rows] == [(e, z) for e in (0.0, 0.025, 0.05) for z in (16, 18, 20)]
+    for row in rows:
+        spec = with_values(mch50_spec, {keys[0]: row[0], keys[1]: int(row[1])})
+        expected = analyze(spec).metrics("arcsec")
+        assert row[2:] == [expected[c] for c in header[2:]]  # exact: same floats, repr round-trip
+
+
+def test_param_json(runner, mch50_path):
+    doc = json.loads(run(runner, mch50_path, "--param", "loads.gear_normal_force_N=0:2000:5", "--format",
+                         "json").stdout)
+    te = [p["gear_transmission_error"] for p in doc["points"]]
+    assert len(te) == 5 and all(b > a for a, b in zip(te, te[1:]))  # more load, more TE
+    assert doc["summary"]["best"]["total_transmission_error"]["loads.gear_normal_force_N"] == 0.0
+
+
+def test_output_file_and_input_protection(runner, mch50_path, tmp_path):
+    out = tmp_path / "grid.csv"
+    r = run(runner, mch50_path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "csv", "-o", out)
+    assert r.exit_code == 0 and r.stdout == "" and out.read_text().startswith("i,l_mm,")
+    r = run(runner, mch50_path, "--i", "2:10:3", "--format", "csv", "-o", mch50_path)
+    assert r.exit_code == 2 and "refusing to overwrite the input file" in r.stderr
+
+
+def test_plot_writes_png(runner, mch50_path, tmp_path):
+    pytest.importorskip("matplotlib")
+    png = tmp_path / "surface.png"
+    r = run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "100:300:11", "--plot", png, "--format", "csv")
+    assert r.exit_code == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    one = tmp_path / "param.png"
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:4", "--plot", one)
+    assert r.exit_code == 0 and one.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_plot_without_matplotlib_gives_the_install_hint(runner, mch50_path, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError
+    r = run(runner, mch50_path, "--i", "2:10:3", "--plot", tmp_path / "x.png")
+    assert r.exit_code == 2
+    assert r.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert not (tmp_path / "x.png").exists()
+
+
+def _drive_with(tmp_path, name, **keys):
+    """The MCH50 drive file with top-level-in-section keys replaced (like sed on the file)."""
+    import re
+
+    from tests.conftest import MCH50
+
+    text = MCH50.read_text()
+    for key, value in keys.items():
+        text, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
+        assert n == 1, key
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture
+def zero_te_drive(tmp_path):
+    """No gear eccentricity and no gear tooth load: the paper's Delta phi_cc is 0 for every phi."""
+    return _drive_with(tmp_path, "zero.toml", gear_centre_distance_error_mm=0, gear_normal_force_N=0)
+
+
+@pytest.mark.parametrize("grid", [("--i", "2:10:3", "--l-mm", "100:300:3"), ("--l-mm", "100:300:3")])
+def test_findings_are_na_when_gear_te_is_zero(runner, zero_te_drive, grid):
+    doc_run = run(runner, zero_te_drive, *grid, "--format", "json")
+    assert doc_run.exit_code == 0, doc_run.stderr
+    assert doc_run.stderr == ""
+    doc = json.loads(doc_run.stdout)
+    # the model: with Delta e = 0 and delta1 = 0 the gear TE vanishes at every point
+    assert all(p["gear_transmission_error"] == 0.0 for p in doc["points"])
+    found = {f["id"]: f for f in doc["summary"]["findings"]}
+    assert found["l_more_sensitive_than_i"]["holds"] is None
+    assert found["l_gain_fades_beyond_200mm"]["holds"] is None
+    reason = ("not testable on this grid: gear TE is 0 everywhere (the spec has no gear eccentricity and no gear "
+              "tooth load), so its relative changes are undefined")
+    assert found["l_more_sensitive_than_i"]["statement"] == reason
+    assert found["l_gain_fades_beyond_200mm"]["statement"] == reason
+    table = run(runner, zero_te_drive, *grid)
+    assert table.exit_code == 0 and table.stderr == ""
+    assert "holds" not in table.stdout and table.stdout.count("n/a") == 3
+
+
+def test_findings_stay_testable_without_eccentricity_but_with_load(tmp_path, runner):
+    """Delta e = 0 alone leaves the load term delta1 sin(alpha)/R2 > 0: the checks still run."""
+    path = _drive_with(tmp_path, "noecc.toml", gear_centre_distance_error_mm=0)
+    doc = json.loads(run(runner, path, "--i", "2:10:3", "--l-mm", "100:300:3", "--format", "json").stdout)
+    assert all(p["gear_transmission_error"] > 0 for p in doc["points"])
+    assert all(f["holds"] is not None for f in doc["summary"]["findings"])
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:1e20"), '--i "2:10:1e20": N = 1e20 is more than the limit of 10000000 values per axis'),
+    (("--l-mm", "100:300:10000001"),
+     '--l-mm "100:300:10000001": N = 10000001 is more than the limit of 10000000 values per axis'),
+    (("--param", "worm_pair.lead_error_mm=0:1:1e20"),
+     '--param worm_pair.lead_error_mm "0:1:1e20": N = 1e20 is more than the limit of 100000 values in a --param '
+     "sweep"),
+    (("--i", "2:10:1e9", "--l-mm", "100:300:1e9"),
+     '--i "2:10:1e9": N = 1e9 is more than the limit of 10000000 values per axis'),
+])
+@pytest.mark.parametrize("fmt", ["table", "json", "csv"])
+def test_huge_n_exits_2_naming_the_option(runner, mch50_path, args, message, fmt):
+    r = run(runner, mch50_path, *args, "--format", fmt)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:10:1e7", "--format", "table"),
+     "--i x --l-mm: 10000000 x 1 = 10000000 points are more than the limit of 2000000 for --format table (it "
+     "holds the whole grid); use --format csv or fewer values"),
+    (("--i", "2:10:1000", "--l-mm", "100:300:101", "--format", "json"),
+     "--i x --l-mm: 1000 x 101 = 101000 points are more than the limit of 100000 for --format json (it holds "
+     "every point as an object); use --format csv, fewer values or --shard K/N"),
+    (("--i", "2:10:1e6", "--l-mm", "100:300:3", "--format", "csv", "-o", "OUT"),
+     "--i x --l-mm: 1000000 x 3 = 3000000 points are more than the limit of 2000000 for --format csv with -o "
+     "(the file is written at once); write to stdout instead (it is streamed: > FILE) or use --shard K/N"),
+    (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv"),
+     "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points are more than the limit of 1000000000 for "
+     "--format csv (about 2.5 us per point); split it with --shard K/N"),
+    (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv", "--shard", "2/1000"),
+     "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points (100000000000 in this shard) are more than the "
+     "limit of 1000000000 for --format csv (about 2.5 us per point); split it with --shard K/N"),
+    (("--i", "2:10:2000", "--l-mm", "100:300:1001", "--format", "csv", "--plot", "PLOT"),
+     "--i x --l-mm: 2000 x 1001 = 2002000 points are more than the limit of 2000000 for --plot (it holds the "
+     "whole grid); plot a coarser grid"),
+])
+def test_point_limits_are_checked_before_building_anything(runner, mch50_path, tmp_path, monkeypatch, args,
+                                                            message):
+    from wormgear_cli import sweep as core
+
+    def no_arrays(self):
+        raise AssertionError("an axis was built before the size check")
+
+    monkeypatch.setattr(core.RangeSpec, "values", no_arrays)
+    args = [str(tmp_path / "out.csv") if a == "OUT" else str(tmp_path / "p.png") if a == "PLOT" else a
+            for a in args]
+    r = run(runner, mch50_path, *args)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_shard_of_a_huge_grid_runs(runner, mch50_path):
+    """Per-axis limits allow big grids to be sharded; this shard has 100 points."""
+    r = run(runner, mch50_path, "--i", "2:10:2e6", "--l-mm", "100:300:2e6", "--format", "csv",
+            "--shard", "3/40000000000")
+    assert r.exit_code == 0, r.stderr
+    header, rows = parse_csv(r.stdout)
+    assert len(rows) == 100
+    step_l = 200 / (2e6 - 1)
+    # points 200..299 of the row-major list: i index 0, l indices 200..299
+    expected_l = [100 + k * step_l for k in range(200, 300)]
+    assert [row[1] for row in rows] == pytest.approx(expected_l, rel=1e-11)  # CSV has 12 digits
+    assert all(row[0] == 2.0 for row in rows)
+
+
+def test_param_grid_size_is_limited(runner, mch50_path):
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:1000", "--param",
+            "gear_pair.pinion.teeth=10:1009:1000", "--format", "csv")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == ("error: --param: 1000 x 1000 = 1000000 points are more than the limit of 100000 points of "
+                        "a --param sweep (each point is a full analyze, about 1.3 ms); use fewer values\n")
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:50001", "--format", "json")
+    assert r.exit_code == 2 and r.stderr == ("error: --param: 50001 = 50001 points are more than the limit of 50000 "
+                                             "for --format json (it holds every point as an object); use --format "
+                                             "csv or --shard K/N\n")
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:1:100001", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == ('error: --param worm_pair.lead_error_mm "0:1:100001": N = 100001 is '
+                                             "more than the limit of 100000 values in a --param sweep\n")
+
+
+def test_param_csv_streams_rows_to_stdout(runner, mch50_path, tmp_path, monkeypatch):
+    args = (mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:6", "--format", "csv")
+    out = tmp_path / "p.csv"
+    assert run(runner, *args, "-o", out).exit_code == 0
+    streamed = run(runner, *args)
+    assert streamed.exit_code == 0 and streamed.stdout == out.read_text()  # same bytes either way
+    # streamed: rows computed before a failure are already out (nothing is held back)
+    from wormgear_cli import sweep as core
+    from wormgear_cli.errors import UsageError
+
+    real = core.param_rows
+
+    def failing(*a, **k):
+        for n, item in enumerate(real(*a, **k)):
+            if n == 150:
+                raise UsageError("stop")
+            yield item
+
+    monkeypatch.setattr(core, "param_rows", failing)
+    r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:200", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == "error: stop\n"
+    header, rows = parse_csv(r.stdout)
+    assert header[0] == "worm_pair.lead_error_mm" and len(rows) == 100
+    assert [row[0] for row in rows] == pytest.approx(list(np.linspace(0, 0.05, 200)[:100]), rel=1e-15)
+
+
+@pytest.mark.parametrize("module, message", [
+    ("1e-300", "--module-mm 1e-300: expected a module from 0.05 to 100 [mm]"),
+    ("0.04", "--module-mm 0.04: expected a module from 0.05 to 100 [mm]"),
+    ("101", "--module-mm 101: expected a module from 0.05 to 100 [mm]"),
+    ("nan", "--module-mm nan: expected a module from 0.05 to 100 [mm]"),
+])
+def test_module_outside_the_physical_range_exits_2(runner, mch50_path, module, message):
+    r = run(runner, mch50_path, "--i", "2:10:3", "--module-mm", module, "--format", "csv")
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+
+
+def test_module_tooth_counts_stay_whole_and_positive(runner, mch50_path):
+    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "1:2:3", "--module-mm", "0.05", "--format", "json")
+    assert r.exit_code == 0, r.stderr
+    pts = json.loads(r.stdout)["points"]
+    assert pts
+    for p in pts:
+        assert p["z1"] > 0 and p["z2"] > 0
+        assert p["z1"] + p["z2"] == round(2 * p["l_mm"] / 0.05)  # the tooth sum for l at this module
+    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "100:1e9:2", "--module-mm", "0.05", "--format", "csv")
+    assert r.exit_code == 2 and r.stderr == (
+        "error: --module-mm 0.05: l = 1e+09 mm needs 4e+10 teeth (z1 + z2 = 2 l / m); at most 1000000 are "
+        "supported, use a larger module or a shorter --l-mm range\n")
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--i", "2:2:1", "--l-mm", "200:200:1"),
+     "--plot needs at least 2 values of i or of l (a single point has no curve to draw)"),
+    (("--l-mm", "200:200:1"), "--plot needs at least 2 values of i or of l (a single point has no curve to draw)"),
+    (("--param", "worm_pair.lead_error_mm=0.01:0.01:1"),
+     "--plot needs at least 2 values of a --param key (a single point has no curve to draw)"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:2", "--param", "gear_pair.pinion.teeth=16:20:3",
+      "--param", "loads.gear_normal_force_N=0:1:2"), "--plot draws one or two --param keys, got 3"),
+])
+@pytest.mark.parametrize("fmt", ["csv", "json", "table"])
+def test_infeasible_plot_fails_before_any_output(runner, mch50_path, tmp_path, monkeypatch, args, message, fmt):
+    from wormgear_cli import sweep as core
+
+    def no_work(*a, **k):
+        raise AssertionError("the sweep ran before the plot check")
+
+    monkeypatch.setattr(core, "RatioDistanceSweep", no_work)
+    monkeypatch.setattr(core, "param_rows", no_work)
+    png = tmp_path / "p.png"
+    r = run(runner, mch50_path, *args, "--plot", png, "--format", fmt)
+    assert (r.exit_code, r.stderr, r.stdout) == (2, f"error: {message}\n", "")
+    assert not png.exists()
+
+
+def test_effect_parameters_are_refused_with_a_reason(runner, mch50_path, mch50_spec):
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import with_values
+
+    # the reason: [effects.*] do not enter the analyze metrics, so every row would be the same
+    with_effect = with_values(mch50_spec, {"effects.bearing_clearance.clearance_arcsec": 8.0})
+    assert with_effect.effects  # the key is a valid spec key ...
+    assert analyze(with_effect).metrics("arcsec") == analyze(mch50_spec).metrics("arcsec")  # ... without effect
+    r = run(runner, mch50_path, "--param", "effects.bearing_clearance.clearance_arcsec=0:8:2", "--format", "csv")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == ("error: --param effects.bearing_clearance.clearance_arcsec: effect parameters cannot be "
+                        "swept with --param (the [effects.*] tables feed simulate and diagnose, not the analyze "
+                        "metrics of a sweep); vary it in the drive file and run wormgear simulate\n")
+

@@ -1,0 +1,91 @@
+"""ISO 1328-1:2013 / ISO 1328-2:1997 tolerances from a grade (wormgear_cli.models.iso1328).
+
+Golden values: the standard's worked example (d = 100 mm, m = 2 mm, b = 20 mm, class 6:
+f_pT 8.5, F_pT 27, F_alphaT 11, F_rT 24 um, exact after the standard's rounding) and
+hand calculations written out in the comments (rounded per ISO 1328-1:2013 5.2.3).
+"""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from wormgear_cli.models import iso1328
+from wormgear_cli.models.iso1328 import GradeError, flank_tolerances, radial_composite, round_tolerance
+
+
+def test_the_standards_worked_example():
+    t = flank_tolerances(6, 2.0, 100.0, 20.0)
+    assert (t.f_pT, t.F_pT, t.F_alphaT, t.F_rT) == (8.5, 27.0, 11.0, 24.0)
+
+
+def test_second_check_value_m3_d120_class6():
+    # hand: s = sqrt(2); f_pT = (0.12 + 1.2 + 5) s = 8.94 -> 9.0; F_pT = (0.24 + 6.025 + 2.1 + 12) s = 28.80 -> 29;
+    # f_HaT = (1.2 + 0.12 + 4) s = 7.52, f_faT = (1.65 + 5) s = 9.40, F_aT = 12.04 -> 12;
+    # the same three values as an independent open implementation's test of ISO 1328-1:2013
+    t = flank_tolerances(6, 3.0, 120.0, 30.0)
+    assert (t.f_pT, t.F_pT, t.F_alphaT) == (9.0, 29.0, 12.0)
+
+
+def test_the_rotary_tables_class5_output_gear():
+    # hand: F_pT = 0.72 + 0.55 sqrt(360) + 1.4 + 12 = 24.56 -> 25 um; f_pT = 0.36 + 0.8 + 5 = 6.16 -> 6.0 um
+    t = flank_tolerances(5, 2.0, 360.0, 40.0, 180)
+    assert (t.F_pT, t.f_pT) == (25.0, 6.0)
+
+
+@pytest.mark.parametrize("raw, rounded", [(12.49, 12.0), (10.5, 11.0), (10.0, 10.0), (7.2, 7.0), (7.26, 7.5),
+                                          (5.0, 5.0), (4.96, 5.0), (4.94, 4.9), (0.04, 0.0)])
+def test_rounding_of_clause_5_2_3(raw, rounded):
+    assert round_tolerance(raw) == rounded
+
+
+@given(st.integers(1, 10), st.floats(0.5, 70), st.floats(5, 15000), st.floats(4, 1200))
+def test_a_coarser_class_never_tightens_a_tolerance(a, m, d, b):
+    lo, hi = flank_tolerances(a, m, d, b), flank_tolerances(a + 1, m, d, b)
+    for name in ("f_pT", "F_pT", "F_alphaT", "F_rT", "F_betaT"):
+        assert getattr(hi, name) >= getattr(lo, name)
+    # one class is a factor sqrt(2) before rounding; rounding moves each by at most half a step (<= 0.5 um)
+    assert hi.F_pT == pytest.approx(lo.F_pT * 2 ** 0.5, abs=0.5 + 0.5 * 2 ** 0.5)
+
+
+@pytest.mark.parametrize("grade", [0, 12, -1])
+def test_grade_outside_1_to_11_is_an_error(grade):
+    with pytest.raises(GradeError, match=r"expected an integer in \[1, 11\]"):
+        flank_tolerances(grade, 2.0, 100.0, 20.0)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(module=0.3), r"module 0.3 outside .* \[0.5, 70\] mm"),
+    (dict(diameter=20000.0), r"diameter 20000 outside .* \[5, 15000\] mm"),
+    (dict(face_width=2.0), r"face_width 2 outside .* \[4, 1200\] mm"),
+    (dict(teeth=4), r"teeth 4 outside .* \[5, 1000\]"),
+])
+def test_outside_the_scope_of_part_1_is_an_error(kwargs, message):
+    args = dict(module=2.0, diameter=100.0, face_width=20.0, teeth=50) | kwargs
+    with pytest.raises(GradeError, match=message):
+        flank_tolerances(6, **args)
+
+
+def test_scope_is_data():
+    assert {r.name for r in iso1328.PART1_SCOPE} == {"module", "diameter", "face_width", "teeth"}
+    assert all(r.on_violation == "error" for r in iso1328.PART1_SCOPE)
+    assert all(r.on_violation == "warning" for r in iso1328.PART2_SCOPE)
+
+
+def test_radial_composite_with_range_means():
+    # hand: m = 2 lies in (1.5, 2.5] -> sqrt(3.75) = 1.936; d = 100 in (50, 125] -> sqrt(6250) = 79.06;
+    # F_i'' = (6.197 + 8.981 + 6.4) sqrt(2) = 30.52 -> 31; f_i'' = (5.732 + 0.089 + 0.8) sqrt(2) = 9.36 -> 9.5
+    rc = radial_composite(6, 2.0, 100.0)
+    assert (rc.F_i2T, rc.f_i2T) == (31.0, 9.5)
+    assert rc.module_mean == pytest.approx(1.936, abs=1e-3) and rc.warnings == ()
+    # hand: m = 3 in (2.5, 4] -> 3.162, d = 135 in (125, 280] -> 187.08: (10.12 + 13.81 + 6.4) = 30.3 -> 30
+    assert radial_composite(5, 3.0, 135.0).F_i2T == 30.0
+
+
+def test_radial_composite_extrapolated_warns_and_grades_are_4_to_12():
+    rc = radial_composite(6, 2.0, 1500.0)
+    assert rc.warnings == ("diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: its formulas are "
+                           "extrapolated",)
+    with pytest.raises(GradeError, match=r"\[4, 12\]"):
+        radial_composite(3, 2.0, 100.0)

@@ -1,0 +1,432 @@
+"""Fitting the spec's model: phases of its periodic sources, zero offset and effect columns.
+
+Deterministic starts (as specified, aligned with the measured harmonics),
+a grid over each shaft's phases, a Levenberg-Marquardt polish in the GLS
+metric and REML variance components, alternated (:func:`fit_model`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import numpy as np
+
+from wormgear_cli.diagnosis.design import orthonormal
+from wormgear_cli.diagnosis.mixed import Cross, VarFit, reml
+from wormgear_cli.diagnosis.runs import Groups, pass_sums
+from wormgear_cli.units import ARCSEC
+
+
+@dataclass(frozen=True)
+class PhaseSource:
+    """A periodic term of the spec whose phase is fitted.
+
+    ``name``: source name (as :func:`simulation.periodic_sources`) or
+    ``effect:NAME``; ``key``: TOML path of its phase key; ``order``
+    [cycles/output rev]; ``amplitude`` [arcsec] (first harmonic, as
+    specified); ``phase`` [rad] as specified; ``contrib(signals, psi)`` ->
+    its whole contribution [arcsec] (common part and lost-motion part)."""
+
+    name: str
+    key: str
+    order: float
+    amplitude: float
+    phase: float
+    contrib: Callable
+
+
+def _source_contrib(src):
+    def contrib(sig, psi):
+        out = src.curve(sig.theta, psi)
+        if src.lost_motion is not None:
+            out = out - sig.direction * src.lost_motion(sig.theta, psi) / 2.0
+        return out / ARCSEC
+    return contrib
+
+
+def effect_contrib(eff, params, g):
+    def contrib(sig, psi):
+        return eff.function(sig, g, **{**params, eff.phase: psi}) / ARCSEC
+    return contrib
+
+
+def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[PhaseSource]]:
+    """(fittable, all) periodic terms of the spec.
+
+    All of :func:`simulation.periodic_sources` plus the spec's periodic
+    ``[effects.*]`` (those with a phase key).  A term is fittable when its
+    contribution at these samples changes with its phase (a source of zero
+    size, or one whose lost motion does not depend on the phase, is not)."""
+    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.simulation import periodic_sources
+
+    out = []
+    for src in periodic_sources(spec):
+        out.append(PhaseSource(src.name, src.phase_path, float(src.order), float(src.amplitude) / ARCSEC,
+                               float(src.phase), _source_contrib(src)))
+    for name, params in spec.effects.items():
+        eff = EFFECTS[name]
+        if eff.phase is None or eff.order is None:
+            continue
+        amp = float(np.max(np.abs(eff.function(unit_circle(), geometry, **params)))) / ARCSEC
+        key = next(p.key for p in eff.params if p.name == eff.phase)
+        out.append(PhaseSource(f"effect:{name}", f"effects.{name}.{key}", float(eff.order(geometry)), amp,
+                               float(params[eff.phase]),
+                               effect_contrib(eff, dict(params), geometry)))
+    probe = probe_signals(signals)
+    fittable = []
+    for s in out:
+        a = s.contrib(probe, 0.3)
+        b = s.contrib(probe, 1.9)
+        if np.max(np.abs(a - b)) > 1e-9:
+            fittable.append(s)
+    return fittable, out
+
+
+def unit_circle(n: int = 720):
+    from wormgear_cli.models.effects import Signals
+
+    return Signals.make(np.linspace(0.0, 2.0 * np.pi, n, endpoint=False))
+
+
+def probe_signals(signals, n: int = 2000):
+    from wormgear_cli.models.effects import Signals
+
+    step = max(1, signals.theta.shape[0] // n)
+    sl = slice(None, None, step)
+    theta = np.concatenate([signals.theta[sl], np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)])
+    direction = np.concatenate([signals.direction[sl], np.where(np.arange(360) % 2 == 0, 1.0, -1.0)])
+    pad = lambda v, fill: np.concatenate([np.asarray(v)[sl], np.full(360, fill)])  # noqa: E731
+    return Signals(theta, direction, pad(signals.load, 0.0), pad(signals.temperature, 20.0), pad(signals.time, 0.0))
+
+
+def subset(sig, idx):
+    from wormgear_cli.models.effects import Signals
+
+    return Signals(sig.theta[idx], sig.direction[idx], sig.load[idx], sig.temperature[idx], sig.time[idx])
+
+
+@dataclass(frozen=True)
+class FitContext:
+    """The fixed inputs of every fit of one measurement.
+
+    ``y`` (N,) measured error [arcsec]; ``sig``: its signals
+    (:class:`wormgear_cli.models.effects.Signals`); ``groups``: run
+    structure; ``base`` (N,) the spec's model without the fitted sources
+    [arcsec]; ``sources``: the periodic sources whose phases are fitted;
+    ``spec_psi`` (m,) their specified (or starting) phases [rad]."""
+
+    y: np.ndarray
+    sig: object
+    groups: Groups
+    base: np.ndarray
+    sources: tuple
+    spec_psi: tuple
+
+    @property
+    def n(self) -> int:
+        return int(self.y.shape[0])
+
+    def subsample(self, idx: np.ndarray) -> "FitContext":
+        """The rows ``idx`` as one group (white-noise metric), for cheap multi-start searches."""
+        one = Groups(np.zeros(idx.shape[0], dtype=int), np.array([float(idx.shape[0])]), np.zeros(1, int),
+                     np.ones(1), 1, False, False, "subsample")
+        return FitContext(self.y[idx], subset(self.sig, idx), one, self.base[idx], self.sources, self.spec_psi)
+
+    def replaced(self, **changes) -> "FitContext":
+        return replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class PhaseFit:
+    """A Levenberg-Marquardt polish: phases ``psi`` [rad], linear coefficients ``beta``,
+    ``residual`` (N,) [arcsec] and its GLS ``cost`` (residual' V~^-1 residual)."""
+
+    psi: np.ndarray
+    beta: np.ndarray
+    residual: np.ndarray
+    cost: float
+
+
+@dataclass
+class ModelFit:
+    """The fitted model at the measured rows.
+
+    ``psi`` [rad] fitted phase of each fittable source; ``beta`` linear
+    coefficients (offset [arcsec] first, then effect columns); ``fitted``,
+    ``residual`` [arcsec]; ``jac`` (N, m) d fitted / d psi [arcsec/rad];
+    ``lin`` (N, l) the linear columns; ``var``: the REML fit of the
+    linearised model; ``cost``: residual' V~^-1 residual."""
+
+    psi: np.ndarray
+    beta: np.ndarray
+    fitted: np.ndarray
+    residual: np.ndarray
+    jac: np.ndarray
+    lin: np.ndarray
+    var: VarFit
+    cost: float
+
+    @property
+    def offset(self) -> float:
+        return float(self.beta[0])
+
+
+def sources_total(sources, sig, psi):
+    out = np.zeros(sig.theta.shape)
+    for s, p in zip(sources, psi):
+        out = out + s.contrib(sig, p)
+    return out
+
+
+def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None):
+    """d contribution / d phase [arcsec/rad] per source: central differences, or forward
+    differences from the contributions ``parts`` already computed at ``psi``."""
+    cols = np.empty((sig.theta.shape[0], len(sources)))
+    for j, (s, p) in enumerate(zip(sources, psi)):
+        if parts is None:
+            cols[:, j] = (s.contrib(sig, p + h) - s.contrib(sig, p - h)) / (2 * h)
+        else:
+            cols[:, j] = (s.contrib(sig, p + h) - parts[j]) / h
+    return cols
+
+
+def gls_cost(r, groups, gp, gr):
+    cr = Cross(np.zeros((1, 1)), np.zeros(1), float(r @ r), np.zeros((groups.passes, 1)), pass_sums(r, groups),
+               groups)
+    return float(cr.weighted([gp], [gr])[2][0])
+
+
+def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iters=40) -> PhaseFit:
+    """Levenberg-Marquardt on the phases and the linear coefficients in the GLS metric
+    (variance ratios ``gp``, ``gr`` held).
+
+    Not (yet) :func:`scipy.optimize.least_squares`: this polish works in the
+    GLS metric of the nested covariance from per-pass sums; least_squares
+    would need the whitened residual V~^(-1/2) r (closed form per pass and
+    run, O(N)) and its Jacobian at every call.  The swap was not measured in
+    this round; bench/bench_diagnose.py on 1e5 rows takes about 5.6 s with
+    this one on an idle machine (the bar is 2.5 s), most of it in the phase
+    search and the candidate tests, not here alone."""
+    y, sig, groups, base, sources = ctx.y, ctx.sig, ctx.groups, ctx.base, ctx.sources
+    m = len(sources) if fit_phases else 0
+    psi = np.array(psi, dtype=float)
+    parts = [s.contrib(sig, p) for s, p in zip(sources, psi)]
+    src = np.sum(parts, axis=0) if parts else np.zeros(y.shape[0])
+    # start with the linear coefficients solved exactly
+    r0 = y - base - src
+    cr = Cross.build(lin, r0, groups)
+    A, b, _, _ = cr.weighted([gp], [gr])
+    beta = np.linalg.lstsq(A[0], b[0], rcond=None)[0]
+    resid = r0 - lin @ beta
+    cost = gls_cost(resid, groups, gp, gr)
+    mu = 1e-3
+    for _ in range(iters):
+        jac = _jacobian(sources, sig, psi, h=1e-6, parts=parts) if m else np.zeros((y.shape[0], 0))
+        design = np.hstack([jac, lin])
+        cr = Cross.build(design, resid, groups)
+        A, b, _, _ = cr.weighted([gp], [gr])
+        A, b = A[0], b[0]
+        diag = np.diag(A).copy()
+        diag = np.where(diag > 0, diag, 1.0)
+        improved = False
+        for _ in range(12):
+            try:
+                step = np.linalg.solve(A + mu * np.diag(diag) + 1e-12 * np.max(diag) * np.eye(len(b)), b)
+            except np.linalg.LinAlgError:
+                mu *= 10.0
+                continue
+            psi_new = psi + step[:m]
+            beta_new = beta + step[m:]
+            parts_new = [s.contrib(sig, p) for s, p in zip(sources, psi_new)] if m else parts
+            src_new = np.sum(parts_new, axis=0) if m else src
+            resid_new = y - base - src_new - lin @ beta_new
+            cost_new = gls_cost(resid_new, groups, gp, gr)
+            if cost_new <= cost:
+                rel = (cost - cost_new) / max(cost, 1e-300)
+                psi, beta, src, resid, cost, parts = psi_new, beta_new, src_new, resid_new, cost_new, parts_new
+                mu = max(mu / 5.0, 1e-12)
+                improved = True
+                break
+            mu *= 8.0
+        if not improved or rel < 1e-10:
+            break
+    return PhaseFit(psi, beta, resid, cost)
+
+
+def _harmonic_starts(ctx: FitContext):
+    """Deterministic starting phases: as specified; aligned with the measured
+    harmonic at each order; and rotated variants for shafts carrying several sources."""
+    y, sig, base, sources, spec_psi = ctx.y, ctx.sig, ctx.base, ctx.sources, ctx.spec_psi
+    from wormgear_cli.harmonics import fit_orders
+
+    starts = [np.array(spec_psi, dtype=float)]
+    if not sources:
+        return starts
+    orders = sorted({s.order for s in sources})
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fit = fit_orders(sig.theta, y - base, orders)
+    measured = {o: fit.phase[i] for i, o in enumerate(orders)}
+    circle = unit_circle(1440)
+    intrinsic = []
+    for s in sources:
+        both = 0.5 * (s.contrib(circle, 0.0)
+                      + s.contrib(type(circle)(circle.theta, -circle.direction, circle.load, circle.temperature,
+                                                circle.time), 0.0))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            f0 = fit_orders(circle.theta, both, [s.order])
+        intrinsic.append(float(f0.phase[0]) if f0.amplitude[0] > 1e-12 else 0.0)
+    rank = {}
+    for s in sources:
+        rank[s.name] = sum(1 for t in sources if t.order == s.order and sources.index(t) < sources.index(s))
+    for spread in (0.0, math.pi):
+        starts.append(np.array([measured[s.order] - intrinsic[j] + spread * min(rank[s.name], 1)
+                                for j, s in enumerate(sources)]))
+    return starts
+
+
+def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep: int = 4):
+    """Candidate phase vectors found shaft by shaft on a grid (white-noise metric, linear
+    columns projected out).
+
+    For the sources sharing an order (at most three at a time; larger groups one
+    by one), every combination of ``grid`` phases is scored with the others held:
+    the cost of (i_1..i_m) is |r - sum_k c_k(i_k)|^2 after the projection,
+    expanded with the Gram matrix of the projected columns, so all grid^m
+    combinations cost one small matrix product.  Sweeps repeat until nothing
+    moves.  Grid points are only a coarse look at the landscape (a large source
+    misplaced by half a step costs more than a wrong basin), so besides the best
+    vector the ``keep`` lowest local minima of each shaft's grid are returned,
+    for the caller to polish and compare."""
+    from wormgear_cli.models.effects import Signals
+
+    y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
+    psi = np.array(psi, dtype=float)
+    if not sources:
+        return [psi]
+    q, _ = np.linalg.qr(lin)
+    sig2 = Signals(sig.theta[:, None], sig.direction[:, None], sig.load[:, None], sig.temperature[:, None],
+                   sig.time[:, None])
+    phases = np.linspace(0.0, 2.0 * np.pi, grid, endpoint=False)
+    by_order: dict = {}
+    for k, s in enumerate(sources):
+        by_order.setdefault(s.order, []).append(k)
+    blocks = []
+    for members in by_order.values():
+        blocks += [members] if len(members) <= 3 else [[k] for k in members]
+    contrib = [s.contrib(sig, p) for s, p in zip(sources, psi)]
+    total = np.sum(contrib, axis=0)
+
+    def project(a):
+        return a - q @ (q.T @ a)
+
+    def grid_cost(members):
+        m = len(members)
+        rest = y - base - (total - sum(contrib[k] for k in members))
+        cols = [np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (y.shape[0], grid)) for k in members]
+        z = project(np.hstack([*cols, rest[:, None]]))
+        gram = z.T @ z
+        cost = np.full((grid,) * m, gram[-1, -1])
+        for a in range(m):
+            shape = [grid if i == a else 1 for i in range(m)]
+            cost = cost - 2.0 * gram[a * grid:(a + 1) * grid, -1].reshape(shape)
+            for b in range(m):
+                blk = gram[a * grid:(a + 1) * grid, b * grid:(b + 1) * grid]
+                if a == b:
+                    cost = cost + np.diag(blk).reshape(shape)
+                else:
+                    # G_ab[i_a, i_b] laid out on axes a and b (rows on the lower axis)
+                    pair = blk if a < b else blk.T
+                    cost = cost + pair.reshape([grid if i in (a, b) else 1 for i in range(m)])
+        now = project(rest - sum(contrib[k] for k in members))
+        return cost, float(now @ now)
+
+    def move(members, idx):
+        nonlocal total
+        for a, k in enumerate(members):
+            psi[k] = phases[idx[a]]
+            new = sources[k].contrib(sig, psi[k])
+            total = total - contrib[k] + new
+            contrib[k] = new
+
+    for _ in range(sweeps):
+        changed = False
+        for members in blocks:
+            cost, now = grid_cost(members)
+            best = np.unravel_index(int(np.argmin(cost)), cost.shape)
+            if float(cost[best]) < now * (1.0 - 1e-9):
+                move(members, best)
+                changed = True
+        if not changed:
+            break
+    out = [psi.copy()]
+    for members in blocks:
+        cost, _ = grid_cost(members)
+        # local minima of the periodic grid (no neighbour lower)
+        is_min = np.ones(cost.shape, dtype=bool)
+        for axis in range(cost.ndim):
+            for shift in (-1, 1):
+                is_min &= cost <= np.roll(cost, shift, axis=axis)
+        flat = np.flatnonzero(is_min.ravel())
+        for j in flat[np.argsort(cost.ravel()[flat])][1:keep]:
+            alt = psi.copy()
+            for a, k in enumerate(members):
+                alt[k] = phases[np.unravel_index(int(j), cost.shape)[a]]
+            out.append(alt)
+    return out
+
+
+def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: VarFit | None = None) -> ModelFit:
+    """Fit the phases (if ``fit_phases``) and the linear coefficients of ``lin`` (N, l) by
+    GLS with REML variance components (alternating, at most three rounds).
+
+    The phases start from several deterministic points (:func:`_harmonic_starts`
+    from ``ctx.spec_psi``, plus ``extra_starts``), each refined on a subsample of
+    at most 3000 rows with white-noise weights; the best is then refined on every
+    row.  With ``variance`` the variance ratios are held at that fit's (no REML)."""
+    y, sig, groups, sources = ctx.y, ctx.sig, ctx.groups, ctx.sources
+    m = len(sources) if fit_phases else 0
+    n = y.shape[0]
+    psi = np.array(ctx.spec_psi, dtype=float)
+    if m:
+        step = max(1, n // 2000)
+        idx = np.arange(0, n, step)
+        sub = ctx.subsample(idx)
+        best = None
+        starts = [*_harmonic_starts(sub), *extra_starts]
+        inits = [*starts[:1], *extra_starts]
+        for start in starts:
+            inits += _group_scan(sub, start, lin[idx], keep=3)
+        seen = set()
+        for init in inits:
+            key = tuple(np.round(np.mod(init, 2 * np.pi), 3))
+            if key in seen:
+                continue
+            seen.add(key)
+            pf = levenberg_marquardt(sub, init, lin[idx], 0.0, 0.0, True, 25)
+            if best is None or pf.cost < best.cost - 1e-9 * abs(pf.cost):
+                best = pf
+        psi = best.psi
+    if variance is not None:
+        pf = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
+        jac = _jacobian(sources, sig, pf.psi) if m else np.zeros((n, 0))
+        return ModelFit(pf.psi, pf.beta, y - pf.residual, pf.residual, jac, lin, variance, pf.cost)
+    gp = gr = 0.0
+    var = None
+    for _ in range(3):
+        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0)
+        psi = pf.psi
+        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+        cr = Cross.build(orthonormal(np.hstack([lin, jac]))[0], pf.residual, groups)
+        var = reml(cr)
+        done = abs(var.gp - gp) <= 0.05 * max(gp, 1e-9) and abs(var.gr - gr) <= 0.05 * max(gr, 1e-9)
+        gp, gr = var.gp, var.gr
+        if done:
+            break
+    else:
+        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0)
+        psi = pf.psi
+        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+    return ModelFit(psi, pf.beta, y - pf.residual, pf.residual, jac, lin, var, pf.cost)

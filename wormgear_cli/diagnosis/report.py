@@ -1,0 +1,297 @@
+"""The report of ``wormgear diagnose``: verdict, status of every catalogue effect, the JSON document."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
+from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY
+from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
+from wormgear_cli.diagnosis.runs import Groups
+from wormgear_cli.diagnosis.scoring import ScoreStatus
+from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
+from wormgear_cli.units import ARCSEC
+
+
+def _status(diag: Diagnosis) -> list[dict]:
+    from wormgear_cli.models.effects import EFFECTS
+
+    stop = diag.stop
+    out = []
+    named = {f.name for f in diag.found}
+    for name in EFFECTS:
+        entry = {"name": name}
+        if name in diag.spec.effects:
+            entry.update(status="in_spec", reason="already in the spec (its parameters are kept as specified)")
+            out.append(entry)
+            continue
+        sc = diag.candidates.get(name)
+        if name in named:
+            entry["status"] = "named"
+            f = next(f for f in diag.found if f.name == name)
+            if not f.separable:
+                entry["reason"] = ("indistinguishable from a larger " + " or ".join(f.indistinguishable_from)
+                                   + ": its size trades against their fitted phases")
+                entry["remedy"] = ("measure the runout and phase of those parts directly (dial indicator), enter "
+                                   "the phases in the spec and rerun with --keep-phases")
+        elif sc is None:
+            entry.update(status="unobservable", reason="not scored")
+        elif sc.status in (ScoreStatus.UNOBSERVABLE, ScoreStatus.UNTESTABLE):
+            entry.update(status=sc.status.value, reason=sc.reason)
+            if sc.remedy:
+                entry["remedy"] = sc.remedy
+        else:
+            entry["status"] = "not_significant"
+            if sc.same_order and sc.p_adj >= diag.alpha:
+                entry.update(status="unobservable",
+                             reason=f"absorbed by the fitted phases of the spec's order-"
+                                    f"{_effect_order(name, diag):g} sources ({', '.join(sc.same_order)}): adding it "
+                                    f"does not improve the fit (together they produce up to {sc.reach:.3g} arcsec "
+                                    "at this order; only content they cannot reach would show)",
+                             remedy="measure the runout and phase of those parts directly (dial indicator), "
+                                    "enter the phases in the spec and rerun with --keep-phases")
+            if stop.reason is StopReason.AMBIGUOUS and name in stop.candidates:
+                others = [c for c in stop.candidates if c != name]
+                entry.update(status="indistinguishable",
+                             reason=f"fits as well as {', '.join(others)} (signatures correlate "
+                                    f"{stop.correlation:.3f})", remedy=_separate_hint([name, *others]))
+            elif stop.reason is StopReason.UNPHYSICAL and stop.candidate == name:
+                entry.update(status="unphysical", reason=stop.detail)
+                if stop.hint:
+                    entry["remedy"] = stop.hint
+            elif stop.reason is StopReason.UNSTABLE and stop.candidate == name:
+                entry.update(status="unstable",
+                             reason=f"best in only {100 * stop.stability:.0f} % of resamples of whole runs")
+            elif stop.reason is StopReason.WORSENS and stop.candidate == name:
+                entry.update(status="rejected",
+                             reason=f"significant, but fitting it makes the RMS gap larger "
+                                    f"({stop.rms_before_arcsec:.3g} -> {stop.rms_with_arcsec:.3g} arcsec): its "
+                                    "estimate follows structure that is not its signature (see unexplained)")
+            elif diag.likely is not None and diag.likely["name"] == name:
+                entry.update(status="likely",
+                             reason=f"short of the level, but it would remove {100 * diag.likely['gain']:.0f} % of "
+                                    "the remaining mean-square gap: a likely further effect (see unexplained)",
+                             remedy="measure more runs (or a wider temperature or load range) to settle it")
+            if sc.wald is not None:
+                entry.update(p_value=sc.wald.p, p_adjusted=sc.p_adj, F=sc.wald.F, df=sc.wald.df)
+                if sc.params is not None and not sc.same_order:
+                    entry["estimate"] = _keys(name, sc.params)
+            if sc.aliases:
+                entry["aliased_with"] = [{"order": o, "label": lab} for o, lab in sc.aliases]
+        out.append(entry)
+    return out
+
+
+def _effect_order(name: str, diag: "Diagnosis") -> float:
+    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.models.effects import EFFECTS
+
+    return float(EFFECTS[name].order(drive_geometry(diag.spec)))
+
+
+def _keys(name, params) -> dict:
+    from wormgear_cli.models.effects import params_to_keys
+
+    return {k: float(v) for k, v in params_to_keys(name, params).items()}
+
+
+def _separate_hint(names) -> str:
+    s = set(names)
+    if s >= {"thermal_backlash", "thermal_drift"}:
+        return "measure both directions during the warm-up"
+    if "thermal_drift" in s or "thermal_backlash" in s:
+        return "vary temperature independently of the other signals (heat and cool, or hold it during load steps)"
+    if "torsional_compliance" in s:
+        return "apply load steps at constant temperature and in both signs"
+    return "measure with irregular target spacing or a dense scan, in both directions"
+
+
+def _verdict(diag: Diagnosis) -> str:
+    found = [f for f in diag.found if f.separable]
+    mixed = [f for f in diag.found if not f.separable]
+    parts = []
+    if found:
+        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(f.name for f in found))
+    for f in mixed:
+        key, (lo, hi) = next(iter(f.intervals.items())) if f.intervals else ("size", (math.nan, math.nan))
+        order = _effect_order(f.name, diag)
+        parts.append(f"missing content at order {order:g} that the spec's sources cannot produce: {f.name} "
+                     f"({key} anywhere from {lo:.3g} to {hi:.3g}) or a larger "
+                     + " or ".join(f.indistinguishable_from)
+                     + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
+                     "--keep-phases)")
+    untestable = [n for n, sc in diag.candidates.items() if sc.status is ScoreStatus.UNTESTABLE]
+    if not diag.found:
+        text = "no missing effect found"
+        if untestable:
+            text += " that these data can test"
+        elif diag.unexplained:
+            text += " in the catalogue"
+        stop = diag.stop
+        if stop.reason is StopReason.AMBIGUOUS:
+            text += (f" that the data can single out: {' or '.join(stop.candidates)} fit equally well")
+        elif stop.reason is StopReason.UNPHYSICAL:
+            text += f" ({stop.candidate} would fit only with {stop.detail})"
+        elif stop.reason is StopReason.UNSTABLE:
+            text += f" ({stop.candidate} is significant but not stable under resampling of runs)"
+        elif stop.reason is StopReason.WORSENS:
+            text += (f" ({stop.candidate} tests significant, but fitting it makes the RMS gap larger: "
+                     f"{stop.rms_before_arcsec:.3g} -> {stop.rms_with_arcsec:.3g} arcsec)")
+        parts.append(text)
+    elif diag.stop.reason is StopReason.WORSENS:
+        parts.append(f"{diag.stop.candidate} was rejected: fitting it makes the RMS gap larger")
+    if untestable:
+        runs = diag.groups.runs
+        parts.append(f"untestable with {runs} run{'s' if runs != 1 else ''}: {', '.join(untestable)} "
+                     f"({REPLICATION_REMEDY})")
+    if diag.likely is not None:
+        parts.append(f"likely {'further ' if diag.found else ''}effect: {diag.likely['name']} (adjusted p = "
+                     f"{diag.likely['p_adjusted']:.2g}, short of the level; see unexplained)")
+    others = [u for u in diag.unexplained if u["kind"] != "likely_effect"]
+    if others:
+        text = "the residual keeps structure no catalogue effect explains"
+        excess = next((u for u in others if u["kind"] == "excess"), None)
+        if excess is not None:
+            text += (f" ({excess['rms_arcsec']:.3g} arcsec RMS against a noise floor of "
+                     f"{excess['noise_floor_arcsec']:.3g})")
+        parts.append(text + " (see unexplained)")
+    return "; ".join(parts)
+
+
+def _direction_warning(meas, groups: Groups) -> str | None:
+    """A note when the file has no direction column yet a pass visits a target more than once."""
+    from wormgear_cli.iso230 import group_targets
+
+    if "direction" in meas.present:
+        return None
+    tgt, _ = group_targets(meas.angle)
+    key = groups.pass_id.astype(np.int64) * (int(np.max(tgt)) + 1) + tgt.astype(np.int64)
+    if np.unique(key).shape[0] == key.shape[0]:
+        return None
+    return ("no direction column: every row is taken as forward, yet one "
+            + ("run" if "run" in meas.present else "block of rows") + " visits the same target more than once: if "
+            "some visits were made in reverse, add a direction column (+1 forward, -1 reverse)"
+            + ("" if "run" in meas.present else "; if they are repeated runs, add a run column"))
+
+
+def report(diag: Diagnosis) -> dict:
+    """The JSON document of ``wormgear diagnose`` (angles in arcsec, effect parameters keyed as in the catalogue)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        return _report(diag)
+
+
+def _report(diag: Diagnosis) -> dict:
+    from wormgear_cli.analysis import geometry as drive_geometry
+
+    g = drive_geometry(diag.spec)
+    meas = diag.meas
+    y = meas.error / ARCSEC
+    resid_after = y - diag.augmented_fitted
+    found = []
+    for f in diag.found:
+        item = {"name": f.name, "parameters": augmented_params(f),
+                "interval_95": {k: [float(lo), float(hi)] for k, (lo, hi) in f.intervals.items()},
+                "p_value": f.p, "df": f.df, "gap_share_pct": 100.0 * f.share,
+                "stability": f.stability, "stability_note": f.stability_note,
+                "signature_rms_arcsec": f.signature_rms, "step": f.step, "separable": f.separable,
+                "fixed_parameters": list(f.fixed_keys),
+                "notes": list(f.notes), "indistinguishable_from": list(f.indistinguishable_from)}
+        if f.name == "thermal_backlash" and diag.thermal_prediction is not None and \
+                "centre_distance_um_per_K" in f.intervals:
+            lo, hi = f.intervals["centre_distance_um_per_K"]
+            pred = diag.thermal_prediction
+            fitted = item["parameters"]["centre_distance_um_per_K"]
+            item["prediction"] = {"centre_distance_um_per_K": pred, "inside_interval": bool(lo <= pred <= hi),
+                                  "fitted_over_predicted": fitted / pred if pred else None,
+                                  "basis": "housing, worm and wheel warming alike, expansion from the spec's "
+                                           "[materials]"}
+        found.append(item)
+    phases = []
+    for s, psi in zip(diag.sources, diag.after.psi):
+        same = [t.name for t in diag.sources if abs(t.order - s.order) < 1e-9 and t is not s]
+        phases.append({"source": s.name, "key": s.key, "order": s.order, "amplitude_arcsec": s.amplitude,
+                       "specified_deg": wrap_deg(s.phase), "fitted_deg": round(wrap_deg(float(psi)), 4),
+                       "shares_order_with": same})
+    info = diag.info
+    doc = {
+        "drive": diag.spec.drive.name,
+        "data": str(meas.source),
+        "rows": len(meas),
+        "verdict": _verdict(diag),
+        "effects_found": found,
+        "gap_as_specified": gap_summary(meas, diag.as_specified),
+        "gap_before": gap_summary(meas, diag.before.residual),
+        "gap_after": gap_summary(meas, resid_after),
+        "unexplained": diag.unexplained,
+        "candidates": _status(diag),
+        "fit": {
+            "phases_fitted": bool(diag.fit_phases),
+            "zero_offset_before_arcsec": diag.before.offset,
+            "zero_offset_after_arcsec": diag.after.offset,
+            "phases": phases,
+            "note": ("sources on one shaft share an order: only their combined vector is determined, the "
+                     "individual phases are one of several equivalent solutions") if any(p["shares_order_with"]
+                                                                                       for p in phases) else "",
+        },
+        "noise": {"before": noise_floor(meas, diag.before.residual, diag.before.var, diag.groups),
+                  "after": noise_floor(meas, resid_after, diag.after.var, diag.groups),
+                  "floor_arcsec": diag.noise_floor if math.isfinite(diag.noise_floor) else None},
+        "orders": {"before": order_table(meas, diag.before.residual, g), "after": order_table(meas, resid_after, g)},
+        "residual_vs": {"before": versus(meas, diag.before.residual, info), "after": versus(meas, resid_after, info)},
+        "iso230": {"measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
+                   "simulated_after": iso_figures(meas, diag.augmented_fitted)},
+        "signals": {"directions": list(info.directions),
+                    "temperature_C": [float(np.min(meas.temperature)), float(np.max(meas.temperature))]
+                    if info.temperature_present else None,
+                    "load_Nm": [float(np.min(meas.load)), float(np.max(meas.load))] if info.load_present else None,
+                    "time_s": [float(np.min(meas.time)), float(np.max(meas.time))] if "time_s" in meas.present
+                    else None,
+                    "temperature_time_correlation": None if math.isnan(info.temperature_time_corr)
+                    else info.temperature_time_corr},
+        "selection": {"alpha": diag.alpha, "steps": diag.steps, "stop": diag.stop.as_dict(),
+                      "method": "forward selection; Wald F-test with REML run/pass random intercepts and "
+                                "Satterthwaite df, Bonferroni over the candidates of each step; stability by "
+                                "cluster bootstrap of whole runs; a candidate whose refit does not shrink the "
+                                "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
+                                "replication untestable"},
+    }
+    data_warning = _direction_warning(meas, diag.groups)
+    if data_warning:
+        doc["signals"]["data_warning"] = data_warning
+    if info.temperature_present and not math.isnan(info.temperature_time_corr) and \
+            abs(info.temperature_time_corr) > 0.95:
+        doc["signals"]["warning"] = (f"temperature and time correlate {info.temperature_time_corr:.2f}: a "
+                                     "common-mode thermal_drift cannot be told apart from a plain drift over "
+                                     "time; heating and cooling separates them")
+    return doc
+
+
+@dataclass(frozen=True)
+class DiagnoseResult:
+    """What ``wormgear diagnose`` computes: the ``diagnosis``, its JSON ``document``
+    (the report) and, when asked for, the augmented spec as TOML text (``spec_toml``)."""
+
+    diagnosis: Diagnosis
+    document: dict
+    spec_toml: str | None
+
+
+def run_diagnose(spec, meas, *, alpha: float = 0.01, fit_phases: bool = True, max_effects: int = 4,
+                 resamples: int = 50, progress=None, data_name: str = "",
+                 write_spec: str | None = None) -> DiagnoseResult:
+    """Diagnose ``meas`` against ``spec`` and assemble the report.
+
+    Parameters as :func:`wormgear_cli.diagnosis.diagnose`; ``data_name``
+    names the measurement in the augmented spec's header; ``write_spec``: the
+    file the augmented spec will be written to (recorded in the report's
+    ``augmented_spec``; None: no spec text is made).  Raises UsageError and
+    DataError as :func:`~wormgear_cli.diagnosis.diagnose`."""
+    diag = diagnose(spec, meas, alpha=alpha, fit_phases=fit_phases, max_effects=max_effects, resamples=resamples,
+                    progress=progress)
+    doc = report(diag)
+    doc["augmented_spec"] = None if write_spec is None else str(write_spec)
+    text = augmented_toml(diag, data_name) if write_spec is not None else None
+    return DiagnoseResult(diag, doc, text)

@@ -1,0 +1,174 @@
+"""Run structure of a measurement: passes, runs, cells and what varies.
+
+A pass is one run in one direction; a cell is one (target, direction) pair.
+Without a ``run`` column a pass is a block of consecutive rows in one
+direction and each pass its own run.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wormgear_cli.measurement import time_restarts  # noqa: F401  (re-exported)
+
+
+@dataclass(frozen=True)
+class Groups:
+    """The run structure of a measurement.
+
+    ``pass_id`` (N,) pass of each row; a pass is one run in one direction.
+    ``pass_size`` (P,), ``pass_run`` (P,) run index of each pass,
+    ``pass_direction`` (P,).  ``runs``: number of runs R.  ``nested``: some
+    run holds more than one pass (then run and pass variances are separate
+    components).  ``random``: False when the rows carry no usable run
+    structure (every row its own pass): noise is then taken as white.
+    ``describe``: how the passes were found.
+    """
+
+    pass_id: np.ndarray
+    pass_size: np.ndarray
+    pass_run: np.ndarray
+    pass_direction: np.ndarray
+    runs: int
+    nested: bool
+    random: bool
+    describe: str
+
+    def __post_init__(self):
+        order = np.argsort(self.pass_id, kind="stable")
+        starts = np.searchsorted(self.pass_id[order], np.arange(self.pass_size.shape[0]))
+        object.__setattr__(self, "order", order)
+        object.__setattr__(self, "starts", starts)
+        ind = np.zeros((self.runs, self.pass_size.shape[0]))
+        ind[self.pass_run, np.arange(self.pass_size.shape[0])] = 1.0
+        object.__setattr__(self, "run_indicator", ind)
+
+    @property
+    def passes(self) -> int:
+        return int(self.pass_size.shape[0])
+
+
+def make_groups(direction: np.ndarray, run: np.ndarray | None, time: np.ndarray | None = None) -> Groups:
+    """Passes and runs from the ``direction``, (optional) ``run`` and (optional) ``time`` [s] columns.
+
+    With a run column: a pass is every row of one (run, direction) pair, a
+    run every row of one run number.  Without: a pass is a block of
+    consecutive rows in one direction, a new one also starting where time
+    goes backwards (:func:`time_restarts`), and each pass is its own run."""
+    direction = np.asarray(direction, dtype=float)
+    n = direction.shape[0]
+    if run is not None:
+        run = np.asarray(run)
+        keys = np.stack([run.astype(float), direction], axis=1)
+        uniq, pass_id = np.unique(keys, axis=0, return_inverse=True)
+        pass_id = pass_id.reshape(-1)
+        run_vals, pass_run = np.unique(uniq[:, 0], return_inverse=True)
+        pass_dir = uniq[:, 1]
+        runs = int(run_vals.shape[0])
+        describe = "run column: one pass per run and direction"
+    else:
+        change = np.ones(n, dtype=bool)
+        change[1:] = direction[1:] != direction[:-1]
+        restarts = time_restarts(time)
+        if restarts is not None:
+            change |= restarts
+        pass_id = np.cumsum(change) - 1
+        p = int(pass_id[-1]) + 1
+        pass_run = np.arange(p)
+        pass_dir = direction[change]
+        runs = p
+        describe = "no run column: a pass is a block of consecutive rows in one direction"
+        if restarts is not None and np.any(restarts):
+            describe += " (a new one where time_s goes backwards)"
+    size = np.bincount(pass_id, minlength=int(pass_id.max()) + 1).astype(float)
+    nested = bool(np.bincount(pass_run).max() > 1) if runs > 0 else False
+    random = bool(size.shape[0] >= 2 and np.mean(size) >= 3.0)
+    if not random:
+        describe += "; passes too short to carry run-to-run noise, noise taken as white"
+    return Groups(pass_id.astype(int), size, np.asarray(pass_run, dtype=int), np.asarray(pass_dir, dtype=float),
+                  runs, nested and random, random, describe)
+
+
+# ============================================================================ GLS / REML from sufficient statistics
+
+
+def pass_sums(values: np.ndarray, groups: Groups) -> np.ndarray:
+    """Per-pass column sums of a (N,) or (N, k) array."""
+    if values.ndim == 1:
+        return np.bincount(groups.pass_id, weights=values, minlength=groups.passes)
+    if values.shape[1] == 0:
+        return np.zeros((groups.passes, 0))
+    return np.add.reduceat(values[groups.order], groups.starts, axis=0)
+
+
+@dataclass(frozen=True)
+class Cells:
+    """Cells = (target, direction) pairs: ``cell_id`` (N,), ``count`` (C,) rows per cell.
+    ``replicated``: cells hold two or more rows on average (repeated runs)."""
+
+    cell_id: np.ndarray
+    count: np.ndarray
+
+    @property
+    def cells(self) -> int:
+        return int(self.count.shape[0])
+
+    @property
+    def replicated(self) -> bool:
+        return bool(np.mean(self.count) >= 2.0)
+
+    def means(self, x: np.ndarray) -> np.ndarray:
+        x2 = x.reshape(x.shape[0], -1)
+        out = np.empty((self.cells, x2.shape[1]))
+        for j in range(x2.shape[1]):
+            out[:, j] = np.bincount(self.cell_id, weights=x2[:, j], minlength=self.cells) / self.count
+        return out if x.ndim > 1 else out[:, 0]
+
+
+def make_cells(theta: np.ndarray, direction: np.ndarray) -> Cells:
+    """Cells of a measurement: rows at the same target (angles within 1e-6 deg) and direction."""
+    from wormgear_cli.iso230 import group_targets
+
+    tgt, _ = group_targets(theta)
+    key = tgt.astype(np.int64) * 2 + (np.asarray(direction) < 0)
+    _, cell = np.unique(key, return_inverse=True)
+    cell = cell.reshape(-1)
+    return Cells(cell, np.bincount(cell).astype(float))
+
+
+def cell_level(cols: np.ndarray, cells: Cells) -> bool:
+    """True when the columns depend on the cell only (no variation between the runs of a cell)."""
+    cols = cols.reshape(cols.shape[0], -1)
+    tot = float(np.sum(cols * cols))
+    if tot <= 0:
+        return False
+    m = cells.means(cols)
+    within = tot - float(np.sum(cells.count[:, None] * m * m))
+    return within <= 1e-9 * tot
+
+
+@dataclass(frozen=True)
+class DataInfo:
+    """What varies in the measurement (decides which effects can be seen)."""
+
+    directions: tuple
+    temperature_range: float
+    temperature_present: bool
+    load_range: float
+    load_present: bool
+    time_range: float
+    temperature_time_corr: float
+    passes_per_direction: float
+
+
+def data_info(meas, groups: Groups) -> DataInfo:
+    d = tuple(sorted({int(x) for x in np.unique(meas.direction)}, reverse=True))
+    t_rng = float(np.ptp(meas.temperature))
+    tt = math.nan
+    if t_rng > 0 and np.ptp(meas.time) > 0:
+        tt = float(np.corrcoef(meas.temperature, meas.time)[0, 1])
+    return DataInfo(d, t_rng, "temperature_C" in meas.present, float(np.ptp(meas.load)), "load_Nm" in meas.present,
+                    float(np.ptp(meas.time)), tt, groups.passes / max(len(d), 1))

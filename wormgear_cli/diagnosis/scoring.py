@@ -1,0 +1,311 @@
+"""Scoring every candidate against the current model (one step of the selection).
+
+Wald F-test of each candidate's columns given the model (REML under the
+alternative), the cell-means check, the same-order refit test for effects
+on the order of sources with fitted phases, Bonferroni adjustment, the
+similarity of signatures and the cluster-bootstrap stability check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Callable
+
+import numpy as np
+
+from wormgear_cli.diagnosis.candidates import Candidate, candidate_params, needs_problem, replication_problem
+from wormgear_cli.diagnosis.design import canonical, orthonormal, r2, residualise, tolerance
+from wormgear_cli.diagnosis.mixed import CellTester, Cross, VarFit, Wald, containment_df, f_sf, reml, wald
+from wormgear_cli.diagnosis.phases import FitContext, ModelFit, gls_cost, levenberg_marquardt
+from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, cell_level, pass_sums
+from wormgear_cli.diagnosis.thresholds import MIN_TOLERANCE
+
+
+class ScoreStatus(str, Enum):
+    """What became of a candidate (its value is the status written in the report)."""
+
+    TESTED = "tested"
+    UNOBSERVABLE = "unobservable"  #: these data cannot show it
+    UNTESTABLE = "untestable"  #: too few runs to test it
+    NAMED = "named"
+    LIKELY = "likely"
+
+
+@dataclass
+class Score:
+    """One candidate at one selection step.
+
+    ``status``: "tested", "unobservable" (cannot be seen in these data),
+    ``reason``: why not; ``remedy``: what measurement would show it;
+    ``wald``/``var``: the test and the REML fit of its model; ``p_adj``:
+    Bonferroni-adjusted p; ``tolerance``: share of its columns left after
+    projecting out the current model (1 = unaffected, 0 = absorbed);
+    ``absorbed_by``: model parts that explain its signature;
+    column scaling (coefficient = scaled estimate / scale)."""
+
+    name: str
+    status: ScoreStatus
+    reason: str = ""
+    remedy: str = ""
+    wald: Wald | None = None
+    var: VarFit | None = None
+    p_adj: float = math.nan
+    tolerance: float = math.nan
+    absorbed_by: list = field(default_factory=list)
+    containment: float | None = None
+    cell_test: bool = False
+    same_order: list = field(default_factory=list)
+    reach: float = 0.0
+    scale: np.ndarray | None = None
+    beta: np.ndarray | None = None
+    params: dict | None = None
+    aliases: list = field(default_factory=list)
+
+
+def _blocks(lin_names, sources, jac, lin):
+    """Named parts of the current model, for saying what absorbs a candidate."""
+    out = [(name, lin[:, sl]) for name, sl in lin_names]
+    orders = {}
+    for j, s in enumerate(sources):
+        orders.setdefault(s.order, []).append(j)
+    for order, idx in orders.items():
+        names = ", ".join(sources[j].name for j in idx)
+        out.append((f"the fitted phase{'s' if len(idx) > 1 else ''} of the spec's order-{order:g} "
+                    f"source{'s' if len(idx) > 1 else ''} ({names})", jac[:, idx]))
+    return out
+
+
+class Step:
+    """Scores of every candidate against the current model (one selection step)."""
+
+    def __init__(self, state: ModelFit, cands: dict, groups: Groups, info: DataInfo, lin_names, sources,
+                 alias_notes: dict, alpha: float, cells: Cells, nonlinear: Callable | None = None,
+                 few_runs: bool = False):
+        self.state = state
+        self.groups = groups
+        nuis = np.hstack([state.lin, state.jac])
+        basis0, _ = orthonormal(nuis)
+        blocks = _blocks(lin_names, sources, state.jac, state.lin)
+        self.scores: dict[str, Score] = {}
+        self.better_null = None
+        # with fewer than MIN_RUNS runs, effects that need replication between runs cannot be tested; they may
+        # still be there, so every other candidate is tested with their signatures as nuisance columns
+        untestable_cols = []
+        if few_runs:
+            for name, cand in cands.items():
+                if cand is None or needs_problem(name, cand.needs, info) is not None:
+                    continue
+                if alias_notes.get(name) and any(a[0] == 0.0 for a in alias_notes[name]):
+                    continue
+                problem = replication_problem(cand, basis0, groups, info)
+                if problem is not None:
+                    self.scores[name] = Score(name, ScoreStatus.UNTESTABLE, problem[0], problem[1],
+                                              aliases=alias_notes.get(name, []))
+                    untestable_cols.append(cand.columns)
+                    blocks.append((f"{name}'s signature (untestable with {groups.runs} run"
+                                   f"{'s' if groups.runs != 1 else ''})", cand.columns))
+        self.basis = orthonormal(np.hstack([nuis, *untestable_cols]))[0] if untestable_cols else basis0
+        kb = self.basis.shape[1]
+        tested_cols = []
+        slices = {}
+        nonlinear_names: list[str] = []
+        for name, cand in cands.items():
+            if name in self.scores:
+                continue
+            if cand is None:
+                self.scores[name] = Score(name, ScoreStatus.UNOBSERVABLE, "its signature is not linear in its parameters")
+                continue
+            why = needs_problem(name, cand.needs, info)
+            sc = Score(name, ScoreStatus.TESTED, aliases=alias_notes.get(name, []))
+            if why is None and alias_notes.get(name) and any(a[0] == 0.0 for a in alias_notes[name]):
+                why = f"order {cand.order:g} falls on a constant at these targets (aliased by the target spacing)"
+                sc.remedy = ("use irregular target spacing or a dense scan with more than "
+                             f"{2 * cand.order:g} points per revolution")
+            same = [s for s in sources if cand.order is not None and abs(s.order - cand.order) < 1e-9
+                    and s.amplitude > 1e-9]
+            if why is None and same and nonlinear is not None:
+                # the spec's sources on this order have fixed sizes and free phases: a linearised test would
+                # call any content at this order absorbed; refit the phases with the candidate instead
+                sc.same_order = [s.name for s in same]
+                sc.reach = float(sum(s.amplitude for s in same))
+                t = nonlinear(cand)
+                if t.better_null is not None:
+                    self.better_null = t.better_null
+                sc.wald = Wald(t.beta, np.full((cand.q, cand.q), np.nan), t.F, cand.q, t.df, t.p)
+                sc.beta = t.beta
+                sc.params = candidate_params(cand, t.beta)
+                nonlinear_names.append(name)
+                self.scores[name] = sc
+                continue
+            if why is None:
+                sc.tolerance = tolerance(self.basis, cand.columns)
+                if sc.tolerance < MIN_TOLERANCE:
+                    sc.absorbed_by = [label for label, blk in blocks if r2(blk, cand.columns) > 0.5] or \
+                        [label for label, _ in blocks]
+                    why = "absorbed by " + " and ".join(sc.absorbed_by)
+                    if any("fitted phase" in a for a in sc.absorbed_by):
+                        sc.remedy = ("the spec's sources on this shaft take up any content at this order by "
+                                     "changing their phases: measure their runout and phase directly (dial "
+                                     "indicator), enter the phases in the spec and rerun with --keep-phases")
+            if why is not None:
+                sc.status = ScoreStatus.UNOBSERVABLE
+                if ": " in why and not sc.remedy:
+                    why, sc.remedy = why.split(": ", 1)
+                sc.reason = why
+                self.scores[name] = sc
+                continue
+            rms = np.sqrt(np.mean(cand.columns**2, axis=0))
+            sc.scale = 1.0 / np.where(rms > 0, rms, 1.0)
+            sc.containment = containment_df(groups, self.basis, residualise(self.basis, cand.columns))
+            start = kb + sum(c.shape[1] for c in tested_cols)
+            slices[name] = slice(start, start + cand.q)
+            tested_cols.append(cand.columns * sc.scale)
+            self.scores[name] = sc
+        self.slices = slices
+        self.design = np.hstack([self.basis, *tested_cols]) if tested_cols else self.basis
+        self.cross = Cross.build(self.design, state.residual, groups)
+        cell_tester = None
+        for name, sl in slices.items():
+            sc = self.scores[name]
+            idx = np.r_[np.arange(kb), np.arange(sl.start, sl.stop)]
+            sub = self.cross.take(idx)
+            vf = reml(sub)
+            w = wald(sub, vf, np.arange(kb, kb + cands[name].q), containment=sc.containment)
+            if cells.replicated and cell_level(cands[name].columns, cells):
+                # both the mixed-model test and the lack-of-fit-aware cell-means test must agree
+                if cell_tester is None:
+                    cell_tester = CellTester(cells, self.basis, state.residual)
+                _, df_c, p_c = cell_tester.test(cands[name].columns)
+                if p_c > w.p:
+                    w = Wald(w.estimate, w.cov, w.F, w.q, min(w.df, df_c), p_c)
+                    sc.cell_test = True
+            sc.wald, sc.var = w, vf
+            sc.beta = w.estimate * sc.scale
+            sc.params = candidate_params(cands[name], sc.beta)
+        tested = [n for n in slices] + nonlinear_names
+        self.nonlinear = set(nonlinear_names)
+        for n in tested:
+            self.scores[n].p_adj = min(1.0, self.scores[n].wald.p * len(tested))
+        # forward selection takes the significant candidate that improves the fit most (Wald chi^2 = F q,
+        # the drop in GLS residual in units of the noise); insignificant ones follow by p
+        def rank(n):
+            sc = self.scores[n]
+            return (0, -sc.wald.F * sc.wald.q) if sc.p_adj < alpha else (1, sc.wald.p)
+
+        self.tested = sorted(tested, key=rank)
+        # how alike the signatures of the tested candidates are, once the model is projected out
+        self.similar: dict[tuple, float] = {}
+        res = {n: residualise(self.basis, cands[n].columns) for n in tested}
+        for i, a in enumerate(tested):
+            for b in tested[i + 1:]:
+                self.similar[(a, b)] = self.similar[(b, a)] = canonical(res[a], res[b])
+
+    def stability(self, resamples: int, alpha: float, seed: int = 0) -> dict[str, float]:
+        """Share of cluster-bootstrap resamples (whole runs) in which each tested candidate scores best."""
+        g = self.groups
+        names = [n for n in self.tested if n in self.slices]
+        if g.runs < 3 or not names or resamples <= 0:
+            return {}
+        z = np.hstack([self.design, self.state.residual[:, None]])
+        k = z.shape[1]
+        order = np.argsort(g.pass_id, kind="stable")
+        bounds = np.searchsorted(g.pass_id[order], np.arange(g.passes + 1))
+        grams = np.empty((g.passes, k, k))
+        for p in range(g.passes):
+            blk = z[order[bounds[p]:bounds[p + 1]]]
+            grams[p] = blk.T @ blk
+        sums = np.vstack([pass_sums(z[:, j], g) for j in range(k)]).T
+        rng = np.random.default_rng(seed)
+        counts = rng.multinomial(g.runs, np.full(g.runs, 1.0 / g.runs), size=resamples).astype(float)
+        kb = self.basis.shape[1]
+        pvals = np.full((resamples, len(names)), 1.0)
+        chi2 = np.zeros((resamples, len(names)))
+        for j, name in enumerate(names):
+            sc = self.scores[name]
+            sl = self.slices[name]
+            idx = np.r_[np.arange(kb), np.arange(sl.start, sl.stop)]
+            q = sl.stop - sl.start
+            for b in range(resamples):
+                rc = counts[b]
+                pc = rc[g.pass_run]
+                gram = np.einsum("p,pij->ij", pc, grams)
+                cr = Cross(gram[np.ix_(idx, idx)], gram[idx, k - 1], gram[k - 1, k - 1], sums[:, idx],
+                           sums[:, k - 1], g, pc, rc)
+                if cr.n - cr.k < 2:
+                    continue
+                A, bb, c, _ = cr.weighted([sc.var.gp], [sc.var.gr])
+                try:
+                    beta = np.linalg.solve(A[0], bb[0])
+                    inv = np.linalg.inv(A[0])
+                except np.linalg.LinAlgError:
+                    continue
+                s2 = max(float(c[0] - bb[0] @ beta), 1e-300) / (cr.n - cr.k)
+                est = beta[kb:]
+                cov = s2 * inv[kb:, kb:]
+                try:
+                    F = float(est @ np.linalg.solve(cov, est)) / q
+                except np.linalg.LinAlgError:
+                    continue
+                chi2[b, j] = F * q
+                pvals[b, j] = f_sf(F, q, sc.wald.df)
+        # best in a resample: the largest chi^2 among the candidates significant there (else the smallest p)
+        sig_ = pvals * len(names) < alpha
+        score = np.where(sig_, chi2, -pvals)
+        best = np.argmax(np.where(np.any(sig_, axis=1, keepdims=True), np.where(sig_, chi2, -np.inf), score), axis=1)
+        return {name: float(np.mean(best == j)) for j, name in enumerate(names)}
+
+
+@dataclass(frozen=True)
+class SameOrderTest:
+    """F-test of a candidate on the order of sources with fitted phases: ``F``, ``df``
+    (denominator), ``p``; ``beta`` (q,) its column coefficients in the refit;
+    ``better_null`` (m,) phases [rad] that fit the null model better than the
+    current fit (None: the current fit was the best)."""
+
+    F: float
+    df: float
+    p: float
+    beta: np.ndarray
+    better_null: np.ndarray | None
+
+
+def same_order_test(ctx: FitContext, state: ModelFit, lin, cand: Candidate, cells: Cells) -> SameOrderTest:
+    """Test a candidate that shares its order with sources whose phases are fitted.
+
+    Refits the phases with the candidate's columns added and compares the GLS
+    residual (at the current variance ratios): F = (cost0 - cost1) / q /
+    (cost1 / (n - k1)), k1 the phases plus linear columns.  With repeated
+    runs the same comparison on the cell means (lack of fit as error) must
+    agree; the larger p is kept."""
+    gp, gr = state.var.gp, state.var.gr
+    lin1 = np.hstack([lin, cand.columns])
+    # the candidate's columns are linear: from the null optimum (candidate at zero) the refit moves continuously
+    alt = levenberg_marquardt(ctx, state.psi, lin1, gp, gr, True)
+    n = ctx.n
+    q = cand.q
+    k1 = lin1.shape[1] + len(ctx.sources)
+    cost0 = gls_cost(state.residual, ctx.groups, gp, gr)
+    # the refit may have found phases the null fit missed: the null must get the same chance
+    null = levenberg_marquardt(ctx, alt.psi, lin, gp, gr, True)
+    better = None
+    if null.cost < cost0 * (1.0 - 1e-6):
+        better = null.psi
+        cost0 = null.cost
+        state_resid = null.residual
+    else:
+        state_resid = state.residual
+    dof = max(n - k1, 1)
+    F = max(cost0 - alt.cost, 0.0) / q / max(alt.cost / dof, 1e-300)
+    p = f_sf(F, q, dof)
+    df = float(dof)
+    if cells.replicated and cells.cells - k1 > 0:
+        m0, m1 = cells.means(state_resid), cells.means(alt.residual)
+        r0, r1 = float(m0 @ m0), float(m1 @ m1)
+        dfc = cells.cells - k1
+        Fc = max(r0 - r1, 0.0) / q / max(r1 / dfc, 1e-300)
+        pc = f_sf(Fc, q, dfc)
+        if pc > p:
+            F, p, df = Fc, pc, float(dfc)
+    return SameOrderTest(F, df, p, alt.beta[lin.shape[1]:], better)
