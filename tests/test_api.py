@@ -204,7 +204,7 @@ def test_diagnose_matches_cli(runner):
 def test_diagnose_augmented_spec_is_what_the_cli_writes(runner, tmp_path):
     out = tmp_path / "aug.toml"
     d = wg.diagnose(MCH50, WARM)
-    result = runner.invoke(app, ["diagnose", str(MCH50), str(WARM), "-o", str(out), "--format", "json"])
+    result = runner.invoke(app, ["diagnose", str(MCH50), str(WARM), "--write-spec", str(out), "--format", "json"])
     assert result.exit_code == 0, result.output
     assert d.augmented_spec() == out.read_text(encoding="utf-8")
     assert wg.load_spec(d.augmented_spec()).effects  # the text is a valid spec with the named effect

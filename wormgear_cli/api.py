@@ -43,11 +43,7 @@ __all__ = [
 
 PathLike = Union[str, "os.PathLike[str]"]
 
-# --- bridges to the report builders --------------------------------------------------------------------------
-# The JSON documents of simulate and sweep are still assembled in their CLI modules on this branch;
-# these two functions are the only places the API reaches into wormgear_cli.cli (see the report to
-# the lead: after the h-cli merge they call wormgear_cli.reports.simulate.dense and
-# wormgear_cli.reports.sweep.ratio_distance_json with the same arguments).
+# --- bridges to the report builders (the same functions the commands call) ------------------------------------
 
 
 def _analyze_report(spec, core, unit) -> dict:
@@ -58,29 +54,31 @@ def _analyze_report(spec, core, unit) -> dict:
 
 def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate`` (dense scan)."""
-    from wormgear_cli.cli.simulate import _simulate_dense
+    from wormgear_cli.reports.simulate import dense
 
-    return _simulate_dense(spec, points, revs, unit, "json", temperature_c, load_nm, phases, effects)
+    r = dense(spec, points, revs, unit, "json", temperature_c, load_nm, phases, effects)
+    return r.text, r.curves
 
 
 def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate --at``."""
-    from wormgear_cli.cli.simulate import _simulate_at
+    from wormgear_cli.reports.simulate import at_rows
 
-    return _simulate_at(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
+    r = at_rows(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
+    return r.text, r.curves
 
 
 def _sweep_report(sw, data, unit) -> dict:
     """The JSON document of ``wormgear sweep --i/--l-mm`` (whole grid, no shard)."""
-    from wormgear_cli.cli.sweep import _rl_json
+    from wormgear_cli.reports.sweep import ratio_distance_json
 
-    return _rl_json(sw, data, unit, None, 0, sw.size)
+    return ratio_distance_json(sw, data, unit, None, 0, sw.size)
 
 
 def _plain(doc) -> dict:
     """The document exactly as the CLI writes it, parsed back: NaN -> None, numpy scalars ->
     Python numbers, tuples -> lists (the CLI's ``json_text``)."""
-    from wormgear_cli.cli.common import json_text
+    from wormgear_cli.formats import json_text
 
     return json.loads(json_text(doc))
 
@@ -667,14 +665,13 @@ def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_
     >>> d.gap_after.rms < d.gap_before.rms
     True
     """
-    from wormgear_cli.diagnosis import diagnose as run, report
+    from wormgear_cli.diagnosis import run_diagnose
 
     spec = _spec(spec)
     meas = data if isinstance(data, Measurement) else read_measurement(data)
-    core = run(spec, meas.core, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
-               resamples=resamples)
-    doc = report(core)
-    doc["augmented_spec"] = None  # nothing written (the CLI records the file of -o here)
+    result = run_diagnose(spec, meas.core, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                          resamples=resamples)
+    core, doc = result.diagnosis, result.document
     found = tuple(doc["effects_found"])
     floor = doc.get("noise", {}).get("floor_arcsec")
     return Diagnosis(doc["drive"], doc["verdict"], tuple(e["name"] for e in found), found,
