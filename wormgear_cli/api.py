@@ -47,9 +47,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 
 def _analyze_report(spec, core, unit) -> dict:
-    """The JSON document of ``wormgear analyze`` (after the h-budget merge the command adds the
-    budget and ``values_used``: call the one core function that assembles all three)."""
-    return core.report(unit)
+    """The JSON document of ``wormgear analyze`` (stages, totals, budget, values used)."""
+    from wormgear_cli.reports.analyze import document
+
+    return document(spec, core, unit)
 
 
 def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
@@ -460,7 +461,7 @@ def read_measurement(path: PathLike, *, column_map: Optional[dict] = None, error
     --------
     >>> m = read_measurement("configs/mch50-warm.csv")
     >>> len(m), round(float(m.temperature_C.max()), 1)
-    (288, 31.9)
+    (720, 44.2)
     """
     from wormgear_cli import measurement as core
 
@@ -545,7 +546,7 @@ def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmo
     --------
     >>> r = measure("configs/mch50-warm.csv", drive="configs/mch50.toml")
     >>> round(r.iso230_2["E"].arcsec, 1), round(r.iso230_2["B"].arcsec, 1)
-    (180.8, 158.3)
+    (177.8, 154.9)
     """
     from wormgear_cli.errors import UsageError
     from wormgear_cli.measure_report import measure as run, report
