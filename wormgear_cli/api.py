@@ -29,7 +29,6 @@ from __future__ import annotations
 import json
 import os
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Optional, Sequence, Union
 
 from wormgear_cli.angles import Angle, AngleArray
@@ -245,19 +244,12 @@ def analyze(spec) -> Analysis:
 
 # --- simulate ------------------------------------------------------------------------------------------------
 
-_PHASES = ("spec", "aligned-error", "aligned-reversal")
-
-
 def _effects(spec, effects: Optional[dict]):
     """The effects to simulate: None (the spec's) or the spec's merged with ``effects``
     (name -> {catalogue key: value}), as ``--effect NAME:key=value`` does."""
-    if not effects:
-        return None
-    from wormgear_cli.models.effects import params_from_keys
-    from wormgear_cli.synth import resolve_effects
+    from wormgear_cli.reports.simulate import effect_params
 
-    requested = {name: dict(values or {}) for name, values in effects.items()}
-    return {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
+    return effect_params(spec, {name: dict(values or {}) for name, values in (effects or {}).items()})
 
 
 def _check_conditions(temperature_c: float, load_nm: float, revs: Optional[float] = None) -> None:
@@ -365,7 +357,9 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
     from wormgear_cli.errors import UsageError
 
     spec = _spec(spec)
-    _choice("phases", phases, _PHASES)
+    from wormgear_cli.reports.simulate import PHASE_CHOICES
+
+    _choice("phases", phases, PHASE_CHOICES)
     if at is None:
         if isinstance(points, bool) or not 2 <= int(points) <= 10_000_000:
             raise UsageError(f"points: expected an integer in [2, 10000000], got {points}")
@@ -383,10 +377,10 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
     import numpy as np
 
     from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import aligned_phases, simulate as run
+    from wormgear_cli.reports.simulate import phase_map as phase_map_of
+    from wormgear_cli.simulation import simulate as run
 
-    phase_map = None if phases == "spec" else aligned_phases(spec, "error" if phases == "aligned-error"
-                                                             else "reversal")
+    phase_map = phase_map_of(spec, phases)
     angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
     theta = np.radians(angle_deg)
     f, r = (run(spec, Signals.make(theta, d, args[4], args[3], 0.0), phase_map, effects=eff) for d in (1.0, -1.0))
