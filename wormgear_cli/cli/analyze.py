@@ -39,7 +39,7 @@ def analyze(
     from wormgear_cli.analysis import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
     from wormgear_cli.spec import load_spec
 
-    from wormgear_cli.budget import budget
+    from wormgear_cli.reports.analyze import document
 
     spec = load_spec(drive)
     result = run(spec)
@@ -50,41 +50,11 @@ def analyze(
         cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
         emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
         return
-    report = {**result.report(unit), **budget(spec, result).report(unit), "values_used": _values_used(spec)}
+    report = document(spec, result, unit)
     if fmt == "json":
         emit(json_text(report), output, [drive])
     else:
         render(_tables(report, unit) + _budget_tables(report, unit), output, [drive])
-
-
-#: spec keys whose value and origin analyze lists (the tolerances the budget and the paper use)
-_LISTED_KEYS = (
-    "gear_pair.output_gear.cumulative_pitch_deviation_mm", "gear_pair.output_gear.single_pitch_deviation_mm",
-    "gear_pair.output_gear.profile_error_mm", "gear_pair.output_gear.thickness_deviation_mm",
-    "gear_pair.pinion.cumulative_pitch_deviation_mm", "gear_pair.pinion.single_pitch_deviation_mm",
-    "gear_pair.pinion.profile_error_mm", "gear_pair.pinion.thickness_deviation_mm",
-    "worm_pair.lead_error_mm", "worm_pair.wheel.radial_composite_error_mm",
-    "worm_pair.wheel.cumulative_pitch_deviation_mm", "assembly.gear_centre_distance_error_mm",
-    "assembly.gear_eccentricity_mm",
-)
-
-
-def _values_used(spec) -> list:
-    """``[{"key", "value_um", "origin"}]`` for :data:`_LISTED_KEYS` (origin: spec / grade / default)."""
-    from wormgear_cli.spec import FIELD_BY_PATH, value_origin
-
-    out = []
-    for path in _LISTED_KEYS:
-        f = FIELD_BY_PATH[path]
-        node = spec
-        for part in f.section.split("."):
-            node = getattr(node, part)
-        value = getattr(node, f.attr)
-        origin = value_origin(spec, path)
-        if path == "assembly.gear_eccentricity_mm" and origin == "default":
-            origin = "spec" if value_origin(spec, "assembly.gear_centre_distance_error_mm") == "spec" else origin
-        out.append({"key": path, "value_um": round(float(value) * 1000.0, 6), "origin": origin})
-    return out
 
 
 def _budget_tables(r: dict, unit: str) -> list:

@@ -5,6 +5,7 @@ takes results of the core and returns data -- dicts for JSON, bytes/str for CSV,
 :class:`wormgear_cli.formats.Table` for tables.  Formatting of numbers lives in
 :mod:`wormgear_cli.formats`.
 
+* :mod:`wormgear_cli.reports.analyze` -- ``wormgear analyze`` (stages, totals, budget, values used).
 * :mod:`wormgear_cli.reports.sweep` -- ``wormgear sweep`` ((i, l) grids and --param grids).
 * :mod:`wormgear_cli.reports.simulate` -- ``wormgear simulate`` (dense scan and --at rows).
 """

@@ -1,0 +1,898 @@
+"""The Python API: every ``wormgear`` command as a function, for notebooks and scripts.
+
+Each function calls the same core function as its command and returns a
+result object whose angle fields are :class:`~wormgear_cli.angles.Angle`
+(one value) or :class:`~wormgear_cli.angles.AngleArray` (many), so no
+``unit`` argument is needed to read them.  ``result.to_dict(unit)`` is the
+document the command prints with ``--format json --unit UNIT`` (built by
+the same report function, so the API and the CLI cannot disagree; the test
+``tests/test_api.py`` compares the two).
+
+Functions: :func:`load_spec`, :func:`analyze`, :func:`simulate`,
+:func:`read_measurement`, :func:`measure`, :func:`diagnose`,
+:func:`sweep`, :func:`tolerance`.  Wherever a function takes ``spec`` it
+accepts a loaded :class:`~wormgear_cli.spec.Spec` or a path to a TOML file.
+Bad input raises the CLI's errors (:class:`~wormgear_cli.errors.SpecError`,
+:class:`~wormgear_cli.errors.DataError`,
+:class:`~wormgear_cli.errors.UsageError`, all
+:class:`~wormgear_cli.errors.WormgearError`), each with ``.problems``,
+one line per problem.
+
+Importing this module loads numpy (for :class:`AngleArray`) but no model;
+the models load on the first call, scipy only in :func:`diagnose` and
+:func:`tolerance`.
+Documented with examples in docs/api.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from typing import Optional, Sequence, Union
+
+from wormgear_cli.angles import Angle, AngleArray
+
+__all__ = [
+    "Angle", "AngleArray",
+    "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose", "sweep", "tolerance",
+    "Analysis", "Stage", "Simulation", "SimulationAt", "Measurement", "MeasureResult", "Order",
+    "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+# --- bridges to the report builders (the same functions the commands call) ------------------------------------
+
+
+def _analyze_report(spec, core, unit) -> dict:
+    """The JSON document of ``wormgear analyze`` (stages, totals, budget, values used)."""
+    from wormgear_cli.reports.analyze import document
+
+    return document(spec, core, unit)
+
+
+def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
+    """(JSON text, curves) of ``wormgear simulate`` (dense scan)."""
+    from wormgear_cli.reports.simulate import dense
+
+    r = dense(spec, points, revs, unit, "json", temperature_c, load_nm, phases, effects)
+    return r.text, r.curves
+
+
+def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects):
+    """(JSON text, curves) of ``wormgear simulate --at``."""
+    from wormgear_cli.reports.simulate import at_rows
+
+    r = at_rows(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
+    return r.text, r.curves
+
+
+def _sweep_report(sw, data, unit) -> dict:
+    """The JSON document of ``wormgear sweep --i/--l-mm`` (whole grid, no shard)."""
+    from wormgear_cli.reports.sweep import ratio_distance_json
+
+    return ratio_distance_json(sw, data, unit, None, 0, sw.size)
+
+
+def _plain(doc) -> dict:
+    """The document exactly as the CLI writes it, parsed back: NaN -> None, numpy scalars ->
+    Python numbers, tuples -> lists (the CLI's ``json_text``)."""
+    from wormgear_cli.formats import json_text
+
+    return json.loads(json_text(doc))
+
+
+def _angle(x, unit: str = "rad") -> Optional[Angle]:
+    return None if x is None else Angle(x, unit)
+
+
+def _spec(spec):
+    from wormgear_cli.spec import Spec
+
+    return spec if isinstance(spec, Spec) else load_spec(spec)
+
+
+def _choice(name: str, value: str, choices: Sequence[str]) -> str:
+    from wormgear_cli.errors import UsageError
+
+    if value not in choices:
+        raise UsageError(f"{name}={value!r}: expected one of {', '.join(choices)}")
+    return value
+
+
+# --- spec ----------------------------------------------------------------------------------------------------
+
+
+def load_spec(source: Union[PathLike, str]):
+    """Read and validate a drive spec.
+
+    Parameters
+    ----------
+    source : str or path-like
+        A path to a TOML drive file, or the TOML text itself (a ``str``
+        containing a newline is taken as text).
+
+    Returns
+    -------
+    Spec
+        The validated, immutable spec (internal units: mm, rad, N).
+
+    Raises
+    ------
+    SpecError
+        Every problem, one line each, naming the file and key.
+
+    Examples
+    --------
+    >>> spec = load_spec("configs/mch50.toml")
+    >>> spec.drive.name, spec.gear_pair.output_gear.teeth
+    ('MCH50 rotary table', 144)
+    """
+    from wormgear_cli import spec as core
+
+    if isinstance(source, str) and "\n" in source:
+        return core.loads_spec(source)
+    return core.load_spec(source)
+
+
+# --- analyze -------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One stage's result at its own output shaft (as the paper reports it).
+
+    ``transmission_error`` and ``backlash``: the maxima; ``parts``: their
+    components by name (gear: eccentricity, deformation; worm: central
+    parts and the envelope half-widths); ``at_output``: the stage's share
+    at the drive output (gear: itself; worm: divided by i_c).
+    """
+
+    transmission_error: Angle
+    backlash: Angle
+    parts: dict
+    at_output: dict
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Result of :func:`analyze`.
+
+    Attributes
+    ----------
+    drive : str
+    transmission_error, backlash : Angle
+        Totals at the drive output.
+    gear, worm : Stage
+    ratios : dict
+        ``gear`` (i_c = z1/z2), ``worm`` (z3/z_worm), ``total``.
+    metrics : dict
+        The flat columns of ``analyze --format csv`` and ``sweep --param``:
+        angle columns as :class:`Angle`, the others as float or None.
+    core : wormgear_cli.analysis.Analysis
+        The core result (angles [rad]).
+    """
+
+    drive: str
+    transmission_error: Angle
+    backlash: Angle
+    gear: Stage
+    worm: Stage
+    ratios: dict
+    metrics: dict
+    core: object = field(repr=False, compare=False)
+    spec: object = field(repr=False, compare=False, default=None)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear analyze --format json --unit UNIT``."""
+        return _plain(_analyze_report(self.spec, self.core, unit))
+
+
+def analyze(spec) -> Analysis:
+    """Transmission error and backlash of each stage and of the whole drive (the paper's model).
+
+    Parameters
+    ----------
+    spec : Spec or path-like
+        The drive.
+
+    Returns
+    -------
+    Analysis
+        Totals at the output: Delta phi_c = Delta phi_cc + Delta phi_wc / i_c
+        and Delta phi_h = Delta phi_ch + Delta phi_wh / i_c (the paper's
+        stage equations, i_c = z1/z2); stage values at each stage's shaft.
+
+    Examples
+    --------
+    >>> r = analyze("configs/mch50.toml")
+    >>> r.transmission_error  # doctest: +ELLIPSIS
+    Angle(53... arcsec)
+    >>> r.backlash > r.transmission_error
+    True
+    """
+    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze as run
+
+    spec = _spec(spec)
+    core = run(spec)
+    a, i = {k: Angle(v) for k, v in core.angles.items()}, core.info
+    rad = core.report("rad")  # the CLI's document in radians: one source for the structure
+    gear, worm = rad["stages"]["gear"], rad["stages"]["worm"]
+
+    def angles(d: dict) -> dict:
+        return {k: Angle(v) for k, v in d.items() if isinstance(v, float) and not k.endswith("_pct")}
+
+    metrics = {c: a[c] for c in METRIC_COLUMNS}
+    metrics.update({c: (None if i[c] is None else float(i[c])) for c in INFO_COLUMNS})
+    return Analysis(
+        drive=core.drive,
+        transmission_error=a["total_transmission_error"],
+        backlash=a["total_backlash"],
+        gear=Stage(a["gear_transmission_error"], a["gear_backlash"],
+                   {"transmission_error": angles(gear["transmission_error_parts"]),
+                    "backlash": angles(gear["backlash_parts"])}, angles(gear["contribution"])),
+        worm=Stage(a["worm_transmission_error"], a["worm_backlash"],
+                   {"transmission_error": angles(worm["transmission_error_parts"]),
+                    "backlash": angles(worm["backlash_parts"])}, angles(worm["contribution"])),
+        ratios=dict(rad["ratios"]),
+        metrics=metrics,
+        core=core,
+        spec=spec,
+    )
+
+
+# --- simulate ------------------------------------------------------------------------------------------------
+
+def _effects(spec, effects: Optional[dict]):
+    """The effects to simulate: None (the spec's) or the spec's merged with ``effects``
+    (name -> {catalogue key: value}), as ``--effect NAME:key=value`` does."""
+    from wormgear_cli.reports.simulate import effect_params
+
+    return effect_params(spec, {name: dict(values or {}) for name, values in (effects or {}).items()})
+
+
+def _check_conditions(temperature_c: float, load_nm: float, revs: Optional[float] = None) -> None:
+    """The option checks of ``wormgear simulate`` (same bounds, same messages)."""
+    import math
+
+    from wormgear_cli.errors import UsageError
+
+    for name, value in (("temperature_c", temperature_c), ("load_nm", load_nm)):
+        if not math.isfinite(value):
+            raise UsageError(f"{name}: expected a finite number, got {value}")
+    if revs is not None and not (math.isfinite(revs) and 0.0 < revs <= 1000.0):
+        raise UsageError(f"revs: expected a number in (0, 1000], got {revs:g}")
+    if not -100.0 <= temperature_c <= 300.0:
+        raise UsageError(f"temperature_c: expected a number in [-100, 300] [degC], got {temperature_c:g}")
+
+
+@dataclass(frozen=True)
+class Simulation:
+    """Result of :func:`simulate` (dense scan): the error over the output angle.
+
+    ``angle_deg`` [deg] (numpy array); ``forward``, ``reverse`` (the error,
+    actual - target, in each direction), ``common`` (their mean) and
+    ``lost_motion`` (reverse - forward): :class:`AngleArray`.
+    """
+
+    drive: str
+    angle_deg: object
+    forward: AngleArray
+    reverse: AngleArray
+    common: AngleArray
+    lost_motion: AngleArray
+    _args: tuple = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear simulate --format json --unit UNIT``."""
+        return json.loads(_simulate_report(*self._args[:3], unit, *self._args[3:])[0])
+
+
+@dataclass(frozen=True)
+class SimulationAt:
+    """Result of :func:`simulate` with ``at=``: the model at every row of a measurement file.
+
+    ``angle_deg`` [deg], ``direction`` (+1/-1): numpy arrays; ``simulated``
+    :class:`AngleArray`; ``measured``: :class:`AngleArray` or None (file
+    without errors).
+    """
+
+    drive: str
+    angle_deg: object
+    direction: object
+    simulated: AngleArray
+    measured: Optional[AngleArray]
+    _args: tuple = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear simulate --at FILE --format json --unit UNIT``."""
+        return json.loads(_simulate_at_report(*self._args[:2], unit, *self._args[2:])[0])
+
+
+def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLike] = None,
+             temperature_c: float = 20.0, load_nm: float = 0.0, phases: str = "spec",
+             effects: Optional[dict] = None):
+    """The drive's predicted error over the output angle, forward and reverse.
+
+    Parameters
+    ----------
+    spec : Spec or path-like
+        The drive.
+    points : int
+        Dense scan: number of output angles (2 to 10 000 000).
+    revs : float
+        Dense scan: output turns covered, angles from 0, end excluded (0 < revs <= 1000).
+    at : path-like or None
+        Evaluate at every row of this measurement CSV instead (its
+        ``load_Nm`` and ``temperature_C`` columns where present).
+    temperature_c : float [degC]
+        Drive temperature (-100 to 300).
+    load_nm : float [N m]
+        External torque on the output.
+    phases : str
+        ``spec``, ``aligned-error`` or ``aligned-reversal`` (see ``wormgear simulate --help``).
+    effects : dict or None
+        Effects to add: name -> {catalogue key: value} (catalogue units), e.g.
+        ``{"thermal_backlash": {"centre_distance_um_per_K": -0.3}}``; they
+        override the spec's ``[effects.NAME]`` keys.
+
+    Returns
+    -------
+    Simulation or SimulationAt
+        ``SimulationAt`` when ``at`` is given.
+
+    Raises
+    ------
+    UsageError, SpecError, DataError
+
+    Examples
+    --------
+    >>> s = simulate("configs/mch50.toml", points=720)
+    >>> len(s.forward)
+    720
+    >>> s.lost_motion.max() <= analyze("configs/mch50.toml").backlash
+    True
+    """
+    from wormgear_cli.errors import UsageError
+
+    spec = _spec(spec)
+    from wormgear_cli.reports.simulate import PHASE_CHOICES
+
+    _choice("phases", phases, PHASE_CHOICES)
+    if at is None:
+        if isinstance(points, bool) or not 2 <= int(points) <= 10_000_000:
+            raise UsageError(f"points: expected an integer in [2, 10000000], got {points}")
+    _check_conditions(temperature_c, load_nm, None if at is not None else revs)
+    eff = _effects(spec, effects)
+    if at is not None:
+        args = (spec, at, float(temperature_c), float(load_nm), phases, eff)
+        _, c = _simulate_at_report(*args[:2], "rad", *args[2:])
+        return SimulationAt(spec.drive.name, c["angle_deg"], c["direction"], AngleArray(c["simulated"]),
+                            None if c["measured"] is None else AngleArray(c["measured"]), args)
+    args = (spec, int(points), float(revs), float(temperature_c), float(load_nm), phases, eff)
+    # the curves straight from the core model (the report builder would also format the whole
+    # curve as text, 20x the cost); to_dict() asks the report builder, and tests/test_api.py
+    # checks that both give the same curve
+    import numpy as np
+
+    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.reports.simulate import phase_map as phase_map_of
+    from wormgear_cli.simulation import simulate as run
+
+    phase_map = phase_map_of(spec, phases)
+    angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
+    theta = np.radians(angle_deg)
+    f, r = (run(spec, Signals.make(theta, d, args[4], args[3], 0.0), phase_map, effects=eff) for d in (1.0, -1.0))
+    return Simulation(spec.drive.name, angle_deg, AngleArray(f), AngleArray(r), AngleArray(0.5 * (f + r)),
+                      AngleArray(r - f), args)
+
+
+# --- measurements --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """A validated measurement (result of :func:`read_measurement`).
+
+    ``angle``, ``error``: :class:`AngleArray` (error NaN where the file has
+    none); ``direction`` (+1/-1), ``run``, ``load_Nm`` [N m],
+    ``temperature_C`` [degC], ``time_s`` [s]: numpy arrays; ``columns``:
+    canonical name -> header cell; ``notes``, ``warnings``: what the reader
+    inferred and what looks wrong.  ``core``: the core record.
+    """
+
+    source: str
+    angle: AngleArray
+    error: AngleArray
+    direction: object
+    run: object
+    load_Nm: object
+    temperature_C: object
+    time_s: object
+    columns: dict
+    notes: tuple
+    warnings: tuple
+    core: object = field(repr=False, compare=False)
+    path: object = field(repr=False, compare=False, default=None)
+    options: object = field(repr=False, compare=False, default=None)
+
+    def __len__(self) -> int:
+        return len(self.core)
+
+
+def _read_options(column_map, error_unit, angle_unit):
+    from wormgear_cli.measurement import ReadOptions
+
+    pairs = tuple((str(k), str(v)) for k, v in (column_map or {}).items())
+    return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit)
+
+
+def read_measurement(path: PathLike, *, column_map: Optional[dict] = None, error_unit: Optional[str] = None,
+                     angle_unit: Optional[str] = None, require_error: bool = True) -> Measurement:
+    """Read and validate a measurement CSV (as ``measure`` and ``diagnose`` read it).
+
+    Parameters
+    ----------
+    path : path-like
+        The CSV file (``angle_deg``, ``error_arcsec``; optional ``direction``,
+        ``run``, ``load_Nm``, ``temperature_C``, ``time_s``).
+    column_map : dict or None
+        Canonical name -> header cell, as ``--map`` (e.g. ``{"angle_deg": "Position"}``).
+    error_unit : str or None
+        Unit of the error column (arcsec, arcmin, deg, urad); None: from the header, else arcsec.
+    angle_unit : str or None
+        Unit of the angle column (deg, rad); None: from the header, else deg.
+    require_error : bool
+        Whether the error column must be present.
+
+    Raises
+    ------
+    DataError, UsageError
+        One line per problem, naming file, line and column.
+
+    Examples
+    --------
+    >>> m = read_measurement("configs/mch50-warm.csv")
+    >>> len(m), round(float(m.temperature_C.max()), 1)
+    (720, 44.2)
+    """
+    from wormgear_cli import measurement as core
+
+    options = _read_options(column_map, error_unit, angle_unit)
+    m = core.read_measurement(path, require_error=require_error, options=options)
+    return Measurement(m.source, AngleArray(m.angle), AngleArray(m.error), m.direction, m.run, m.load,
+                       m.temperature, m.time, dict(m.columns), tuple(m.notes), tuple(m.warnings), m, path, options)
+
+
+# --- measure -------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Order:
+    """One fitted order of :func:`measure`: amplitude [Angle] and phase [deg] of the common
+    mode (mean of the directions) and the differential mode (half the reversal); None where
+    not fitted (``status`` says why)."""
+
+    order: float
+    label: Optional[str]
+    status: str
+    amplitude: Optional[Angle]
+    amplitude_stderr: Optional[Angle]
+    phase_deg: Optional[float]
+    differential_amplitude: Optional[Angle]
+    differential_phase_deg: Optional[float]
+
+
+@dataclass(frozen=True)
+class MeasureResult:
+    """Result of :func:`measure`.
+
+    ``iso230_2``: the ISO 230-2 figures by name (A, B, E, M, R and their
+    directional variants, see ``wormgear measure``) as :class:`Angle`, None
+    where withheld; ``orders``: tuple of :class:`Order`; ``residual_rms``:
+    :class:`Angle`; ``verdict``, ``warnings``, ``notes``: text.
+    """
+
+    source: str
+    drive: Optional[str]
+    rows: int
+    targets: int
+    iso230_2: dict
+    orders: tuple
+    residual_rms: Optional[Angle]
+    verdict: str
+    warnings: tuple
+    notes: tuple
+    core: object = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear measure --format json --unit UNIT``."""
+        from wormgear_cli.measure_report import report
+
+        return _plain(report(self.core, unit))
+
+
+def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmonics: int = 3,
+            column_map: Optional[dict] = None, error_unit: Optional[str] = None,
+            angle_unit: Optional[str] = None) -> MeasureResult:
+    """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
+
+    Parameters
+    ----------
+    data : path-like or Measurement
+        The measurement CSV, or a :class:`Measurement` from
+        :func:`read_measurement` (its file is read with its options).
+    drive : path-like or None
+        Drive spec: its shaft and mesh orders are the default orders, labelled.
+    orders : sequence of float [cycles/rev] or None
+        Orders to fit (default: the drive's, else 1, 2, 3, 4).
+    harmonics : int
+        With ``drive``: harmonics of each shaft/mesh order (1 to 10).
+    column_map, error_unit, angle_unit
+        As for :func:`read_measurement` (ignored when ``data`` is a Measurement).
+
+    Raises
+    ------
+    DataError, SpecError, UsageError
+
+    Examples
+    --------
+    >>> r = measure("configs/mch50-warm.csv", drive="configs/mch50.toml")
+    >>> round(r.iso230_2["E"].arcsec, 1), round(r.iso230_2["B"].arcsec, 1)
+    (177.8, 154.9)
+    """
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.measure_report import measure as run, report
+
+    if isinstance(data, Measurement):
+        path, options = data.path, data.options
+    else:
+        path, options = data, _read_options(column_map, error_unit, angle_unit)
+    if drive is not None and not isinstance(drive, (str, os.PathLike)):
+        raise UsageError("drive: expected the path of a drive spec (TOML)")
+    if isinstance(harmonics, bool) or not 1 <= int(harmonics) <= 10:
+        raise UsageError(f"harmonics: expected an integer in [1, 10], got {harmonics}")
+    if orders is not None:
+        from wormgear_cli.measure_report import parse_orders
+
+        orders = parse_orders(",".join(repr(float(k)) for k in orders))
+    core = run(path, options, drive, orders, int(harmonics))
+    doc = report(core, "rad", per_target=False)  # the CLI's document in radians
+    items = []
+    for it in doc["orders"]["items"]:
+        c, d = it["common"], it["differential"]
+        items.append(Order(it["order"], it["label"], it["status"], _angle(c["amplitude"]),
+                           _angle(c["amplitude_stderr"]), c["phase_deg"], _angle(d["amplitude"]), d["phase_deg"]))
+    return MeasureResult(doc["source"], doc["drive"], doc["rows"], doc["targets"],
+                         {k: _angle(v) for k, v in doc["iso230_2"].items()}, tuple(items),
+                         _angle(doc["orders"]["residual_rms"]), doc["verdict"], tuple(doc["warnings"]),
+                         tuple(doc["notes"]), core)
+
+
+# --- diagnose ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Gap:
+    """Measured - model over matched forward/reverse targets: ``rms``, ``max`` and the same for
+    the common and differential modes, as :class:`Angle`."""
+
+    rms: Angle
+    max: Angle
+    common_rms: Angle
+    common_max: Angle
+    differential_rms: Angle
+    differential_max: Angle
+
+
+def _gap(d: Optional[dict]) -> Optional[Gap]:
+    if d is None:
+        return None
+    return Gap(*(_angle(d[f"{k}_arcsec"], "arcsec") for k in
+                 ("rms", "max", "common_rms", "common_max", "differential_rms", "differential_max")))
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    """Result of :func:`diagnose`.
+
+    ``verdict``: one line; ``effects``: names of the effects the data
+    support, in order of selection; ``effects_found``: their entries of the
+    report (parameters in catalogue units, p-value, interval, stability);
+    ``gap_as_specified``, ``gap_before`` (phases fitted), ``gap_after``
+    (named effects added): :class:`Gap`; ``noise_floor``: :class:`Angle`.
+    """
+
+    drive: str
+    verdict: str
+    effects: tuple
+    effects_found: tuple
+    gap_as_specified: Optional[Gap]
+    gap_before: Optional[Gap]
+    gap_after: Optional[Gap]
+    noise_floor: Optional[Angle]
+    core: object = field(repr=False, compare=False)
+    _doc: dict = field(repr=False, compare=False)
+    _data_name: str = field(repr=False, compare=False, default="")
+
+    def to_dict(self) -> dict:
+        """The document of ``wormgear diagnose --format json`` (always arcsec: its keys end in
+        ``_arcsec``)."""
+        return _plain(self._doc)
+
+    def augmented_spec(self) -> str:
+        """The augmented drive spec (TOML text: fitted phases, an ``[effects.NAME]`` table per
+        named effect), as ``wormgear diagnose`` writes it."""
+        from wormgear_cli.diagnosis import augmented_toml
+
+        return augmented_toml(self.core, self._data_name)
+
+
+def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_effects: int = 4,
+             resamples: int = 50) -> Diagnosis:
+    """Where the model and a measurement disagree, and which catalogue effect is missing.
+
+    Parameters
+    ----------
+    spec : Spec or path-like
+        The drive.
+    data : path-like or Measurement
+        The measurement.
+    alpha : float
+        Family-wise significance level of each selection step (0 < alpha < 0.5).
+    keep_phases : bool
+        Hold the spec's phases instead of fitting them.
+    max_effects : int
+        Name at most this many effects (0 to 20).
+    resamples : int
+        Resamples of whole runs for the stability check (0: skip).
+
+    Raises
+    ------
+    DataError, SpecError, UsageError
+
+    Examples
+    --------
+    >>> d = diagnose("configs/mch50.toml", "configs/mch50-warm.csv")
+    >>> d.effects
+    ('thermal_backlash',)
+    >>> d.gap_after.rms < d.gap_before.rms
+    True
+    """
+    from wormgear_cli.diagnosis import run_diagnose
+
+    spec = _spec(spec)
+    meas = data if isinstance(data, Measurement) else read_measurement(data)
+    result = run_diagnose(spec, meas.core, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                          resamples=resamples)
+    core, doc = result.diagnosis, result.document
+    found = tuple(doc["effects_found"])
+    floor = doc.get("noise", {}).get("floor_arcsec")
+    return Diagnosis(doc["drive"], doc["verdict"], tuple(e["name"] for e in found), found,
+                     _gap(doc.get("gap_as_specified")), _gap(doc.get("gap_before")), _gap(doc.get("gap_after")),
+                     _angle(floor, "arcsec"), core, doc, str(meas.path if meas.path is not None else meas.source))
+
+
+# --- sweep ---------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Result of :func:`sweep`: the (i, l) response surface.
+
+    ``i``, ``l_mm`` [mm]: the grid axes (numpy arrays); ``points``: column
+    name -> one value per computed point, in point order (i outermost;
+    skipped points left out with ``module_mm``): angle columns as
+    :class:`AngleArray`, the others as numpy arrays; ``best``: name of the
+    minimised column -> that point's row as a dict.
+    """
+
+    drive: str
+    i: object
+    l_mm: object
+    points: dict
+    best: dict
+    findings: tuple
+    core: object = field(repr=False, compare=False)
+    _data: dict = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear sweep --format json --unit UNIT``."""
+        return _plain(_sweep_report(self.core, self._data, unit))
+
+
+def _axis(value, option: str):
+    import numpy as np
+
+    from wormgear_cli import sweep as core
+
+    if isinstance(value, str):
+        return core.parse_range_spec(value, option, positive=True).values()
+    from wormgear_cli.errors import UsageError
+
+    arr = np.atleast_1d(np.asarray(value, dtype=float))
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
+        raise UsageError(f"{option}: expected positive finite values, or START:STOP:N")
+    return arr
+
+
+def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: Optional[float] = None,
+          min_pinion_teeth: Optional[int] = None) -> Sweep:
+    """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
+
+    Parameters
+    ----------
+    spec : Spec or path-like
+        The drive.
+    i : str or array_like or None
+        Gear ratio values i = z1/z2: ``"START:STOP:N"`` (as ``--i``) or the
+        values; None: the spec's ratio.
+    l_mm : str or array_like [mm] or None
+        Centre distance values l = R1 + R2, likewise; None: the spec's.
+    hold : str
+        What stays fixed as i and l change: ``force`` or ``torque``.
+    module_mm : float [mm] or None
+        Snap every point to whole tooth counts at this module.
+    min_pinion_teeth : int or None
+        With ``module_mm``: skip designs whose smaller gear has fewer teeth.
+
+    Raises
+    ------
+    UsageError, SpecError
+
+    Examples
+    --------
+    >>> s = sweep("configs/mch50.toml", i="2:10:5", l_mm="100:300:3")
+    >>> len(s.points["total_transmission_error"])
+    15
+    >>> sorted(s.best)
+    ['gear_transmission_error', 'total_transmission_error']
+    """
+    from wormgear_cli import sweep as core
+    from wormgear_cli.errors import UsageError
+
+    spec = _spec(spec)
+    _choice("hold", hold, ("force", "torque"))
+    if min_pinion_teeth is not None and module_mm is None:
+        raise UsageError("min_pinion_teeth applies only with module_mm")
+    gp = spec.gear_pair
+    i_values = _axis(i, "--i") if i is not None else [gp.output_gear.teeth / gp.pinion.teeth]
+    l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth
+                                                                             + gp.pinion.teeth) / 2.0]
+    sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth)
+    data = sw.collect(0, sw.size)
+    doc = _sweep_report(sw, data, "rad")  # the CLI's document in radians
+    points = {c: (AngleArray(data[c]) if c in core.ANGLE_COLUMNS else data[c]) for c in sw.columns}
+
+    def row(d: dict) -> dict:
+        return {k: (Angle(v) if k in core.ANGLE_COLUMNS else v) for k, v in d.items()}
+
+    summary = doc["summary"]
+    return Sweep(doc["drive"], sw.i_values, sw.l_values, points,
+                 {k: row(v) for k, v in summary["best"].items()}, tuple(summary["findings"]), sw, data)
+
+
+# --- tolerance -----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MetricStats:
+    """Statistics of one metric over the sampled drives: ``mean``, ``std``, ``corner`` (the
+    worst case, as analyze), ``rss`` (root-sum-square estimate) and ``percentiles`` (key ->
+    value: "50", "90", "95", "99", "99.73", "max"), all :class:`Angle`."""
+
+    mean: Angle
+    std: Angle
+    percentiles: dict
+    corner: Angle
+    rss: Angle
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """Result of :func:`tolerance`.
+
+    ``metrics``: metric name -> :class:`MetricStats`; ``yields``:
+    requirement key (or "all") -> {value, low, high, passing} (fractions);
+    ``sensitivity``: metric -> first-order indices by varied quantity;
+    ``allocation``: the ranking of ``target_yield`` or None.
+    """
+
+    drive: str
+    samples: int
+    seed: int
+    metrics: dict
+    yields: dict
+    sensitivity: dict
+    allocation: Optional[dict]
+    _run: object = field(repr=False, compare=False)
+    _docs: dict = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear tolerance --format json --unit UNIT`` (same seed: the same
+        samples are drawn again for a unit not computed yet)."""
+        if unit not in self._docs:
+            self._docs[unit] = self._run(unit)
+        return _plain(self._docs[unit])
+
+
+def _tolerance_doc(spec, options, target_yield):
+    """Setup, run, allocation and document exactly as ``wormgear tolerance`` (no shard, no
+    summarize): see the report to the lead, this sequence belongs in the tolerance package."""
+    from dataclasses import replace
+
+    from wormgear_cli.cli.tolerance import ALLOCATION_SAMPLES  # to move into the core with this sequence
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.tolerance import engine, report
+
+    s = engine.setup(spec, options)
+    summary = engine.run(s)
+    target = target_yield if target_yield is not None else spec.requirements.min_yield
+    allocation = None
+    if target is not None and engine.metrics_for_limits(spec) is not None:
+        from wormgear_cli.tolerance.allocation import allocate
+
+        allocation = allocate(spec, replace(options, samples=min(options.samples, ALLOCATION_SAMPLES)), float(target))
+    elif target_yield is not None:
+        raise UsageError("target_yield needs a limit in [requirements] (max_transmission_error_arcsec or "
+                         "max_backlash_arcsec) to count the yield against")
+    return report.document(s, summary, allocation, None)
+
+
+def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "all", plan: str = "iso",
+              targets: int = 24, points: int = 360, target_yield: Optional[float] = None) -> Tolerance:
+    """Statistical tolerance analysis: Monte Carlo over built drives.
+
+    Parameters
+    ----------
+    spec : Spec or path-like
+        The drive (its tolerances, optional ``[statistics]`` and ``[requirements]``).
+    samples : int
+        Number of built drives (>= 1).
+    seed : int
+        Seed of every random number (same seed, same result).
+    metrics : str
+        ``paper`` (total TE and backlash), ``iso`` (ISO 230-2 E, B, M, A of
+        the simulated acceptance test) or ``all``.
+    plan : str
+        Acceptance test: ``iso`` (``targets`` irregular targets) or ``dense`` (``points`` angles).
+    targets, points : int
+        Sizes of the two plans.
+    target_yield : float or None
+        Yield to aim at (0 < P < 1; default ``[requirements] min_yield``):
+        rank the tolerances by the yield one step of tightening gains.
+
+    Raises
+    ------
+    UsageError, SpecError
+
+    Examples
+    --------
+    >>> t = tolerance("configs/mch50.toml", samples=2000, seed=1, metrics="paper")
+    >>> te = t.metrics["total_transmission_error"]
+    >>> te.mean < te.percentiles["99"] < te.corner
+    True
+    """
+    from dataclasses import replace
+
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.tolerance import engine
+
+    spec = _spec(spec)
+    if target_yield is not None and not 0.0 < target_yield < 1.0:
+        raise UsageError(f"target_yield: expected a number in (0, 1), got {target_yield:g}")
+    options = engine.Options(samples=samples, seed=seed, metrics=metrics, plan=plan, targets=targets,
+                             points=points, unit="rad")
+
+    def run(unit: str) -> dict:
+        return _tolerance_doc(spec, replace(options, unit=unit), target_yield)
+
+    doc = run("rad")
+    stats = {}
+    for name, m in doc["metrics"].items():
+        stats[name] = MetricStats(_angle(m["mean"]), _angle(m["std"]),
+                                  {k: _angle(v) for k, v in m["percentiles"].items()}, _angle(m["corner"]),
+                                  _angle(m["rss"]))
+    return Tolerance(doc["drive"], doc["samples"], doc["seed"], stats, doc["yield"], doc["sensitivity"],
+                     doc.get("allocation"), run, {"rad": doc})
