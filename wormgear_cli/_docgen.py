@@ -14,8 +14,8 @@ when a committed page differs):
 Output is deterministic: commands and effects are sorted by name, spec keys
 keep the schema's order (the order of the template ``wormgear new`` writes).
 
-The worked sessions of ``docs/tutorial.md`` and of the example of
-``docs/commands/measure.md`` are hand-written prose whose command outputs are
+The worked sessions of ``docs/tutorial.md`` and of the examples of
+``docs/commands/measure.md`` and ``docs/commands/diagnose.md`` are hand-written prose whose command outputs are
 filled in by running the commands (:func:`refresh_session`, :data:`SESSION_PAGES`).
 
 Run from the project root::
@@ -289,7 +289,7 @@ def refresh_session(text: str, root: Path) -> str:
 
 
 #: Hand-written pages whose command outputs :func:`refresh_session` fills in.
-SESSION_PAGES = ("tutorial.md", "commands/measure.md")
+SESSION_PAGES = ("tutorial.md", "commands/measure.md", "commands/diagnose.md")
 
 
 # --- driver ---------------------------------------------------------------------------------------------------------
