@@ -14,8 +14,9 @@ when a committed page differs):
 Output is deterministic: commands and effects are sorted by name, spec keys
 keep the schema's order (the order of the template ``wormgear new`` writes).
 
-The worked session of ``docs/tutorial.md`` is hand-written prose whose
-command outputs are filled in by running the commands (:func:`refresh_session`).
+The worked session of ``docs/tutorial.md`` and the examples of the command
+pages listed in :data:`SESSION_PAGES` are hand-written prose whose command outputs are
+filled in by running the commands (:func:`refresh_session`, :data:`SESSION_PAGES`).
 
 Run from the project root::
 
@@ -288,7 +289,8 @@ def refresh_session(text: str, root: Path) -> str:
 
 
 #: Hand-written pages whose command outputs :func:`refresh_session` fills in.
-SESSION_PAGES = ("tutorial.md",)
+SESSION_PAGES = ("tutorial.md", "commands/analyze.md", "commands/check.md", "commands/sweep.md",
+                 "commands/simulate.md", "commands/synth.md", "commands/measure.md", "commands/diagnose.md")
 
 
 # --- driver ---------------------------------------------------------------------------------------------------------

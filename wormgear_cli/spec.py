@@ -3,7 +3,7 @@
 The schema is data (:data:`FIELDS`): every key with its section, unit,
 default, physical range, whether the paper's Table 1 gives it, and a
 description.  The loader, ``wormgear new`` (the commented template), the
-README's key reference and ``sweep --param`` all read it.
+generated key reference (docs/reference/spec.md) and ``sweep --param`` all read it.
 
 Units live in key names (``module_mm``, ``pressure_angle_deg``) and are
 converted once, here, to the internal system: lengths [mm], forces [N],
@@ -149,7 +149,7 @@ def _gear_grade_fields(section, name):
     )
 
 
-#: The drive-spec schema.  Order = order in the template and the README.
+#: The drive-spec schema.  Order = order in the template and the key reference (docs/reference/spec.md).
 FIELDS: tuple[Field, ...] = (
     Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
     Field("drive.description", "description", "str", "", "", "free text"),
@@ -240,7 +240,7 @@ FIELDS: tuple[Field, ...] = (
     _f("stiffness.iso_ka", "iso_ka", "-", 1.0,
        "ISO 6336 K_A (application factor) in the line load F_t K_A / b that scales c' below 100 N/mm",
        **FACTOR),
-    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (see README for the calibration)",
+    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (its calibration: docs/models.md, deformation models)",
        lo=0.0, hi=1000.0),
     _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
     _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),

@@ -71,7 +71,7 @@ def test_file_larger_than_the_limit_is_refused(tmp_path):
     with pytest.raises(DataError) as info:
         read_measurement(path, options=ReadOptions(max_bytes=2048))
     assert info.value.problems == [f"{path}: 4023 bytes, larger than the 2048 bytes accepted; expected a CSV file"]
-    assert MAX_FILE_BYTES == 256 * 1024 * 1024  # the documented limit (docs/commands/measure-field.md)
+    assert MAX_FILE_BYTES == 256 * 1024 * 1024  # the documented limit (docs/commands/measure.md, Limits)
 
 
 def test_binary_after_a_text_start_and_bad_utf8(tmp_path):
