@@ -55,7 +55,7 @@ def test_demo_names_thermal_backlash_and_the_gap_shrinks(demo_json):
     share = truth["thermal"]["housing_share"]
     assert lo <= predicted_centre_distance_um_per_K(load_spec(CONFIGS / "mch50.toml"), share) <= hi
     # the CSV gives away nothing of the truth: not its values, not the effect, not the seed
-    # (the command that made it is in the truth file and the README)
+    # (the command that made it is in the truth file and in docs/commands/diagnose.md)
     text = DEMO.read_text()
     assert f"{k_true}" not in text and "phase_deg" not in text
     assert "thermal_backlash" not in text and "--seed" not in text

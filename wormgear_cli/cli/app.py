@@ -76,7 +76,7 @@ class WormgearGroup(TyperGroup):
 
     Exit codes: 0 ok, 1 a check ran and failed, 2 bad usage/input or an output that
     cannot be written, 128 + N stopped by signal N (130 Ctrl-C, 129 SIGHUP, 143
-    SIGTERM, 141 stdout closed by its reader).  A stopped run leaves no output file.
+    SIGTERM; a stdout closed by its reader ends quietly with 0).  A stopped run leaves no output file.
     """
 
     def invoke(self, ctx):
