@@ -32,8 +32,9 @@ def test_json_contract(runner):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["samples"] == 2000 and doc["seed"] == 7
+    # the six metrics in its order, then the full budget's totals (more keys may be added)
     assert list(doc["metrics"]) == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B",
-                                    "iso230_M", "iso230_A"]
+                                    "iso230_M", "iso230_A", "budget_linear", "budget_rss"]
     for m, v in doc["metrics"].items():
         assert list(v["percentiles"]) == PERCENTILE_KEYS
         p = [v["percentiles"][k] for k in PERCENTILE_KEYS]

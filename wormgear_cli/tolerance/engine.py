@@ -285,8 +285,9 @@ def run(s: Setup, on_block: Callable[[Block], None] | None = None,
 def _aligned(spec, quantity: str) -> dict[str, np.ndarray]:
     from wormgear_cli.simulation import aligned_phases, periodic_sources
 
-    a = aligned_phases(spec, quantity)
-    return {p: np.array([a[src.name]]) for p, src in zip(PHASES, periodic_sources(spec))}
+    a = aligned_phases(spec, quantity)  # sources without a size are left out there: 90 deg, as the sinusoids
+    return {src.phase_path: np.array([a.get(src.name, 0.5 * math.pi)])
+            for src in periodic_sources(spec, all_budget_sources=True)}
 
 
 def _values_at(varied, which: str | None) -> dict[str, np.ndarray]:
