@@ -86,8 +86,8 @@ def test_csv_columns(runner):
     assert header[0] == "sample"
     assert "assembly.wheel_eccentricity_mm" in header and "assembly.worm_pair_errors_mm[5]" in header
     assert "worm_pair.lead_error_phase_deg" in header
-    assert header[-6:] == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B", "iso230_M",
-                           "iso230_A"]
+    assert header[-8:] == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B", "iso230_M",
+                           "iso230_A", "budget_linear", "budget_rss"]
     assert len(r.stdout.splitlines()) == 4
 
 
