@@ -207,7 +207,8 @@ def test_check_min_yield_without_limits_is_an_input_error(runner, tmp_path):
     r = runner.invoke(app, ["check", str(drive)])
     assert r.exit_code == 2
     assert r.stderr == (f"error: {drive}: requirements.min_yield: needs a limit to count the yield against "
-                        "(max_transmission_error_arcsec or max_backlash_arcsec)\n")
+                        "(max_transmission_error_arcsec, max_backlash_arcsec, max_budget_linear_arcsec, "
+                        "max_budget_rss_arcsec)\n")
 
 
 def test_plot(runner, tmp_path):

@@ -165,11 +165,13 @@ def tolerance(
         from wormgear_cli.tolerance.allocation import allocate
 
         n_alloc = min(n_rows if n_rows is not None else samples, ALLOCATION_SAMPLES)
-        with _Progress(14, n_alloc * 14 * _SECONDS_PER_SAMPLE["paper"], "allocation") as bar:
+        steps = 1 + len(s.varied)
+        cost = _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]
+        with _Progress(steps, n_alloc * steps * cost, "allocation") as bar:
             allocation = allocate(spec, replace(options, samples=n_alloc), float(target), bar.advance)
     elif target_yield is not None and engine.metrics_for_limits(spec) is None:
-        raise UsageError("--target-yield needs a limit in [requirements] (max_transmission_error_arcsec or "
-                         "max_backlash_arcsec) to count the yield against")
+        raise UsageError(f"--target-yield needs a limit in [requirements] ({engine.LIMIT_KEYS}) to count the "
+                         "yield against")
     doc = report.document(s, summary, allocation, shard)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
@@ -264,12 +266,16 @@ def _tables(doc: dict, target) -> list:
         for c in ("key", "step", "yield", "gain"):
             t5.add_column(c, justify="left" if c in ("key", "step") else "right")
         for st in alloc["steps"][:8]:
-            t5.add_row(escape(st["key"]), st["step"], _pct(st["yield"]["value"]), f"{100 * st['gain']:+.2f} %")
+            t5.add_row(escape(_short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
+                       f"{100 * st['gain']:+.2f} %")
         out.append(t5)
+        out.append(escape(alloc["answer"] if alloc["answer"] else "no single step gains yield"))
     notes = []
     if doc.get("shard"):
         notes.append(f"shard {doc['shard']['part']}: samples {doc['shard']['first_sample']} to "
                      f"{doc['shard']['stop_sample'] - 1}")
+    for key, why in doc.get("not_sampled", {}).items():
+        notes.append(f"{key.replace('requirements.', '')}: no yield, {why}")
     notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]

@@ -135,6 +135,11 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
         "varied": varied,
         "phases": "uniform in [0, 360) deg",
     }
+    from wormgear_cli.tolerance.engine import not_sampled
+
+    skipped = not_sampled(s.spec)
+    if skipped:
+        doc["not_sampled"] = skipped
     if shard is not None:
         doc["shard"] = {"part": shard, "first_sample": s.start, "stop_sample": s.stop}
     if allocation is not None:
