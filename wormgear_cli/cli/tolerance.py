@@ -269,7 +269,8 @@ def _tables(doc: dict, target) -> list:
             t5.add_row(escape(_short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
                        f"{100 * st['gain']:+.2f} %")
         out.append(t5)
-        out.append(escape(alloc["answer"] if alloc["answer"] else "no single step gains yield"))
+        head, _, rest = alloc["answer"].partition(": ")  # the answer on two lines within 80 columns
+        out.append(escape(f"{head}:\n  {rest}" if rest else head))
     notes = []
     if doc.get("shard"):
         notes.append(f"shard {doc['shard']['part']}: samples {doc['shard']['first_sample']} to "

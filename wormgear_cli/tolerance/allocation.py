@@ -151,6 +151,12 @@ def allocate(spec, options: engine.Options, target: float, progress: Callable[[i
             progress(1)
     steps.sort(key=lambda st: -st.gain)  # stable: ties keep registry order
     reached = [st.path for st in steps if st.after.low >= target]
-    best = steps[0].advice() if steps and steps[0].gain > 0 else None
+    if base.low >= target:
+        best = (f"target met, no tightening needed: yield {100 * base.value:.1f} % (95 % interval from "
+                f"{100 * base.low:.1f} %) >= {100 * target:g} %")
+    elif steps and steps[0].gain > 0:
+        best = steps[0].advice()
+    else:
+        best = "no single step gains yield: tighten several tolerances together or revise the limits"
     return {"target": target, "yield": {"value": base.value, "low": base.low, "high": base.high},
             "steps": [st.to_dict() for st in steps], "reaching_target": reached, "answer": best}
