@@ -22,7 +22,7 @@ import numpy as np
 from wormgear_cli.errors import UsageError
 from wormgear_cli.tolerance import metrics as metrics_mod
 from wormgear_cli.tolerance import statistics as stats
-from wormgear_cli.tolerance.quantities import PHASES, Varied, varied_quantities
+from wormgear_cli.tolerance.quantities import PHASE_SIZE, PHASES, Varied, varied_quantities
 from wormgear_cli.tolerance.sampling import BLOCK, draw
 from wormgear_cli.units import RAD_PER_UNIT, to_unit
 
@@ -141,7 +141,10 @@ def setup(spec, options: Options, varied: tuple[Varied, ...] | None = None) -> S
             if v.tolerance[e] > 0:
                 columns.append(col)
                 bounds[col] = v.bounds(e)
+    sized = {v.path for v in varied if any(t > 0 for t in v.tolerance)}
     for p in PHASES:
+        if p in PHASE_SIZE and PHASE_SIZE[p] not in sized:
+            continue  # the source has no size in this spec: its phase is drawn but not an output column
         columns.append(p)
         bounds[p] = (0.0, 360.0)
     targets = plan_targets(options)

@@ -1,6 +1,7 @@
 """The registry of varied quantities (data) and the spec's ``[statistics]`` table.
 
-Every toleranced key the paper's model reads is one :class:`Quantity`: its
+Every toleranced key the model reads (the paper's equations, the full budget's
+pitch deviations, the involute gear stage) is one :class:`Quantity`: its
 TOML path, its :class:`Kind` (which sets its default distribution and the
 interval it lives in) and whether an ISO 1328 accuracy grade drives its
 tolerance.  The spec value of the key is read as the tolerance T.
@@ -70,9 +71,8 @@ class Quantity:
 
 R, S, U = Kind.radial, Kind.signed, Kind.unknown
 
-#: The registry: every toleranced key the paper's model reads, in a fixed order
-#: (the order of the random streams' rows: append new quantities at the end, never reorder,
-#: and existing samples stay the same).
+#: The registry: every toleranced key the model reads, in a fixed order (append new quantities at
+#: the end, never reorder; their random-stream rows are :data:`STREAM_ROWS`).
 QUANTITIES: tuple[Quantity, ...] = (
     Quantity("assembly.gear_eccentricity_mm", R, grade_driven=True),
     Quantity("worm_pair.lead_error_mm", S, grade_driven=True),
@@ -114,7 +114,30 @@ PHASES: tuple[str, ...] = (
     "gear_pair.pinion.single_pitch_phase_deg",
 )
 
-#: spec keys with a tolerance that the paper's model does not read directly (why they are not varied)
+#: the budget's phases -> the key that sizes their source: a phase is an output column only when
+#: that key varies (the paper's five phases are always columns)
+PHASE_SIZE = {
+    "gear_pair.output_gear.cumulative_pitch_phase_deg": "gear_pair.output_gear.cumulative_pitch_deviation_mm",
+    "gear_pair.pinion.cumulative_pitch_phase_deg": "gear_pair.pinion.cumulative_pitch_deviation_mm",
+    "worm_pair.wheel.cumulative_pitch_phase_deg": "worm_pair.wheel.cumulative_pitch_deviation_mm",
+    "gear_pair.output_gear.single_pitch_phase_deg": "gear_pair.output_gear.single_pitch_deviation_mm",
+    "gear_pair.pinion.single_pitch_phase_deg": "gear_pair.pinion.single_pitch_deviation_mm",
+}
+
+#: The random-stream rows (one uniform per sample each), in the order they were added: the paper's
+#: five phases and its 13 quantities first (the first release), then the full budget's quantities
+#: and phases.  Append only (new quantities' columns and new phases at the end, never reorder), so
+#: every existing sample stays the same when the registry grows.
+_FIRST_PHASES, _FIRST_QUANTITIES = 5, 13
+STREAM_ROWS: tuple[str, ...] = (
+    *PHASES[:_FIRST_PHASES],
+    *(c for q in QUANTITIES[:_FIRST_QUANTITIES] for c in q.columns()),
+    *(c for q in QUANTITIES[_FIRST_QUANTITIES:] for c in q.columns()),
+    *PHASES[_FIRST_PHASES:],
+)
+assert len(set(STREAM_ROWS)) == len(STREAM_ROWS) == len(PHASES) + sum(q.length for q in QUANTITIES)
+
+#: spec keys with a tolerance that the model does not read (why they are not varied)
 NOT_VARIED = {
     "gear_pair.output_gear.profile_error_mm": "is not used by the gear-stage equations (paper or involute)",
     "gear_pair.pinion.profile_error_mm": "is not used by the gear-stage equations (paper or involute)",
