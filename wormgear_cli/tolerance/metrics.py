@@ -292,9 +292,11 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     col = lambda a: np.asarray(a, dtype=float)[:, None]  # noqa: E731
 
     de, psi_e = col(v["assembly.gear_eccentricity_mm"]), col(ph["assembly.gear_eccentricity_phase_deg"])
-    sines = _sinusoids(ctx, v)
+    # sources without a size in this chunk (a tolerance of 0: the budget's pitch deviations of most specs)
+    # are left out, and with them their orders
+    sines = [(a, k, o) for a, k, o in _sinusoids(ctx, v) if np.any(a)]
     # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term
-    orders = list(dict.fromkeys(o for _, _, o in sines))
+    orders = list(dict.fromkeys([i_c] + [o for _, _, o in sines]))  # i_c always: the lost motion's order
     th = ctx.theta
     basis = np.stack([f(o * th) for o in orders for f in (np.sin, np.cos)] + [np.ones_like(th)])
     where = {o: 2 * k for k, o in enumerate(orders)}
