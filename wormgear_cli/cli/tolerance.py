@@ -219,7 +219,9 @@ def _tables(doc: dict, target) -> list:
     a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
     out = []
     kw = dict(box=box.SIMPLE_HEAD, padding=(0, 1), title_justify="left")
-    t1 = Table(title=escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"), **kw)
+    # the heading as its own line: a table title would wrap at the (narrower) table's width
+    out.append(escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"))
+    t1 = Table(**kw)
     for c in ("metric", "mean", "std", "p50", "p90", "p95", "p99"):
         t1.add_column(c, justify="left" if c == "metric" else "right")
     t2 = Table(title=escape(f"worst case / RSS / Monte Carlo [{unit}]"), **kw)
