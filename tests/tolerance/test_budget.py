@@ -160,3 +160,14 @@ def test_spur_profile_error_is_never_varied(runner, tmp_path):
     assert r.exit_code == 2
     assert r.stderr == (f'error: {drive}: statistics."gear_pair.output_gear.profile_error_mm": cannot be varied: '
                         "the key is not used by the gear-stage equations (paper or involute)\n")
+
+
+def test_check_judges_only_the_sampled_limits_by_the_yield(runner, tmp_path):
+    # min_yield judges the limits it counts (rss budget: yield ~87 %, target 50 % met); a limit it does not
+    # sample (the budget's peak rule, corner 17.45" over 1") still fails by its worst case
+    drive = _rotary(tmp_path, max_budget_rss_arcsec=12.0, max_budget_peak_arcsec=1.0, min_yield=0.5)
+    r = runner.invoke(app, ["check", str(drive)])
+    assert r.exit_code == 1
+    assert f"{drive}: worst case over requirements.max_budget_rss_arcsec: limit 12 arcsec" in r.stdout
+    assert f"{drive}: FAIL requirements.max_budget_peak_arcsec: limit 1 arcsec" in r.stdout
+    assert f"{drive}: ok requirements.min_yield: target 50 %" in r.stdout
