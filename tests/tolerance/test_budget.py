@@ -171,3 +171,16 @@ def test_check_judges_only_the_sampled_limits_by_the_yield(runner, tmp_path):
     assert f"{drive}: worst case over requirements.max_budget_rss_arcsec: limit 12 arcsec" in r.stdout
     assert f"{drive}: FAIL requirements.max_budget_peak_arcsec: limit 1 arcsec" in r.stdout
     assert f"{drive}: ok requirements.min_yield: target 50 %" in r.stdout
+
+
+def test_rotary_table_shards_and_summarize_equal_the_whole_run(runner, tmp_path):
+    # the budget's phase columns (pitch deviations with a size) go through shards and --summarize too
+    whole = _run(runner, ROTARY, "-n", 300, "--format", "csv").stdout
+    assert "gear_pair.output_gear.cumulative_pitch_phase_deg" in whole.splitlines()[0]
+    parts = [_run(runner, ROTARY, "-n", 300, "--format", "csv", "--shard", f"{k}/3").stdout for k in (1, 2, 3)]
+    joined = parts[0] + "".join(p.split("\n", 1)[1] for p in parts[1:])
+    assert joined == whole
+    samples = tmp_path / "all.csv"
+    samples.write_text(joined)
+    report = _run(runner, ROTARY, "-n", 300, "--format", "json").stdout
+    assert _run(runner, ROTARY, "-n", 300, "--summarize", samples, "--format", "json").stdout == report
