@@ -152,8 +152,8 @@ def allocate(spec, options: engine.Options, target: float, progress: Callable[[i
     steps.sort(key=lambda st: -st.gain)  # stable: ties keep registry order
     reached = [st.path for st in steps if st.after.low >= target]
     if base.low >= target:
-        best = (f"target met, no tightening needed: yield {100 * base.value:.1f} % (95 % interval from "
-                f"{100 * base.low:.1f} %) >= {100 * target:g} %")
+        best = (f"target met, no tightening needed: yield {100 * base.value:.2f} % (95 % interval from "
+                f"{100 * base.low:.2f} %) >= {100 * target:g} %")
     elif steps and steps[0].gain > 0:
         best = steps[0].advice()
     else:
