@@ -2,10 +2,12 @@
 of the ISO 230-2 figures at 24 targets <= 10 s, peak memory < 1 GB).
 
 Run: python bench/bench_tolerance.py [N]
-Prints, for N samples (default 10^6) of configs/mch50.toml, seed 0:
+Prints, for N samples (default 10^6), seed 0, of configs/mch50.toml (paper kinematics) and
+configs/rotary-table-precision.toml (involute kinematics, grades, the budget's pitch deviations):
   * the core run (draw, metrics, statistics; scipy imported beforehand) for --metrics paper, best of 2;
+  * the same for --metrics budget (the budget's linear and rss totals), once;
   * the same for --metrics iso (24 targets of the iso plan), once;
-  * a plain numpy script that loops analyze's model functions sample by sample (scalar calls, timed on
+  * (MCH50) a plain numpy script that loops analyze's model functions sample by sample (scalar calls, timed on
     2000 samples and scaled to N), and the ratio to the vectorised run;
   * the whole command in a new process (start-up included) for --metrics paper, and its peak memory
     (ru_maxrss of the child) for N and 4 N samples;
@@ -25,6 +27,8 @@ from _timing import best_of
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVE = ROOT / "configs" / "mch50.toml"
+#: the paper's drive, and the rotary table (involute kinematics, ISO 1328 grades, ten budget sources)
+DRIVES = (DRIVE, ROOT / "configs" / "rotary-table-precision.toml")
 
 
 def command(*args):
@@ -100,12 +104,21 @@ def main() -> None:
     spec = load_spec(DRIVE)
     print(f"machine load (1 min average): {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores "
           "(wall times grow with it; cpu times much less)")
-    paper = engine.setup(spec, engine.Options(samples=n, metrics="paper"))
-    wall, cpu = min(timed(lambda: engine.run(paper)) for _ in range(2))
-    print(f"core, {n} samples, paper metrics:            wall {wall:6.2f} s, cpu {cpu:6.2f} s  (target 2 s)")
-    iso = engine.setup(spec, engine.Options(samples=n, metrics="iso", targets=24))
-    wall_i, cpu_i = timed(lambda: engine.run(iso))
-    print(f"core, {n} samples, ISO 230-2 at 24 targets:  wall {wall_i:6.2f} s, cpu {cpu_i:6.2f} s  (target 10 s)")
+    wall = None
+    for drive in DRIVES:
+        sp = load_spec(drive)
+        print(f"{drive.name} (gear_pair.kinematics = {sp.gear_pair.kinematics}):")
+        paper = engine.setup(sp, engine.Options(samples=n, metrics="paper"))
+        w, cpu = min(timed(lambda: engine.run(paper)) for _ in range(2))
+        wall = w if wall is None else wall
+        print(f"  core, {n} samples, paper metrics:            wall {w:6.2f} s, cpu {cpu:6.2f} s  (target 2 s)")
+        bud = engine.setup(sp, engine.Options(samples=n, metrics="budget"))
+        w_b, cpu_b = timed(lambda: engine.run(bud))
+        print(f"  core, {n} samples, budget linear + rss:      wall {w_b:6.2f} s, cpu {cpu_b:6.2f} s")
+        iso = engine.setup(sp, engine.Options(samples=n, metrics="iso", targets=24))
+        wall_i, cpu_i = timed(lambda: engine.run(iso))
+        print(f"  core, {n} samples, ISO 230-2 at 24 targets:  wall {wall_i:6.2f} s, cpu {cpu_i:6.2f} s  "
+              "(target 10 s)")
     m = 2000
     draw = sampling.draw(varied_quantities(spec), 0, 0, m)
     t_loop = plain_loop(spec, draw, m) * n / m

@@ -32,8 +32,9 @@ def test_json_contract(runner):
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["samples"] == 2000 and doc["seed"] == 7
+    # the six metrics in its order, then the full budget's totals (more keys may be added)
     assert list(doc["metrics"]) == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B",
-                                    "iso230_M", "iso230_A"]
+                                    "iso230_M", "iso230_A", "budget_linear", "budget_rss"]
     for m, v in doc["metrics"].items():
         assert list(v["percentiles"]) == PERCENTILE_KEYS
         p = [v["percentiles"][k] for k in PERCENTILE_KEYS]
@@ -85,8 +86,8 @@ def test_csv_columns(runner):
     assert header[0] == "sample"
     assert "assembly.wheel_eccentricity_mm" in header and "assembly.worm_pair_errors_mm[5]" in header
     assert "worm_pair.lead_error_phase_deg" in header
-    assert header[-6:] == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B", "iso230_M",
-                           "iso230_A"]
+    assert header[-8:] == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B", "iso230_M",
+                           "iso230_A", "budget_linear", "budget_rss"]
     assert len(r.stdout.splitlines()) == 4
 
 
@@ -206,7 +207,8 @@ def test_check_min_yield_without_limits_is_an_input_error(runner, tmp_path):
     r = runner.invoke(app, ["check", str(drive)])
     assert r.exit_code == 2
     assert r.stderr == (f"error: {drive}: requirements.min_yield: needs a limit to count the yield against "
-                        "(max_transmission_error_arcsec or max_backlash_arcsec)\n")
+                        "(max_transmission_error_arcsec, max_backlash_arcsec, max_budget_linear_arcsec, "
+                        "max_budget_rss_arcsec)\n")
 
 
 def test_plot(runner, tmp_path):

@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 
 from tests.tolerance.helpers import mch50_doc, only, set_path, spec_of
+from tests.conftest import CONFIGS
 from wormgear_cli.analysis import analyze
+from wormgear_cli.budget import budget
 from wormgear_cli.iso230 import iso230_figures
 from wormgear_cli.models.effects import Signals
 from wormgear_cli.simulation import periodic_sources, simulate
-from wormgear_cli.spec import with_values
+from wormgear_cli.spec import load_spec, with_values
 from wormgear_cli.tolerance import engine, metrics, sampling
 from wormgear_cli.tolerance.quantities import PHASES, varied_quantities
 
@@ -25,12 +27,37 @@ def _spec_at(spec, values: dict, j: int):
     return with_values(spec, ch)
 
 
+#: the paper's MCH50 (paper kinematics, no grades) and the rotary table (involute kinematics,
+#: ISO 1328 grades giving the pitch deviations, no gear eccentricity written)
+SPECS = {"mch50": lambda: spec_of(mch50_doc()), "rotary-table": lambda: load_spec(CONFIGS / "rotary-table-precision.toml")}
+
+
+def _magnitudes(spec, d):
+    """Sample values as the spec can hold them (its keys take magnitudes only)."""
+    return {k: np.abs(a) for k, a in d.values.items()}
+
+
+def test_rotary_table_is_read_with_the_involute_kinematics_and_grades():
+    spec = SPECS["rotary-table"]()
+    assert spec.gear_pair.kinematics == "involute"
+    by = {v.path: v for v in varied_quantities(spec)}
+    assert by["assembly.gear_eccentricity_mm"].tolerance == (0.0,)  # involute: only a written eccentricity
+    assert by["assembly.gear_centre_distance_error_mm"].tolerance == (0.008,)
+    assert by["gear_pair.output_gear.thickness_deviation_mm"].tolerance == (0.015,)
+    # ISO 1328-1:2013 class 4, d = 360 mm, m = 2: F_pT = 17 um (the config's comment, `wormgear grade`)
+    assert by["gear_pair.output_gear.cumulative_pitch_deviation_mm"].tolerance[0] == pytest.approx(0.017)
+    # the paper's kinematics does not read the centre-distance error (only as Delta e's default)
+    mch = SPECS["mch50"]()
+    assert {v.path: v for v in varied_quantities(mch)}["assembly.gear_centre_distance_error_mm"].tolerance == (0.0,)
+
+
+@pytest.mark.parametrize("name", sorted(SPECS))
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_paper_totals_equal_analyze_per_sample(seed):
-    spec = spec_of(mch50_doc())
+def test_paper_totals_equal_analyze_per_sample(seed, name):
+    spec = SPECS[name]()
     varied = varied_quantities(spec)
     d = sampling.draw(varied, seed, 0, 12)
-    values = {k: np.abs(a) for k, a in d.values.items()}  # the spec takes magnitudes only
+    values = _magnitudes(spec, d)
     ctx = metrics.context(spec, varied[0].tolerance[0], np.radians([0.0, 90.0]))
     got = metrics.paper_totals(ctx, values)
     for j in range(12):
@@ -39,22 +66,39 @@ def test_paper_totals_equal_analyze_per_sample(seed):
             assert got[m][j] == pytest.approx(a[m], rel=1e-11)
 
 
+@pytest.mark.parametrize("name", sorted(SPECS))
+@pytest.mark.parametrize("seed", [1, 2])
+def test_budget_totals_equal_the_budget_per_sample(seed, name):
+    spec = SPECS[name]()
+    varied = varied_quantities(spec)
+    d = sampling.draw(varied, seed, 0, 8)
+    values = _magnitudes(spec, d)
+    ctx = metrics.context(spec, varied[0].tolerance[0], np.radians([0.0, 90.0]))
+    got = metrics.budget_totals(ctx, values)
+    for j in range(8):
+        b = budget(_spec_at(spec, values, j))
+        assert got["budget_linear"][j] == pytest.approx(b.linear, rel=1e-9)
+        assert got["budget_rss"][j] == pytest.approx(b.rss, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", sorted(SPECS))
 @pytest.mark.parametrize("seed", [4, 5])
-def test_iso_figures_equal_iso230_of_simulate(seed):
-    spec = spec_of(mch50_doc())
+def test_iso_figures_equal_iso230_of_simulate(seed, name):
+    spec = SPECS[name]()
     varied = varied_quantities(spec)
     d = sampling.draw(varied, seed, 0, 6)
-    values = {k: np.abs(a) for k, a in d.values.items()}
+    values = _magnitudes(spec, d)
     targets = np.radians(engine.plan_targets(engine.Options(seed=seed)))
     ctx = metrics.context(spec, varied[0].tolerance[0], targets)
     got = metrics.iso_figures(ctx, values, d.phases)
-    names = {p: src.name for p, src in zip(PHASES, periodic_sources(spec))}
     n = targets.size
     theta = np.concatenate([targets, targets[::-1]] * 2)  # two runs, each forward then reverse
     direction = np.tile(np.concatenate([np.ones(n), -np.ones(n)]), 2)
     time = np.arange(theta.size) % (2 * n) * 10.0
     for j in range(6):
         s = _spec_at(spec, values, j)
+        names = {src.phase_path: src.name for src in periodic_sources(s, all_budget_sources=True)}
+        assert set(names) == set(PHASES)
         err = simulate(s, Signals(theta, direction, np.zeros_like(theta), np.full_like(theta, 20.0), time),
                        {names[p]: float(d.phases[p][j]) for p in PHASES})
         f = iso230_figures(theta, err, direction)

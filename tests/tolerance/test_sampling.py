@@ -167,7 +167,7 @@ def test_truncation_holds_for_any_capability(cp, ratio, tol, signed, seed):
 
 
 def test_appending_a_quantity_to_the_registry_keeps_every_sample(monkeypatch):
-    # the budget of the grades issue will append quantities: existing samples must not move
+    # growing the registry (as the budget's quantities and phases did) must not move existing samples
     from wormgear_cli.tolerance import quantities
     from wormgear_cli.tolerance.quantities import Kind, Quantity
 
@@ -176,6 +176,7 @@ def test_appending_a_quantity_to_the_registry_keeps_every_sample(monkeypatch):
     extra = Varied(Quantity("x.new_mm", Kind.radial), (0.01,), "rayleigh")
     monkeypatch.setattr(sampling, "STREAM_COLUMNS", sampling.STREAM_COLUMNS + 1)
     monkeypatch.setattr(quantities, "QUANTITIES", quantities.QUANTITIES + (extra.quantity,))
+    monkeypatch.setattr(quantities, "STREAM_ROWS", quantities.STREAM_ROWS + ("x.new_mm",))
     after = sampling.draw(varied + (extra,), 3, 100, 300)
     for k in before.values:
         assert np.array_equal(before.values[k], after.values[k])

@@ -13,7 +13,7 @@ from wormgear_cli.cli.app import app
 from wormgear_cli.cli.common import DriveArgument, FormatOption, OutputOption, UnitOption, emit, json_text, render
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
-_SECONDS_PER_SAMPLE = {"paper": 2e-6, "iso": 1e-5, "all": 1.2e-5}
+_SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
 #: most samples of one ``--format csv -o FILE`` run: the file is written at once (atomically), about
 #: 600 bytes per sample held in memory; stdout is streamed block by block (memory constant)
 MAX_CSV_FILE_SAMPLES = 500_000
@@ -21,13 +21,16 @@ MAX_CSV_FILE_SAMPLES = 500_000
 ALLOCATION_SAMPLES = 100_000
 
 LABELS = {"total_transmission_error": "total TE", "total_backlash": "backlash", "iso230_E": "ISO E",
-          "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A"}
+          "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A", "budget_linear": "budget lin",
+          "budget_rss": "budget rss"}
 SHORT = {"total_transmission_error": "TE", "total_backlash": "BL", "iso230_E": "E", "iso230_B": "B",
-         "iso230_M": "M", "iso230_A": "A"}
+         "iso230_M": "M", "iso230_A": "A", "budget_linear": "lin", "budget_rss": "rss"}
 
 
 class MetricSet(str, Enum):
     paper = "paper"
+    budget = "budget"
+    paper_budget = "paper+budget"
     iso = "iso"
     all = "all"
 
@@ -74,7 +77,8 @@ def tolerance(
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same output).")] = 0,
     metrics: Annotated[MetricSet, typer.Option(
         "--metrics", help="paper: total TE and backlash as analyze; iso: ISO 230-2 E, B, M, A of the simulated "
-        "acceptance test; all: both.", case_sensitive=False)] = MetricSet.all,
+        "acceptance test; budget: the full budget's TE, linear and rss rules; paper+budget; all: every "
+        "metric.", case_sensitive=False)] = MetricSet.all,
     plan: Annotated[PlanKind, typer.Option(
         "--plan", help="Acceptance test: iso (irregular targets as synth plans them with --seed) or dense "
         "(--points even angles).", case_sensitive=False)] = PlanKind.iso,
@@ -164,11 +168,13 @@ def tolerance(
         from wormgear_cli.tolerance.allocation import allocate
 
         n_alloc = min(n_rows if n_rows is not None else samples, ALLOCATION_SAMPLES)
-        with _Progress(14, n_alloc * 14 * _SECONDS_PER_SAMPLE["paper"], "allocation") as bar:
+        steps = 1 + len(s.varied)
+        cost = _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]
+        with _Progress(steps, n_alloc * steps * cost, "allocation") as bar:
             allocation = allocate(spec, replace(options, samples=n_alloc), float(target), bar.advance)
     elif target_yield is not None and engine.metrics_for_limits(spec) is None:
-        raise UsageError("--target-yield needs a limit in [requirements] (max_transmission_error_arcsec or "
-                         "max_backlash_arcsec) to count the yield against")
+        raise UsageError(f"--target-yield needs a limit in [requirements] ({engine.LIMIT_KEYS}) to count the "
+                         "yield against")
     doc = report.document(s, summary, allocation, shard)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
@@ -216,7 +222,9 @@ def _tables(doc: dict, target) -> list:
     a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
     out = []
     kw = dict(box=box.SIMPLE_HEAD, padding=(0, 1), title_justify="left")
-    t1 = Table(title=escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"), **kw)
+    # the heading as its own line: a table title would wrap at the (narrower) table's width
+    out.append(escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"))
+    t1 = Table(**kw)
     for c in ("metric", "mean", "std", "p50", "p90", "p95", "p99"):
         t1.add_column(c, justify="left" if c == "metric" else "right")
     t2 = Table(title=escape(f"worst case / RSS / Monte Carlo [{unit}]"), **kw)
@@ -252,7 +260,7 @@ def _tables(doc: dict, target) -> list:
         keys = [k for k in next(iter(sens.values())) if k != "remainder"]
         shown = [k for k in keys if any(sens[m].get(k, 0.0) >= 0.005 for m in sens)]
         for k in shown:
-            t4.add_row(escape(k), *(f"{sens[m][k]:.2f}" for m in sens))
+            t4.add_row(escape(_short_key(k)), *(f"{sens[m][k]:.2f}" for m in sens))
         t4.add_row("remainder (rest and interactions)",
                    *(f"{1.0 - sum(sens[m][k] for k in shown):.2f}" for m in sens))
         out.append(t4)
@@ -263,16 +271,29 @@ def _tables(doc: dict, target) -> list:
         for c in ("key", "step", "yield", "gain"):
             t5.add_column(c, justify="left" if c in ("key", "step") else "right")
         for st in alloc["steps"][:8]:
-            t5.add_row(escape(st["key"]), st["step"], _pct(st["yield"]["value"]), f"{100 * st['gain']:+.2f} %")
+            t5.add_row(escape(_short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
+                       f"{100 * st['gain']:+.2f} %")
         out.append(t5)
+        head, _, rest = alloc["answer"].partition(": ")  # the answer on two lines within 80 columns
+        out.append(escape(f"{head}:\n  {rest}" if rest else head))
     notes = []
     if doc.get("shard"):
         notes.append(f"shard {doc['shard']['part']}: samples {doc['shard']['first_sample']} to "
                      f"{doc['shard']['stop_sample'] - 1}")
+    for key, why in doc.get("not_sampled", {}).items():
+        notes.append(f"{key.replace('requirements.', '')}: no yield, {why}")
     notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]
     return out
+
+
+def _short_key(column: str) -> str:
+    """A varied column shortened to fit 80 columns: without the top section and the unit suffix
+    (assembly.wheel_eccentricity_mm -> wheel_eccentricity); the JSON keeps the full TOML path."""
+    head, _, rest = column.partition(".")
+    name = rest if head in ("gear_pair", "worm_pair", "assembly") and rest else column
+    return name.replace("_mm[", "[").removesuffix("_mm")
 
 
 def _pct(x: float) -> str:

@@ -481,4 +481,4 @@ def involute_stage(gear_radius, pressure_angle, eccentricity, centre_distance_er
     bl_d = 2.0 * deflection / rb
     bl_t = thickness_allowances / gear_radius
     bl = 2.0 * (centre_distance_error + eccentricity) * t / gear_radius + bl_t + bl_d
-    return InvoluteStage(float(te_e), float(te_d), float(bl), float(bl_d), float(bl_t))
+    return InvoluteStage(te_e, te_d, bl, bl_d, bl_t)  # arrays broadcast (tolerance samples)

@@ -22,15 +22,24 @@ import numpy as np
 from wormgear_cli.errors import UsageError
 from wormgear_cli.tolerance import metrics as metrics_mod
 from wormgear_cli.tolerance import statistics as stats
-from wormgear_cli.tolerance.quantities import PHASES, Varied, varied_quantities
+from wormgear_cli.tolerance.quantities import PHASE_SIZE, PHASES, Varied, varied_quantities
 from wormgear_cli.tolerance.sampling import BLOCK, draw
 from wormgear_cli.units import RAD_PER_UNIT, to_unit
 
 PLANS = ("iso", "dense")
 #: most samples of one run (or one shard)
 MAX_SAMPLES = 10**10
-#: requirement attribute -> metric it limits (the paper totals; stage limits are not sampled)
-YIELD_REQUIREMENTS = {"max_transmission_error": "total_transmission_error", "max_backlash": "total_backlash"}
+#: requirement attribute -> metric it limits (the paper's totals and the full budget's linear and rss
+#: totals); the other limits are not sampled (:data:`NOT_SAMPLED`)
+YIELD_REQUIREMENTS = {"max_transmission_error": "total_transmission_error", "max_backlash": "total_backlash",
+                      "max_budget_linear": "budget_linear", "max_budget_rss": "budget_rss"}
+#: requirement attribute -> why its yield is not estimated
+NOT_SAMPLED = {
+    "max_budget_peak": "the peak rule searches one output turn per sample; its yield is not estimated "
+    "(the linear rule bounds it: peak <= linear)",
+    **{f"max_{stage}_{what}": "stage limits are checked by wormgear check, not sampled"
+       for stage in ("gear", "worm") for what in ("transmission_error", "backlash")},
+}
 
 
 @dataclass(frozen=True)
@@ -132,7 +141,10 @@ def setup(spec, options: Options, varied: tuple[Varied, ...] | None = None) -> S
             if v.tolerance[e] > 0:
                 columns.append(col)
                 bounds[col] = v.bounds(e)
+    sized = {v.path for v in varied if any(t > 0 for t in v.tolerance)}
     for p in PHASES:
+        if p in PHASE_SIZE and PHASE_SIZE[p] not in sized:
+            continue  # the source has no size in this spec: its phase is drawn but not an output column
         columns.append(p)
         bounds[p] = (0.0, 360.0)
     targets = plan_targets(options)
@@ -285,8 +297,9 @@ def run(s: Setup, on_block: Callable[[Block], None] | None = None,
 def _aligned(spec, quantity: str) -> dict[str, np.ndarray]:
     from wormgear_cli.simulation import aligned_phases, periodic_sources
 
-    a = aligned_phases(spec, quantity)
-    return {p: np.array([a[src.name]]) for p, src in zip(PHASES, periodic_sources(spec))}
+    a = aligned_phases(spec, quantity)  # sources without a size are left out there: 90 deg, as the sinusoids
+    return {src.phase_path: np.array([a.get(src.name, 0.5 * math.pi)])
+            for src in periodic_sources(spec, all_budget_sources=True)}
 
 
 def _values_at(varied, which: str | None) -> dict[str, np.ndarray]:
@@ -348,10 +361,25 @@ def joint_yield(s: Setup) -> stats.Yield:
 
 
 def metrics_for_limits(spec) -> str | None:
-    """The cheapest ``--metrics`` set that covers the spec's limits, or None without limits."""
-    if any(getattr(spec.requirements, a) is not None for a in YIELD_REQUIREMENTS):
-        return "paper"
-    return None
+    """The cheapest ``--metrics`` set that covers the spec's sampled limits (:data:`YIELD_REQUIREMENTS`):
+    "paper", "budget" or "paper+budget"; None without such a limit."""
+    needed = {metric for attr, metric in YIELD_REQUIREMENTS.items() if getattr(spec.requirements, attr) is not None}
+    if not needed:
+        return None
+    for name in ("paper", "budget", "paper+budget"):
+        if needed <= set(metrics_mod.METRIC_SETS[name]):
+            return name
+    return "all"
+
+
+def not_sampled(spec) -> dict[str, str]:
+    """Requirement key -> why the spec's limit gets no yield estimate (:data:`NOT_SAMPLED`)."""
+    return {f"requirements.{a}_arcsec": why for a, why in NOT_SAMPLED.items()
+            if getattr(spec.requirements, a) is not None}
+
+
+#: the limits a yield is counted against, for messages
+LIMIT_KEYS = ", ".join(f"{a}_arcsec" for a in YIELD_REQUIREMENTS)
 
 
 # --- the yield requirement of ``check`` --------------------------------------------------------
@@ -389,7 +417,7 @@ class YieldCheck:
 
 def check_yield(spec, samples: int = CHECK_SAMPLES, seed: int = 0) -> YieldCheck | None:
     """The ``min_yield`` requirement of ``spec`` (None when absent): the joint yield of the
-    limits on the paper's totals from ``samples`` drives.  A target inside the 95 %
+    sampled limits (:data:`YIELD_REQUIREMENTS`) from ``samples`` drives.  A target inside the 95 %
     interval is undecided (and fails).  Raises SpecError when there is no limit to count
     against, or for a bad ``[statistics]`` table."""
     from wormgear_cli.errors import SpecError
@@ -399,6 +427,6 @@ def check_yield(spec, samples: int = CHECK_SAMPLES, seed: int = 0) -> YieldCheck
         return None
     if metrics_for_limits(spec) is None:
         raise SpecError(f"{spec.source}: requirements.min_yield: needs a limit to count the yield against "
-                        "(max_transmission_error_arcsec or max_backlash_arcsec)")
-    est = joint_yield(setup(spec, Options(samples=samples, seed=seed, metrics="paper")))
+                        f"({LIMIT_KEYS})")
+    est = joint_yield(setup(spec, Options(samples=samples, seed=seed, metrics=metrics_for_limits(spec))))
     return YieldCheck(float(target), est, est.verdict(float(target)))

@@ -12,16 +12,33 @@
   M = max_i x_i(bi) - min_i x_i(bi) with x_i(bi) = (x_i(up) + x_i(down)) / 2;
   A = max(x + 2 s) - min(x - 2 s) with s = 0.
 
+* ``budget_linear``, ``budget_rss``: the full error budget's TE at the output
+  (:mod:`wormgear_cli.budget`, the lines of ``simulation.periodic_sources`` with
+  every budget source plus the two static deflection lines) under the linear
+  rule (sum of every line's maximum) and the rss rule (static lines + root-sum-
+  square of the periodic ones); phases do not enter them.  The peak rule (a
+  search over one output turn per sample) is not sampled.
+
+Both gear-stage kinematics are followed (``gear_pair.kinematics``): ``paper``
+(the paper's Delta phi_cc curve of Delta e) and ``involute`` (TE e/r_b1 at the
+pinion's order, centre-distance error and thickness allowances in the backlash;
+:func:`wormgear_cli.models.gear.involute_stage`).
+
 The simulated error (simulation module doc) written per sample with the
 sinusoidal sources of one shaft combined into one term
 (a sin(o theta + psi) = a cos(psi) sin(o theta) + a sin(psi) cos(o theta)):
 
-    e(theta, d) = gear_kinematic_te(i_c theta + psi_e) + sum_k a_k sin(o_k theta + psi_k)
-                  - d/2 [Delta e tan(alpha)(1 + sin(i_c theta + psi_e)) / R2
+    e(theta, d) = gear(i_c theta + psi_e) + sum_k a_k sin(o_k theta + psi_k)
+                  - d/2 [gear_lost(i_c theta + psi_e)
                          + max(central + h_j sin(i_c theta + psi_Fi), 0) / (r_w i_c)]
                   + fixed(theta, d)
 
-where fixed = tooth-deflection lag and the spec's effects (not varied).
+with gear = the paper's gear_kinematic_te (paper) or e/r_b1 sin (involute, then one
+of the sinusoids), gear_lost = Delta e tan(alpha)(1 + sin) / R2 (paper) or
+max(2 Delta a tan(alpha) + E_sn1 + E_sn2 + e tan(alpha)(1 + sin), 0) / R2 (involute;
+clipped at 0 as a clearance, which matters only for sampled negative deviations),
+the sinusoids the worm-stage sources (orders n_w and i_c) and the pitch deviations
+(orders 1, i_c, z1), and fixed = tooth-deflection lag and the spec's effects (not varied).
 All angles [rad], lengths [mm].
 """
 
@@ -36,9 +53,11 @@ from wormgear_cli.models import gear as gear_model
 from wormgear_cli.models import worm as worm_model
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
+BUDGET_METRICS = ("budget_linear", "budget_rss")
 ISO_METRICS = ("iso230_E", "iso230_B", "iso230_M", "iso230_A")
-#: metric sets of ``--metrics``
-METRIC_SETS = {"paper": PAPER_METRICS, "iso": ISO_METRICS, "all": PAPER_METRICS + ISO_METRICS}
+#: metric sets of ``--metrics`` ("paper+budget": the cheapest set for limits on both)
+METRIC_SETS = {"paper": PAPER_METRICS, "budget": BUDGET_METRICS, "paper+budget": PAPER_METRICS + BUDGET_METRICS,
+               "iso": ISO_METRICS, "all": PAPER_METRICS + ISO_METRICS + BUDGET_METRICS}
 
 #: Chebyshev-Lobatto nodes of the gear-TE interpolant in Delta e, and its accepted relative error
 _CHEB_DEGREE = 48
@@ -53,12 +72,14 @@ class GearTeMax:
     of :func:`wormgear_cli.models.gear.gear_te_max_fast` (degree 48, checked against
     the exact maximiser between the nodes to 1e-11 relative; the exact maximiser
     is used when the check fails).  Capped at the value at T (the maximum grows
-    with Delta e), so no sample exceeds the corner case."""
+    with Delta e), so no sample exceeds the corner case.  ``part="deformation"``:
+    instead the deformation part of that maximum (analyze's ``gear_te_deformation``:
+    the maximum less the kinematic curve at its angle), not capped."""
 
-    def __init__(self, spec, tolerance: float, deflection: float):
+    def __init__(self, spec, tolerance: float, deflection: float, part: str = "max"):
         gp = spec.gear_pair
         self.args = (gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0)
-        self.alpha, self.d1, self.t = gp.pressure_angle, deflection, float(tolerance)
+        self.alpha, self.d1, self.t, self.part = gp.pressure_angle, deflection, float(tolerance), part
         self.at_t = float(self.exact(np.array([self.t]))[0])
         self.coef = None
         if self.t > 0:
@@ -74,7 +95,10 @@ class GearTeMax:
                 self.coef = coef
 
     def exact(self, de):
-        return gear_model.gear_te_max_fast(*self.args, de, self.alpha, self.d1)[0]
+        value, phi = gear_model.gear_te_max_fast(*self.args, de, self.alpha, self.d1)
+        if self.part == "deformation":  # analyze's gear_te_deformation: the maximum less its kinematic part
+            return value - gear_model.gear_kinematic_te(phi, *self.args, de, self.alpha)
+        return value
 
     def __call__(self, de):
         de = np.asarray(de, dtype=float)
@@ -84,7 +108,8 @@ class GearTeMax:
             from numpy.polynomial import chebyshev
 
             value = chebyshev.chebval(2.0 * de / self.t - 1.0, self.coef)
-        return np.minimum(np.where(de == self.t, self.at_t, value), self.at_t)
+        value = np.where(de == self.t, self.at_t, value)
+        return np.minimum(value, self.at_t) if self.part == "max" else value
 
 
 @dataclass(frozen=True)
@@ -95,6 +120,8 @@ class Context:
     deflection_gear: float
     deflection_worm: float
     gear_te: GearTeMax
+    gear_kin: GearTeMax  # kinematic maximum alone (deflection 0): the budget's gear line
+    gear_def: GearTeMax  # deformation part of gear_te (the budget's static gear line)
     theta: np.ndarray  # test targets [rad]
     fixed_up: np.ndarray  # deflection lag + effects, forward [rad]
     fixed_down: np.ndarray
@@ -115,8 +142,24 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
         parts = components(spec, Signals.make(theta, sign, 0.0, 20.0, times))
         fixed[sign] = sum((v for k, v in parts.items() if k == "deformation" or k.startswith("effect:")),
                           np.zeros(n))
-    return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, gear_eccentricity_tolerance, d.gear),
-                   theta, np.broadcast_to(fixed[1.0], (n,)).copy(), np.broadcast_to(fixed[-1.0], (n,)).copy())
+    paper = spec.gear_pair.kinematics == "paper"
+    t = gear_eccentricity_tolerance if paper else 0.0  # the involute stage needs no interpolant
+    return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, t, d.gear), GearTeMax(spec, t, 0.0),
+                   GearTeMax(spec, t, d.gear, "deformation"), theta, np.broadcast_to(fixed[1.0], (n,)).copy(), np.broadcast_to(fixed[-1.0], (n,)).copy())
+
+
+def _gear_stage(ctx: Context, v: dict):
+    """Gear-stage TE and backlash [rad at the output] per sample, as analyze (both kinematics)."""
+    gp = ctx.spec.gear_pair
+    de = v["assembly.gear_eccentricity_mm"]
+    if gp.kinematics == "paper":
+        return ctx.gear_te(de), gear_model.gear_backlash_max(gp.module, gp.output_gear.teeth, de, gp.pressure_angle,
+                                                             ctx.deflection_gear)
+    inv = gear_model.involute_stage(gp.module * gp.output_gear.teeth / 2.0, gp.pressure_angle, de,
+                                    v["assembly.gear_centre_distance_error_mm"], ctx.deflection_gear,
+                                    v["gear_pair.output_gear.thickness_deviation_mm"]
+                                    + v["gear_pair.pinion.thickness_deviation_mm"])
+    return inv.te_eccentricity + inv.te_deformation, inv.backlash
 
 
 def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
@@ -124,16 +167,15 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
 
     ``values``: column -> values [mm] (see :func:`wormgear_cli.tolerance.sampling.draw`).
     Source: the paper's Delta phi_c = Delta phi_cc + Delta phi_wc / i_c and
-    Delta phi_h = Delta phi_ch + Delta phi_wh / i_c (module doc of analysis).
+    Delta phi_h = Delta phi_ch + Delta phi_wh / i_c (module doc of analysis); the gear
+    stage by the spec's kinematics (paper or involute).
     """
     spec = ctx.spec
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     i_c = z1 / z2
     v = values
-    de = v["assembly.gear_eccentricity_mm"]
-    te_gear = ctx.gear_te(de)
-    bl_gear = gear_model.gear_backlash_max(gp.module, z1, de, gp.pressure_angle, ctx.deflection_gear)
+    te_gear, bl_gear = _gear_stage(ctx, v)
     lam, a2, m2, z3 = wp.lead_angle, wp.transverse_pressure_angle, wp.module, wp.wheel.teeth
     f_hl, fi = v["worm_pair.lead_error_mm"], v["worm_pair.wheel.radial_composite_error_mm"]
     h_te = worm_model.worm_te_halfwidth(f_hl, v["assembly.worm_eccentricity_mm"],
@@ -149,6 +191,74 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
                                              v["assembly.worm_centre_distance_error_mm"], fi, lam, a2)
     wbl = worm_model.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
     return {"total_transmission_error": te_gear + wte / i_c, "total_backlash": bl_gear + wbl / i_c}
+
+
+def _sinusoids(ctx: Context, v: dict) -> list:
+    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), in
+    the order of ``simulation.periodic_sources`` (the gear eccentricity only under the involute
+    kinematics, where it is the sinusoid e/r_b1 at order i_c)."""
+    from wormgear_cli.analysis import geometry
+
+    spec = ctx.spec
+    g = geometry(spec)
+    gp, wp = spec.gear_pair, spec.worm_pair
+    r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
+    i_c, n_w, z1 = g.gear_ratio, g.worm_order, float(gp.output_gear.teeth)
+    to_out = 1.0 / (g.wheel_pitch_radius * i_c)
+    worm_ecc = np.hypot(v["assembly.worm_eccentricity_mm"], v["assembly.worm_bearing_clearance_mm"]) / math.cos(
+        wp.lead_angle)
+    wheel_ecc = np.hypot(v["assembly.wheel_eccentricity_mm"], v["assembly.wheel_bearing_clearance_mm"]) / math.cos(
+        wp.transverse_pressure_angle)
+    out = []
+    if gp.kinematics == "involute":
+        out.append((v["assembly.gear_eccentricity_mm"] / g.output_base_radius,
+                    "assembly.gear_eccentricity_phase_deg", i_c))
+    out += [
+        (v["worm_pair.lead_error_mm"] * (0.5 * to_out), "worm_pair.lead_error_phase_deg", n_w),
+        (worm_ecc * (0.5 * to_out), "assembly.worm_eccentricity_phase_deg", n_w),
+        (v["worm_pair.wheel.radial_composite_error_mm"] * (0.5 * to_out), "worm_pair.wheel.radial_composite_phase_deg",
+         i_c),
+        (wheel_ecc * (0.5 * to_out), "assembly.wheel_eccentricity_phase_deg", i_c),
+        # pitch deviations: F_p / (2 r) at their shaft, reduced by the ratios; f_p at the mesh order z1
+        (v["gear_pair.output_gear.cumulative_pitch_deviation_mm"] / (2.0 * r2),
+         "gear_pair.output_gear.cumulative_pitch_phase_deg", 1.0),
+        (v["gear_pair.pinion.cumulative_pitch_deviation_mm"] / (2.0 * r1) / i_c,
+         "gear_pair.pinion.cumulative_pitch_phase_deg", i_c),
+        (v["worm_pair.wheel.cumulative_pitch_deviation_mm"] / (2.0 * g.wheel_pitch_radius) / i_c,
+         "worm_pair.wheel.cumulative_pitch_phase_deg", i_c),
+        (v["gear_pair.output_gear.single_pitch_deviation_mm"] / (2.0 * r2),
+         "gear_pair.output_gear.single_pitch_phase_deg", z1),
+        (v["gear_pair.pinion.single_pitch_deviation_mm"] / (2.0 * r1) / i_c,
+         "gear_pair.pinion.single_pitch_phase_deg", z1),
+    ]
+    return out
+
+
+def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
+    """The full budget's TE [rad] per sample under the linear and the rss rule, as
+    :func:`wormgear_cli.budget.budget` combines its lines (module doc there):
+    linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
+
+    Lines: the gear eccentricity (paper: the kinematic maximum of Delta phi_cc at no
+    load; involute: e/r_b1), the sinusoids (:func:`_sinusoids`), and the static tooth
+    deflections (gear: analyze's gear_te_deformation, which under the paper's
+    kinematics depends on Delta e; worm: delta2 on the wheel pitch circle / i_c).
+    """
+    spec = ctx.spec
+    gp, wp = spec.gear_pair, spec.worm_pair
+    i_c = gp.output_gear.teeth / gp.pinion.teeth
+    worm_static = float(gear_model.pitch_arc_to_angle(ctx.deflection_worm, wp.module, wp.wheel.teeth)) / i_c
+    periodic = [np.asarray(a, dtype=float) for a, _, _ in _sinusoids(ctx, values)]
+    if gp.kinematics == "paper":
+        de = values["assembly.gear_eccentricity_mm"]
+        periodic.insert(0, np.asarray(ctx.gear_kin(de), dtype=float))
+        static = ctx.gear_def(de) + worm_static
+    else:
+        r_b1 = gp.module * gp.output_gear.teeth * math.cos(gp.pressure_angle) / 2.0
+        static = ctx.deflection_gear / r_b1 + worm_static
+    lin = sum(periodic)
+    sq = sum(a * a for a in periodic)
+    return {"budget_linear": static + lin, "budget_rss": static + np.sqrt(sq)}
 
 
 def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarray]:
@@ -175,33 +285,31 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     g = geometry(spec)
     gp, wp = spec.gear_pair, spec.worm_pair
     r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-    alpha, i_c, n_w = gp.pressure_angle, g.gear_ratio, g.worm_order
+    alpha, i_c = gp.pressure_angle, g.gear_ratio
     to_out = 1.0 / (g.wheel_pitch_radius * i_c)
+    paper = gp.kinematics == "paper"
     theta = ctx.theta[None, :]
     col = lambda a: np.asarray(a, dtype=float)[:, None]  # noqa: E731
 
     de, psi_e = col(v["assembly.gear_eccentricity_mm"]), col(ph["assembly.gear_eccentricity_phase_deg"])
-    # sinusoidal sources [rad at the output]: (amplitude, phase path, order)
-    worm_ecc = np.hypot(v["assembly.worm_eccentricity_mm"], v["assembly.worm_bearing_clearance_mm"]) / math.cos(
-        wp.lead_angle)
-    wheel_ecc = np.hypot(v["assembly.wheel_eccentricity_mm"], v["assembly.wheel_bearing_clearance_mm"]) / math.cos(
-        wp.transverse_pressure_angle)
-    sines = (
-        (v["worm_pair.lead_error_mm"], "worm_pair.lead_error_phase_deg", n_w),
-        (worm_ecc, "assembly.worm_eccentricity_phase_deg", n_w),
-        (v["worm_pair.wheel.radial_composite_error_mm"], "worm_pair.wheel.radial_composite_phase_deg", i_c),
-        (wheel_ecc, "assembly.wheel_eccentricity_phase_deg", i_c),
-    )
+    # sources without a size in this chunk (a tolerance of 0: the budget's pitch deviations of most specs)
+    # are left out, and with them their orders
+    sines = [(a, k, o) for a, k, o in _sinusoids(ctx, v) if np.any(a)]
     # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term
+    orders = list(dict.fromkeys([i_c] + [o for _, _, o in sines]))  # i_c always: the lost motion's order
     th = ctx.theta
-    basis = np.stack([np.sin(n_w * th), np.cos(n_w * th), np.sin(i_c * th), np.cos(i_c * th), np.ones_like(th)])
-    coef = np.zeros((de.shape[0], 5))
+    basis = np.stack([f(o * th) for o in orders for f in (np.sin, np.cos)] + [np.ones_like(th)])
+    where = {o: 2 * k for k, o in enumerate(orders)}
+    j_ic = where[i_c]
+    coef = np.zeros((de.shape[0], basis.shape[0]))
     for a, k, o in sines:
-        j = 0 if o == n_w else 2
-        amp = np.asarray(a, dtype=float) * (0.5 * to_out)
+        j = where[o]
+        amp = np.asarray(a, dtype=float)
         coef[:, j] += amp * np.cos(ph[k])
         coef[:, j + 1] += amp * np.sin(ph[k])
-    common = gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha) + coef @ basis
+    common = coef @ basis
+    if paper:
+        common += gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha)
     # lost motion (never negative): the gear part and simulation._worm_lost_motion
     ft1, ft2 = v["worm_pair.worm.profile_error_mm"], v["worm_pair.wheel.profile_error_mm"]
     ts1, ts2 = v["worm_pair.worm.thickness_deviation_mm"], v["worm_pair.wheel.thickness_deviation_mm"]
@@ -212,11 +320,21 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
                                              v["worm_pair.wheel.radial_composite_error_mm"], wp.lead_angle,
                                              wp.transverse_pressure_angle)
     psi_f = np.asarray(ph["worm_pair.wheel.radial_composite_phase_deg"], dtype=float)
+    n = de.shape[0]
+
+    def at_ic(amplitude, phase, constant):
+        c = np.zeros((n, basis.shape[0]))
+        c[:, j_ic], c[:, j_ic + 1], c[:, -1] = amplitude * np.cos(phase), amplitude * np.sin(phase), constant
+        return c @ basis
+
     c_gear = de[:, 0] * (math.tan(alpha) / r2)
-    gear_lost = np.stack([np.zeros_like(c_gear), np.zeros_like(c_gear), c_gear * np.cos(psi_e[:, 0]),
-                          c_gear * np.sin(psi_e[:, 0]), c_gear], axis=1) @ basis
-    worm_inner = np.stack([np.zeros_like(c_gear), np.zeros_like(c_gear), h_j * np.cos(psi_f), h_j * np.sin(psi_f),
-                           np.broadcast_to(prof + thk, c_gear.shape)], axis=1) @ basis
+    if paper:
+        gear_lost = at_ic(c_gear, psi_e[:, 0], c_gear)
+    else:  # simulation's involute gear_lost: (static + e tan(alpha) (1 + sin)) / R2, clipped at 0
+        static = (2.0 * math.tan(alpha) * np.asarray(v["assembly.gear_centre_distance_error_mm"], dtype=float)
+                  + v["gear_pair.output_gear.thickness_deviation_mm"] + v["gear_pair.pinion.thickness_deviation_mm"])
+        gear_lost = np.maximum(at_ic(c_gear, psi_e[:, 0], c_gear + np.asarray(static) / r2), 0.0)
+    worm_inner = at_ic(h_j, psi_f, np.broadcast_to(prof + thk, c_gear.shape))
     lost = gear_lost + np.maximum(worm_inner, 0.0) * to_out
     up = common - 0.5 * lost + ctx.fixed_up[None, :]
     down = common + 0.5 * lost + ctx.fixed_down[None, :]
@@ -232,6 +350,8 @@ def evaluate(ctx: Context, values: dict, phases: dict, metrics: tuple[str, ...])
     out = {}
     if any(m in PAPER_METRICS for m in metrics):
         out.update(paper_totals(ctx, values))
+    if any(m in BUDGET_METRICS for m in metrics):
+        out.update(budget_totals(ctx, values))
     if any(m in ISO_METRICS for m in metrics):
         out.update(iso_figures(ctx, values, phases))
     return {m: out[m] for m in metrics}

@@ -1,6 +1,7 @@
 """The registry of varied quantities (data) and the spec's ``[statistics]`` table.
 
-Every toleranced key the paper's model reads is one :class:`Quantity`: its
+Every toleranced key the model reads (the paper's equations, the full budget's
+pitch deviations, the involute gear stage) is one :class:`Quantity`: its
 TOML path, its :class:`Kind` (which sets its default distribution and the
 interval it lives in) and whether an ISO 1328 accuracy grade drives its
 tolerance.  The spec value of the key is read as the tolerance T.
@@ -56,6 +57,10 @@ class Quantity:
     kind: Kind
     grade_driven: bool = False
     length: int = 1
+    #: the gear-stage kinematics (``gear_pair.kinematics``) under which the model reads the key;
+    #: None: always.  Under another kinematics the quantity keeps its random-stream row but is
+    #: not varied (tolerance 0).
+    kinematics: str | None = None
 
     def columns(self) -> tuple[str, ...]:
         """Column names: the path, or ``path[i]`` per element of an array key."""
@@ -66,9 +71,8 @@ class Quantity:
 
 R, S, U = Kind.radial, Kind.signed, Kind.unknown
 
-#: The registry: every toleranced key the paper's model reads, in a fixed order
-#: (the order of the random streams' rows: append new quantities at the end, never reorder,
-#: and existing samples stay the same).
+#: The registry: every toleranced key the model reads, in a fixed order (append new quantities at
+#: the end, never reorder; their random-stream rows are :data:`STREAM_ROWS`).
 QUANTITIES: tuple[Quantity, ...] = (
     Quantity("assembly.gear_eccentricity_mm", R, grade_driven=True),
     Quantity("worm_pair.lead_error_mm", S, grade_driven=True),
@@ -83,6 +87,16 @@ QUANTITIES: tuple[Quantity, ...] = (
     Quantity("assembly.wheel_eccentricity_mm", R),
     Quantity("assembly.wheel_bearing_clearance_mm", R),
     Quantity("assembly.worm_pair_errors_mm", U, length=6),
+    # --- the full budget's pitch deviations (simulate's and the budget's sources; ISO 1328-1 grade) ---
+    Quantity("gear_pair.output_gear.cumulative_pitch_deviation_mm", R, grade_driven=True),
+    Quantity("gear_pair.pinion.cumulative_pitch_deviation_mm", R, grade_driven=True),
+    Quantity("worm_pair.wheel.cumulative_pitch_deviation_mm", R),
+    Quantity("gear_pair.output_gear.single_pitch_deviation_mm", U, grade_driven=True),
+    Quantity("gear_pair.pinion.single_pitch_deviation_mm", U, grade_driven=True),
+    # --- read only by the involute gear stage (models.gear.involute_stage) ---
+    Quantity("assembly.gear_centre_distance_error_mm", S, kinematics="involute"),
+    Quantity("gear_pair.output_gear.thickness_deviation_mm", S, kinematics="involute"),
+    Quantity("gear_pair.pinion.thickness_deviation_mm", S, kinematics="involute"),
 )
 QUANTITY_BY_PATH = {q.path: q for q in QUANTITIES}
 
@@ -93,16 +107,50 @@ PHASES: tuple[str, ...] = (
     "assembly.worm_eccentricity_phase_deg",
     "worm_pair.wheel.radial_composite_phase_deg",
     "assembly.wheel_eccentricity_phase_deg",
+    "gear_pair.output_gear.cumulative_pitch_phase_deg",
+    "gear_pair.pinion.cumulative_pitch_phase_deg",
+    "worm_pair.wheel.cumulative_pitch_phase_deg",
+    "gear_pair.output_gear.single_pitch_phase_deg",
+    "gear_pair.pinion.single_pitch_phase_deg",
 )
 
-#: spec keys with a tolerance that the paper's model does not read directly (why they are not varied)
+#: the budget's phases -> the key that sizes their source: a phase is an output column only when
+#: that key varies (the paper's five phases are always columns)
+PHASE_SIZE = {
+    "gear_pair.output_gear.cumulative_pitch_phase_deg": "gear_pair.output_gear.cumulative_pitch_deviation_mm",
+    "gear_pair.pinion.cumulative_pitch_phase_deg": "gear_pair.pinion.cumulative_pitch_deviation_mm",
+    "worm_pair.wheel.cumulative_pitch_phase_deg": "worm_pair.wheel.cumulative_pitch_deviation_mm",
+    "gear_pair.output_gear.single_pitch_phase_deg": "gear_pair.output_gear.single_pitch_deviation_mm",
+    "gear_pair.pinion.single_pitch_phase_deg": "gear_pair.pinion.single_pitch_deviation_mm",
+}
+
+#: The random-stream rows (one uniform per sample each), in the order they were added: the paper's
+#: five phases and its 13 quantities first (the first release), then the full budget's quantities
+#: and phases.  Append only (new quantities' columns and new phases at the end, never reorder), so
+#: every existing sample stays the same when the registry grows.
+_FIRST_PHASES, _FIRST_QUANTITIES = 5, 13
+STREAM_ROWS: tuple[str, ...] = (
+    *PHASES[:_FIRST_PHASES],
+    *(c for q in QUANTITIES[:_FIRST_QUANTITIES] for c in q.columns()),
+    *(c for q in QUANTITIES[_FIRST_QUANTITIES:] for c in q.columns()),
+    *PHASES[_FIRST_PHASES:],
+)
+assert len(set(STREAM_ROWS)) == len(STREAM_ROWS) == len(PHASES) + sum(q.length for q in QUANTITIES)
+
+#: spec keys with a tolerance that the model does not read (why they are not varied)
 NOT_VARIED = {
-    "assembly.gear_centre_distance_error_mm": "enters the model only as the default of "
-    "assembly.gear_eccentricity_mm; vary that key",
-    "gear_pair.output_gear.profile_error_mm": "is not used by the paper's gear-stage equations",
-    "gear_pair.output_gear.thickness_deviation_mm": "is not used by the paper's gear-stage equations",
-    "gear_pair.pinion.profile_error_mm": "is not used by the paper's gear-stage equations",
-    "gear_pair.pinion.thickness_deviation_mm": "is not used by the paper's gear-stage equations",
+    "gear_pair.output_gear.profile_error_mm": "is not used by the gear-stage equations (paper or involute)",
+    "gear_pair.pinion.profile_error_mm": "is not used by the gear-stage equations (paper or involute)",
+}
+
+#: why a kinematics-bound quantity (:attr:`Quantity.kinematics`) is not varied under the other one
+NOT_READ_UNDER = {
+    "assembly.gear_centre_distance_error_mm": "enters the paper's kinematics only as the default of "
+    "assembly.gear_eccentricity_mm (vary that key); it is varied with gear_pair.kinematics = \"involute\"",
+    "gear_pair.output_gear.thickness_deviation_mm": "is not used by the paper's gear-stage equations; it is "
+    "varied with gear_pair.kinematics = \"involute\"",
+    "gear_pair.pinion.thickness_deviation_mm": "is not used by the paper's gear-stage equations; it is "
+    "varied with gear_pair.kinematics = \"involute\"",
 }
 
 #: keys of one ``[statistics]`` entry
@@ -145,6 +193,25 @@ def spec_value(spec, path: str):
     return getattr(node, f.attr)
 
 
+def applies(spec, quantity: Quantity) -> bool:
+    """Whether the model reads ``quantity`` under the spec's gear-stage kinematics."""
+    return quantity.kinematics is None or quantity.kinematics == spec.gear_pair.kinematics
+
+
+def tolerance_value(spec, quantity: Quantity):
+    """The tolerance the model reads for ``quantity`` [mm] (a tuple for an array key): the
+    spec value; 0 when the spec's kinematics does not read the key; for the gear
+    eccentricity under the involute kinematics only an eccentricity written in the spec
+    (:func:`wormgear_cli.analysis.gear_eccentricity`)."""
+    if not applies(spec, quantity):
+        return (0.0,) * quantity.length if quantity.length > 1 else 0.0
+    if quantity.path == "assembly.gear_eccentricity_mm":
+        from wormgear_cli.analysis import gear_eccentricity
+
+        return gear_eccentricity(spec)
+    return spec_value(spec, quantity.path)
+
+
 def varied_quantities(spec) -> tuple[Varied, ...]:
     """Every registry quantity of ``spec`` with its tolerance and distribution.
 
@@ -156,7 +223,7 @@ def varied_quantities(spec) -> tuple[Varied, ...]:
     settings = statistics_table(spec)
     out = []
     for q in QUANTITIES:
-        value = spec_value(spec, q.path)
+        value = tolerance_value(spec, q)
         tol = tuple(float(v) for v in value) if q.length > 1 else (float(value),)
         s = settings.get(q.path, {})
         out.append(Varied(q, tol, s.get("distribution", DEFAULT_DISTRIBUTION[q.kind]), s.get("cp"), s.get("cpk")))
@@ -204,6 +271,10 @@ def statistics_table(spec) -> dict[str, dict]:
             problems.append(f"{where}: expected a table such as {{ distribution = \"uniform\" }}")
             continue
         q = QUANTITY_BY_PATH[path]
+        if not applies(spec, q):
+            problems.append(f"{where}: cannot be varied with gear_pair.kinematics = "
+                            f"\"{spec.gear_pair.kinematics}\": the key {NOT_READ_UNDER[path]}")
+            continue
         ok = True
         for key in entry:
             if key not in ENTRY_KEYS:

@@ -33,7 +33,7 @@ def csv_rows(s: Setup, block: Block) -> str:
 
 
 def read_header(path: Path) -> tuple[tuple[str, ...], str]:
-    """The varied columns of a samples CSV and its metric set ("paper", "iso" or "all")."""
+    """The varied columns of a samples CSV and its metric set (a key of METRIC_SETS)."""
     name = str(path)
     if not Path(path).is_file():
         raise DataError(f"{name}: file not found, expected a samples CSV of wormgear tolerance --format csv")
@@ -43,12 +43,12 @@ def read_header(path: Path) -> tuple[tuple[str, ...], str]:
     if not cols or cols[0] != "sample":
         raise DataError(f"{name}: line 1: expected a header starting with \"sample\" "
                         "(a CSV of wormgear tolerance --format csv)")
-    for key, names in (("all", METRIC_SETS["all"]), ("paper", METRIC_SETS["paper"]), ("iso", METRIC_SETS["iso"])):
+    for key, names in sorted(METRIC_SETS.items(), key=lambda kv: -len(kv[1])):  # the longest match first
         k = len(names)
         if cols[-k:] == names:
             return cols[1:-k], key
     raise DataError(f"{name}: line 1: expected the metric columns to end the header "
-                    f"({', '.join(METRIC_SETS['all'])}, or the paper or iso part)")
+                    f"({', '.join(METRIC_SETS['all'])}, or the paper, budget or iso part)")
 
 
 def read_samples(path: Path, s: Setup) -> Iterator[Block]:
@@ -135,6 +135,11 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
         "varied": varied,
         "phases": "uniform in [0, 360) deg",
     }
+    from wormgear_cli.tolerance.engine import not_sampled
+
+    skipped = not_sampled(s.spec)
+    if skipped:
+        doc["not_sampled"] = skipped
     if shard is not None:
         doc["shard"] = {"part": shard, "first_sample": s.start, "stop_sample": s.stop}
     if allocation is not None:

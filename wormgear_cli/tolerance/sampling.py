@@ -22,8 +22,9 @@ inspection, so no value lies beyond its tolerance):
 Random streams: sample j belongs to block b = j // :data:`BLOCK`; each block
 has its own PCG64 generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
 and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms (row-major, so
-a longer matrix starts with the same numbers): one row per phase, then one per
-registry column in registry order.  So sample j is the same
+a longer matrix starts with the same numbers): one row per phase and per
+registry column, in the append-only order of
+:data:`~wormgear_cli.tolerance.quantities.STREAM_ROWS`.  So sample j is the same
 whatever the block size used for the computation or the shard it falls in.
 """
 
@@ -35,12 +36,13 @@ from typing import Callable
 
 import numpy as np
 
-from wormgear_cli.tolerance.quantities import PHASES, QUANTITIES, Kind, Varied
+from wormgear_cli.tolerance import quantities
+from wormgear_cli.tolerance.quantities import PHASES, STREAM_ROWS, Kind, Varied
 
 #: samples per random-stream block (fixed: changing it changes every sample)
 BLOCK = 65536
-#: uniform rows per block: one per phase, then one per registry column (array keys one per element)
-STREAM_COLUMNS = sum(q.length for q in QUANTITIES) + len(PHASES)
+#: uniform rows per block: one per phase and per registry column (array keys one per element)
+STREAM_COLUMNS = len(STREAM_ROWS)
 
 
 def _normal_params(low: float, high: float, cp: float | None, cpk: float | None) -> tuple[float, float]:
@@ -140,12 +142,12 @@ def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int) -> Draw:
         hi = min(stop - b * BLOCK, BLOCK)
         parts.append(u[:, lo:hi])
     u = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
-    # rows: the phases first, then the registry columns in registry order, so a quantity appended
-    # to the registry adds a row at the end and leaves every existing sample unchanged
-    phases = {p: 2.0 * math.pi * u[k] for k, p in enumerate(PHASES)}
-    values, row = {}, len(PHASES)
+    # rows in the append-only order of quantities.STREAM_ROWS: growing the registry adds rows at the
+    # end and leaves every existing sample unchanged
+    row = {name: k for k, name in enumerate(quantities.STREAM_ROWS)}
+    phases = {p: 2.0 * math.pi * u[row[p]] for p in PHASES}
+    values = {}
     for v in varied:
         for e, col in enumerate(v.quantity.columns()):
-            values[col] = sample_values(v, u[row], e)
-            row += 1
+            values[col] = sample_values(v, u[row[col]], e)
     return Draw(start, stop, values, phases)
