@@ -818,26 +818,11 @@ class Tolerance:
 
 
 def _tolerance_doc(spec, options, target_yield):
-    """Setup, run, allocation and document exactly as ``wormgear tolerance`` (no shard, no
-    summarize): see the report to the lead, this sequence belongs in the tolerance package."""
-    from dataclasses import replace
-
-    from wormgear_cli.cli.tolerance import ALLOCATION_SAMPLES  # to move into the core with this sequence
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.tolerance import engine, report
+    """Set-up, run, allocation and document, as ``wormgear tolerance`` (no shard, no summarize)."""
+    from wormgear_cli.tolerance import engine
 
     s = engine.setup(spec, options)
-    summary = engine.run(s)
-    target = target_yield if target_yield is not None else spec.requirements.min_yield
-    allocation = None
-    if target is not None and engine.metrics_for_limits(spec) is not None:
-        from wormgear_cli.tolerance.allocation import allocate
-
-        allocation = allocate(spec, replace(options, samples=min(options.samples, ALLOCATION_SAMPLES)), float(target))
-    elif target_yield is not None:
-        raise UsageError("target_yield needs a limit in [requirements] (max_transmission_error_arcsec or "
-                         "max_backlash_arcsec) to count the yield against")
-    return report.document(s, summary, allocation, None)
+    return engine.finish(s, engine.run(s), target_yield)
 
 
 def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "all", plan: str = "iso",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from enum import Enum
 from pathlib import Path
 from typing import Annotated, Optional
@@ -10,15 +9,14 @@ from typing import Annotated, Optional
 import typer
 
 from wormgear_cli.cli.app import app
-from wormgear_cli.cli.common import DriveArgument, FormatOption, OutputOption, UnitOption, emit, json_text, render
+from wormgear_cli.cli.common import (DriveArgument, FormatOption, OutputOption, Progress, UnitOption, emit,
+                                     json_text, render, write_stdout)
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
 #: most samples of one ``--format csv -o FILE`` run: the file is written at once (atomically), about
 #: 600 bytes per sample held in memory; stdout is streamed block by block (memory constant)
 MAX_CSV_FILE_SAMPLES = 500_000
-#: samples of each allocation rerun (at most)
-ALLOCATION_SAMPLES = 100_000
 
 LABELS = {"total_transmission_error": "total TE", "total_backlash": "backlash", "iso230_E": "ISO E",
           "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A", "budget_linear": "budget lin",
@@ -38,35 +36,6 @@ class MetricSet(str, Enum):
 class PlanKind(str, Enum):
     iso = "iso"
     dense = "dense"
-
-
-class _Progress:
-    """A rich progress bar on stderr, only on a terminal and only for work estimated over 1 s."""
-
-    def __init__(self, total: int, seconds: float, label: str):
-        from wormgear_cli.cli.common import stderr_is_terminal
-
-        self.bar = None
-        if total > 0 and seconds > 1.0 and stderr_is_terminal():
-            from rich.console import Console
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
-            self.bar = Progress("[progress.description]{task.description}", BarColumn(), MofNCompleteColumn(),
-                                TimeRemainingColumn(), console=Console(stderr=True), transient=True)
-            self.task = self.bar.add_task(label, total=total)
-
-    def __enter__(self):
-        if self.bar is not None:
-            self.bar.start()
-        return self
-
-    def __exit__(self, *exc):
-        if self.bar is not None:
-            self.bar.stop()
-
-    def advance(self, n: int) -> None:
-        if self.bar is not None:
-            self.bar.advance(self.task, n)
 
 
 @app.command()
@@ -161,21 +130,15 @@ def tolerance(
         summary = _csv_run(s, output, inputs)
     else:
         seconds = (s.stop - s.start) * _SECONDS_PER_SAMPLE[metric_set]
-        with _Progress(s.stop - s.start, seconds, "tolerance") as bar:
+        with Progress(s.stop - s.start, seconds, "tolerance") as bar:
             summary = engine.run(s, progress=bar.advance)
-    allocation = None
-    if target is not None and k_n is None and engine.metrics_for_limits(spec) is not None:
-        from wormgear_cli.tolerance.allocation import allocate
-
-        n_alloc = min(n_rows if n_rows is not None else samples, ALLOCATION_SAMPLES)
-        steps = 1 + len(s.varied)
-        cost = _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]
-        with _Progress(steps, n_alloc * steps * cost, "allocation") as bar:
-            allocation = allocate(spec, replace(options, samples=n_alloc), float(target), bar.advance)
-    elif target_yield is not None and engine.metrics_for_limits(spec) is None:
+    if target_yield is not None and engine.metrics_for_limits(spec) is None:
         raise UsageError(f"--target-yield needs a limit in [requirements] ({engine.LIMIT_KEYS}) to count the "
                          "yield against")
-    doc = report.document(s, summary, allocation, shard)
+    plan = engine.allocation_runs(s, target, n_rows if n_rows is not None else samples)
+    cost = (plan[0] * plan[1] * _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]) if plan else 0.0
+    with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
+        doc = engine.finish(s, summary, target_yield, n_rows if n_rows is not None else samples, shard, bar.advance)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
 
@@ -192,15 +155,11 @@ def _csv_run(s, output, inputs):
 
     seconds = (s.stop - s.start) * (_SECONDS_PER_SAMPLE[s.options.metrics] + 4e-6)
     header = report.csv_header(s)  # every part carries the header; concatenate with it once (tail -n +2)
-    with _Progress(s.stop - s.start, seconds, "tolerance") as bar:
+    with Progress(s.stop - s.start, seconds, "tolerance") as bar:
         if output is None or str(output) == "-":
-            sys.stdout.write(header)
-
-            def write(block):
-                sys.stdout.write(report.csv_rows(s, block))
-
-            summary = engine.run(s, on_block=write, progress=bar.advance)
-            sys.stdout.flush()
+            write_stdout(header)  # checked: a full disk is exit 2, a closed pipe a quiet stop
+            summary = engine.run(s, on_block=lambda block: write_stdout(report.csv_rows(s, block)),
+                                 progress=bar.advance)
             return summary
         import io
 
