@@ -10,7 +10,6 @@ import numpy as np
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
-from wormgear_cli.diagnosis.runs import Groups
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.units import ARCSEC
@@ -161,20 +160,27 @@ def _verdict(diag: Diagnosis) -> str:
     return "; ".join(parts)
 
 
-def _direction_warning(meas, groups: Groups) -> str | None:
-    """A note when the file has no direction column yet a pass visits a target more than once."""
+def data_findings(meas) -> list:
+    """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
+    pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
+    ``measure``'s checks (:func:`wormgear_cli.measure_report.structure_findings`), the one definition."""
     from wormgear_cli.iso230 import group_targets
+    from wormgear_cli.measure_report import structure_findings
 
-    if "direction" in meas.present:
-        return None
     tgt, _ = group_targets(meas.angle)
-    key = groups.pass_id.astype(np.int64) * (int(np.max(tgt)) + 1) + tgt.astype(np.int64)
-    if np.unique(key).shape[0] == key.shape[0]:
-        return None
-    return ("no direction column: every row is taken as forward, yet one "
-            + ("run" if "run" in meas.present else "block of rows") + " visits the same target more than once: if "
-            "some visits were made in reverse, add a direction column (+1 forward, -1 reverse)"
-            + ("" if "run" in meas.present else "; if they are repeated runs, add a run column"))
+    findings, _ = structure_findings(meas, tgt)
+    return findings
+
+
+def _data_verdict(findings) -> list[str]:
+    """The verdict-line parts of the data checks: the unit warnings in full, the others as measure says them."""
+    out = []
+    for f in findings:
+        if f.kind == "units":
+            out.append(f"check the units: {f.text}")
+        elif f.verdict:
+            out.append(f.verdict)
+    return out
 
 
 def report(diag: Diagnosis) -> dict:
@@ -204,10 +210,14 @@ def _report(diag: Diagnosis) -> dict:
             lo, hi = f.intervals["centre_distance_um_per_K"]
             pred = diag.thermal_prediction
             fitted = item["parameters"]["centre_distance_um_per_K"]
+            ratio = float(diag.spec.materials.housing_rise_ratio)
+            basis = ("housing, worm and wheel warming alike (housing_rise_ratio = 1)" if ratio == 1.0 else
+                     f"worm and wheel at the measured temperature, the housing rising {ratio:g} K per K of it "
+                     "(housing_rise_ratio)")
             item["prediction"] = {"centre_distance_um_per_K": pred, "inside_interval": bool(lo <= pred <= hi),
                                   "fitted_over_predicted": fitted / pred if pred else None,
-                                  "basis": "housing, worm and wheel warming alike, expansion from the spec's "
-                                           "[materials]"}
+                                  "housing_rise_ratio": ratio,
+                                  "basis": basis + ", expansion from the spec's [materials]"}
         found.append(item)
     phases = []
     for s, psi in zip(diag.sources, diag.after.psi):
@@ -258,9 +268,14 @@ def _report(diag: Diagnosis) -> dict:
                                 "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
                                 "replication untestable"},
     }
-    data_warning = _direction_warning(meas, diag.groups)
+    checks = data_findings(meas)
+    data_warning = next((f.text for f in checks if f.kind in ("repeated_targets", "mixed_directions")), None)
     if data_warning:
         doc["signals"]["data_warning"] = data_warning
+    doc["signals"]["checks"] = [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in checks]
+    flags = _data_verdict(checks)
+    if flags:
+        doc["verdict"] = "; ".join([doc["verdict"], *flags]) if doc["verdict"] else "; ".join(flags)
     if info.temperature_present and not math.isnan(info.temperature_time_corr) and \
             abs(info.temperature_time_corr) > 0.95:
         doc["signals"]["warning"] = (f"temperature and time correlate {info.temperature_time_corr:.2f}: a "

@@ -326,7 +326,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     try:
         from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
 
-        thermal = float(predicted_centre_distance_um_per_K(spec))
+        thermal = float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
     except (ImportError, AttributeError):
         thermal = None
     return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,
