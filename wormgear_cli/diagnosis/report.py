@@ -8,19 +8,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
-from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY
+from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind, aliased_effects, candidate,
+                                               candidate_params)
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.units import ARCSEC
 
 
-def _status(diag: Diagnosis) -> list[dict]:
+def _status(diag: Diagnosis, twins: dict) -> list[dict]:
     from wormgear_cli.models.effects import EFFECTS
 
     stop = diag.stop
     out = []
     named = {f.name for f in diag.found}
+    twin_of = {t["name"]: (owner, t) for owner, items in twins.items() for t in items}
     for name in EFFECTS:
         entry = {"name": name}
         if name in diag.spec.effects:
@@ -36,6 +38,18 @@ def _status(diag: Diagnosis) -> list[dict]:
                                    + ": its size trades against their fitted phases")
                 entry["remedy"] = ("measure the runout and phase of those parts directly (dial indicator), enter "
                                    "the phases in the spec and rerun with --keep-phases")
+            if name in twins:
+                text = _twin_text(name, _effect_order(name, diag), twins[name])
+                entry["reason"] = text + ("; " + entry["reason"] if "reason" in entry else "")
+                entry["indistinguishable_from"] = [t["name"] for t in twins[name]]
+                entry["remedy"] = FOLD_REMEDY + ("; " + entry["remedy"] if "remedy" in entry else "")
+        elif name in twin_of:
+            owner, t = twin_of[name]
+            entry.update(status="indistinguishable",
+                         reason=_twin_text(name, t["order"], [{"name": owner, "order": _effect_order(owner, diag)}])
+                         + f" (fitted and reported as {owner})", remedy=FOLD_REMEDY)
+            if "estimate" in t:
+                entry["estimate"] = t["estimate"]
         elif sc is None:
             entry.update(status="unobservable", reason="not scored")
         elif sc.status in (ScoreStatus.UNOBSERVABLE, ScoreStatus.UNTESTABLE):
@@ -84,6 +98,51 @@ def _status(diag: Diagnosis) -> list[dict]:
     return out
 
 
+def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
+    """Per named effect, the catalogue effects at orders these targets fold onto its order
+    (:func:`~wormgear_cli.diagnosis.candidates.aliased_effects`): they explain the data equally well.
+
+    Each twin: ``name``, ``order``, and (for an effect whose size is determined) ``estimate``, the twin's
+    parameters that reproduce the named effect's fitted signature at the measured angles (least squares
+    of the named signature on the twin's columns), keyed as in the catalogue."""
+    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.models.effects import EFFECTS
+
+    g = drive_geometry(diag.spec)
+    names = [n for n in EFFECTS if n not in diag.spec.effects]
+    out = {}
+    sig = None
+    for f in diag.found:
+        twins = aliased_effects(diag.meas.angle, f.name, names, g)
+        if not twins:
+            continue
+        items = []
+        for name, order in twins:
+            item = {"name": name, "order": order}
+            if f.separable and f.kind is CandidateKind.PERIODIC:
+                sig = sig if sig is not None else diag.meas.signals()
+                own, twin = candidate(f.name, sig, g), candidate(name, sig, g)
+                eff = EFFECTS[f.name]
+                amp, ph = f.params[eff.amplitude], f.params[eff.phase]
+                signature = own.columns @ np.array([amp * math.cos(ph), amp * math.sin(ph)])
+                if twin is not None:
+                    beta = np.linalg.lstsq(twin.columns, signature, rcond=None)[0]
+                    item["estimate"] = _keys(name, candidate_params(twin, beta))
+            items.append(item)
+        out[f.name] = items
+    return out
+
+
+def _twin_text(name: str, order: float, twins: list[dict]) -> str:
+    others = " or ".join(f"{t['name']} (order {t['order']:g})" for t in twins)
+    orders = ", ".join(f"{t['order']:g}" for t in twins)
+    return (f"indistinguishable here from {others}: these targets fold order{'s' if len(twins) > 1 else ''} "
+            f"{orders} onto order {order:g}, so either explains the data equally well")
+
+
+FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell them apart"
+
+
 def _effect_order(name: str, diag: "Diagnosis") -> float:
     from wormgear_cli.analysis import geometry as drive_geometry
     from wormgear_cli.models.effects import EFFECTS
@@ -108,17 +167,29 @@ def _separate_hint(names) -> str:
     return "measure with irregular target spacing or a dense scan, in both directions"
 
 
-def _verdict(diag: Diagnosis) -> str:
+def _verdict(diag: Diagnosis, twins: dict) -> str:
     found = [f for f in diag.found if f.separable]
     mixed = [f for f in diag.found if not f.separable]
     parts = []
+
+    def named(f):
+        if f.name not in twins:
+            return f.name
+        orders = ", ".join(f"{t['order']:g}" for t in twins[f.name])
+        return (" or ".join([f.name, *(t["name"] for t in twins[f.name])])
+                + f" (indistinguishable here: these targets fold order {orders} onto order "
+                f"{_effect_order(f.name, diag):g}; {FOLD_REMEDY})")
+
     if found:
-        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(f.name for f in found))
+        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(named(f) for f in found))
     for f in mixed:
         key, (lo, hi) = next(iter(f.intervals.items())) if f.intervals else ("size", (math.nan, math.nan))
         order = _effect_order(f.name, diag)
-        parts.append(f"missing content at order {order:g} that the spec's sources cannot produce: {f.name} "
-                     f"({key} anywhere from {lo:.3g} to {hi:.3g}) or a larger "
+        folded = "".join(f" or {t['name']} at order {t['order']:g}" for t in twins.get(f.name, []))
+        also = ", ".join(f"{t['order']:g}" for t in twins.get(f.name, []))
+        where = f" (where these targets also put order {also})" if also else ""
+        parts.append(f"missing content at order {order:g}{where} that the spec's sources cannot produce: {f.name} "
+                     f"({key} anywhere from {lo:.3g} to {hi:.3g}){folded} or a larger "
                      + " or ".join(f.indistinguishable_from)
                      + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
                      "--keep-phases)")
@@ -196,6 +267,7 @@ def _report(diag: Diagnosis) -> dict:
     meas = diag.meas
     y = meas.error / ARCSEC
     resid_after = y - diag.augmented_fitted
+    twins = folded_twins(diag)
     found = []
     for f in diag.found:
         item = {"name": f.name, "parameters": augmented_params(f),
@@ -218,6 +290,14 @@ def _report(diag: Diagnosis) -> dict:
                                   "fitted_over_predicted": fitted / pred if pred else None,
                                   "housing_rise_ratio": ratio,
                                   "basis": basis + ", expansion from the spec's [materials]"}
+        if f.name in twins:
+            item["indistinguishable_from"] += [t["name"] for t in twins[f.name]]
+            item["aliased_with"] = twins[f.name]
+            item["notes"].append(_twin_text(f.name, _effect_order(f.name, diag), twins[f.name])
+                                 + "".join(f"; as {t['name']}: " + ", ".join(f"{k} = {v:.4g}" for k, v in
+                                                                             t["estimate"].items())
+                                           for t in twins[f.name] if "estimate" in t)
+                                 + f" ({FOLD_REMEDY})")
         found.append(item)
     phases = []
     for s, psi in zip(diag.sources, diag.after.psi):
@@ -230,13 +310,13 @@ def _report(diag: Diagnosis) -> dict:
         "drive": diag.spec.drive.name,
         "data": str(meas.source),
         "rows": len(meas),
-        "verdict": _verdict(diag),
+        "verdict": _verdict(diag, twins),
         "effects_found": found,
         "gap_as_specified": gap_summary(meas, diag.as_specified),
         "gap_before": gap_summary(meas, diag.before.residual),
         "gap_after": gap_summary(meas, resid_after),
         "unexplained": diag.unexplained,
-        "candidates": _status(diag),
+        "candidates": _status(diag, twins),
         "fit": {
             "phases_fitted": bool(diag.fit_phases),
             "zero_offset_before_arcsec": diag.before.offset,
