@@ -192,7 +192,7 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
                      f"({key} anywhere from {lo:.3g} to {hi:.3g}){folded} or a larger "
                      + " or ".join(f.indistinguishable_from)
                      + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
-                     "--keep-phases)")
+                     "--keep-phases" + (f"; {FOLD_REMEDY}" if also else "") + ")")
     untestable = [n for n, sc in diag.candidates.items() if sc.status is ScoreStatus.UNTESTABLE]
     if not diag.found:
         text = "no missing effect found"
