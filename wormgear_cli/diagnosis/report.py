@@ -13,6 +13,7 @@ from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
+from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
 from wormgear_cli.units import ARCSEC
 
 
@@ -254,6 +255,95 @@ def _data_verdict(findings) -> list[str]:
     return out
 
 
+def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None) -> dict | None:
+    """Whether the spec's predicted error is far from the data (a spec of another drive, or a unit mix-up).
+
+    Compared on the measurement itself, not on a fitted effect: the
+    amplitude of the common and the differential mode at every physical
+    order the targets resolve and at which the spec's model has content
+    (the model with its phases fitted, so only sizes count), and the mean
+    reversal (twice the differential offset).  An item is out of line when spec and data differ
+    by at least MISMATCH_RATIO and by at least MISMATCH_NOISE times the
+    repeatability.  Reported only when the gap left after fitting stays
+    above EXCESS_FACTOR times the repeatability (the pooled scatter over
+    runs per target and direction; the noise floor without repeated runs).
+
+    Returns None, or {"items": [...], "gap_after_arcsec", "repeat_arcsec",
+    "scale": data/spec size ratio (geometric mean over the items), "units":
+    (column unit, unit read) when every item's ratio is within
+    UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}."""
+    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.measurement import ERROR_UNITS
+    from wormgear_cli.units import RAD_PER_UNIT
+
+    meas = diag.meas
+    noise = repeat_arcsec if repeat_arcsec else diag.noise_floor
+    if noise is None or not math.isfinite(noise) or noise <= 0:
+        return None
+    y = meas.error / ARCSEC
+    gap_after = float(np.sqrt(np.mean((y - diag.augmented_fitted) ** 2)))
+    if gap_after <= EXCESS_FACTOR * noise:
+        return None
+    g = drive_geometry(diag.spec)
+    data_t = {r["order"]: r for r in order_table(meas, y, g)}
+    model_t = {r["order"]: r for r in order_table(meas, diag.before.fitted, g)}
+    items = []
+
+    def out_of_line(spec_v, data_v):
+        lo, hi = sorted((abs(spec_v), abs(data_v)))
+        return hi - lo >= MISMATCH_NOISE * noise and hi >= MISMATCH_RATIO * lo
+
+    for order, m in model_t.items():
+        d = data_t.get(order)
+        if order == 0.0 or d is None or not (m.get("identifiable") and d.get("identifiable")):
+            continue
+        for mode, key in (("", "common_arcsec"), ("differential ", "differential_arcsec")):
+            if key not in m or key not in d:
+                continue
+            spec_a, data_a = m[key], d[key]
+            if spec_a >= MISMATCH_NOISE * noise and out_of_line(spec_a, data_a):
+                items.append({"what": f"{mode}amplitude at order {order:g} ({m['label']})", "spec_arcsec": spec_a,
+                              "data_arcsec": data_a})
+    m0, d0 = model_t.get(0.0, {}), data_t.get(0.0, {})
+    if "differential_arcsec" in m0 and "differential_arcsec" in d0:
+        spec_b, data_b = -2.0 * m0["differential_arcsec"], -2.0 * d0["differential_arcsec"]
+        if out_of_line(spec_b, data_b) or (spec_b * data_b < 0 and min(abs(spec_b), abs(data_b))
+                                           >= MISMATCH_NOISE * noise):
+            items.append({"what": "mean reversal", "spec_arcsec": spec_b, "data_arcsec": data_b})
+    if not items:
+        return None
+    ratios = [abs(it["data_arcsec"]) / abs(it["spec_arcsec"]) for it in items
+              if it["spec_arcsec"] and it["data_arcsec"]]
+    scale = float(np.exp(np.mean(np.log(ratios)))) if ratios else None
+    units = None
+    read = dict(meas.units).get("error", "arcsec")
+    if ratios and len(ratios) == len(items) and read in RAD_PER_UNIT:
+        # every item scaled alike, by the ratio of two units: a column in unit c read as unit `read`
+        for c in ERROR_UNITS:
+            unit_ratio = RAD_PER_UNIT[read] / RAD_PER_UNIT[c]
+            if c != read and all(abs(math.log(r / unit_ratio)) <= math.log(UNIT_RATIO_TOLERANCE) for r in ratios):
+                units = (c, read)
+    return {"items": items, "gap_after_arcsec": gap_after, "repeat_arcsec": noise, "scale": scale, "units": units}
+
+
+def _mismatch_text(mm: dict, spec_name: str, found) -> str:
+    """The verdict when the spec's predicted error is far from the data: what looks wrong, with the numbers."""
+    said = "; ".join(f"{it['what']}: the spec gives {it['spec_arcsec']:.3g} arcsec, the data {it['data_arcsec']:.3g}"
+                     for it in mm["items"])
+    text = (f"the drive spec does not describe these data ({said}; {mm['gap_after_arcsec']:.3g} arcsec RMS stays "
+            f"unexplained against a repeatability of {mm['repeat_arcsec']:.2g} arcsec): check that the spec is the "
+            "drive measured (its ratios, tolerances, clearances) and the unit of the error column")
+    if mm["units"] is not None:
+        col, read = mm["units"]
+        factor = 1.0 / mm["scale"] if mm["scale"] < 1 else mm["scale"]
+        text += (f"; the data are about {factor:.3g} times {'smaller' if mm['scale'] < 1 else 'larger'} than the "
+                 f"spec predicts: if the error column is in {col} (read as {read}), use --error-unit {col}")
+    if found:
+        text += ("; not naming " + ", ".join(f"{f.name} ({100 * f.share:.0f} % of the gap)" for f in found)
+                 + ": against a spec that does not fit, a catalogue effect takes up what it can")
+    return text
+
+
 def report(diag: Diagnosis) -> dict:
     """The JSON document of ``wormgear diagnose`` (angles in arcsec, effect parameters keyed as in the catalogue)."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
@@ -348,6 +438,20 @@ def _report(diag: Diagnosis) -> dict:
                                 "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
                                 "replication untestable"},
     }
+    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"])
+    doc["plausibility"] = None
+    if mismatch is not None:
+        doc["plausibility"] = {
+            "spec_fits_data": False, "items": mismatch["items"],
+            "gap_after_arcsec": mismatch["gap_after_arcsec"], "repeatability_arcsec": mismatch["repeat_arcsec"],
+            "data_over_spec": mismatch["scale"],
+            "likely_units": None if mismatch["units"] is None else {"column": mismatch["units"][0],
+                                                                   "read_as": mismatch["units"][1]},
+            "effects_not_named": [f.name for f in diag.found]}
+        doc["verdict"] = _mismatch_text(mismatch, diag.spec.drive.name, diag.found)
+        for item in found:
+            item["notes"].append("not named in the verdict: the drive spec does not describe these data "
+                                 "(see plausibility)")
     checks = data_findings(meas)
     data_warning = next((f.text for f in checks if f.kind in ("repeated_targets", "mixed_directions")), None)
     if data_warning:
