@@ -240,7 +240,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
                  and step.scores[o].p_adj < alpha]
         # a twin at an order the target spacing folds onto best's explains the data equally well by construction:
         # best is fitted and named together with it (the report names both); only other twins stop the selection
-        folded = {o for o, _ in alias_notes.get(best, [])}
+        folded = {o for o, _ in alias_notes.get(best, []) if o != remaining[best].order}
         twins = [o for o in twins if remaining[o].order not in folded]
         if twins:
             stop = Stop(StopReason.AMBIGUOUS, candidates=(best, *twins),
