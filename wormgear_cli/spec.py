@@ -261,6 +261,10 @@ FIELDS: tuple[Field, ...] = (
        "thermal expansion of the wheel (CuSn12 bronze 18.5)", lo=-5.0, hi=50.0),
     _f("materials.housing_expansion_ppm_per_K", "housing_expansion", "ppm/K", 10.5,
        "thermal expansion of the housing (grey cast iron 10.5)", lo=-5.0, hi=50.0),
+    _f("materials.housing_rise_ratio", "housing_rise_ratio", "-", 1.0,
+       "the housing's temperature rise per kelvin of the measured (mesh/oil) temperature; used by diagnose's "
+       "thermal_backlash prediction (1: the whole drive warms alike; a running worm drive warms at the mesh, "
+       "so less than 1)", lo=0.0, hi=1.5, lo_open=True),
     # --- requirements (all optional) ---------------------------------------------
     *(
         _f(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, hi=1e9,

@@ -258,3 +258,40 @@ def jointly_fittable_orders(theta, orders, priority=None,
         else:
             aliased[o] = "other orders at these targets (too few targets to resolve them all)"
     return [o for o in keep if o in chosen], aliased
+
+
+def effect_order(name: str, geometry) -> float | None:
+    """The order [cycles/rev] of catalogue effect ``name`` on this drive (None: not periodic)."""
+    from wormgear_cli.models.effects import EFFECTS
+
+    eff = EFFECTS[name]
+    return float(eff.order(geometry)) if eff.order is not None else None
+
+
+def aliased_effects(theta, name: str, names, geometry) -> list[tuple[str, float]]:
+    """Catalogue effects among ``names`` that the target spacing makes indistinguishable from ``name``.
+
+    Two periodic effects at different orders k1, k2 are indistinguishable
+    when the angles ``theta`` [rad] sample their columns alike
+    (:func:`wormgear_cli.harmonics.alias_groups`: k1 - k2 or k1 + k2 a
+    multiple of the number of equally spaced targets, e.g. the spur-mesh
+    order 144 and the intermediate-shaft order 8 at 136 targets): either
+    explains the data equally well.  Orders aliased onto a constant are left
+    out (the offset takes them).  Returns [(name, order)] sorted by order;
+    empty when ``name`` is not periodic or nothing folds onto it."""
+    from wormgear_cli.harmonics import alias_groups
+
+    k = effect_order(name, geometry)
+    if k is None:
+        return []
+    others = {}
+    for other in names:
+        o = effect_order(other, geometry) if other != name else None
+        if o is not None and abs(o - k) > 1e-9 * max(1.0, k):
+            others[other] = o
+    if not others:
+        return []
+    for grp in alias_groups(np.asarray(theta, dtype=float), sorted({k, *others.values()})):
+        if k in grp and 0.0 not in grp:
+            return sorted(((n, o) for n, o in others.items() if o in grp), key=lambda t: t[1])
+    return []

@@ -8,20 +8,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
-from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY
+from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind, aliased_effects, candidate,
+                                               candidate_params)
 from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
-from wormgear_cli.diagnosis.runs import Groups
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
+from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
 from wormgear_cli.units import ARCSEC
 
 
-def _status(diag: Diagnosis) -> list[dict]:
+def _status(diag: Diagnosis, twins: dict) -> list[dict]:
     from wormgear_cli.models.effects import EFFECTS
 
     stop = diag.stop
     out = []
     named = {f.name for f in diag.found}
+    twin_of = {t["name"]: (owner, t) for owner, items in twins.items() for t in items}
     for name in EFFECTS:
         entry = {"name": name}
         if name in diag.spec.effects:
@@ -37,6 +39,18 @@ def _status(diag: Diagnosis) -> list[dict]:
                                    + ": its size trades against their fitted phases")
                 entry["remedy"] = ("measure the runout and phase of those parts directly (dial indicator), enter "
                                    "the phases in the spec and rerun with --keep-phases")
+            if name in twins:
+                text = _twin_text(name, _effect_order(name, diag), twins[name])
+                entry["reason"] = text + ("; " + entry["reason"] if "reason" in entry else "")
+                entry["indistinguishable_from"] = [t["name"] for t in twins[name]]
+                entry["remedy"] = FOLD_REMEDY + ("; " + entry["remedy"] if "remedy" in entry else "")
+        elif name in twin_of:
+            owner, t = twin_of[name]
+            entry.update(status="indistinguishable",
+                         reason=_twin_text(name, t["order"], [{"name": owner, "order": _effect_order(owner, diag)}])
+                         + f" (fitted and reported as {owner})", remedy=FOLD_REMEDY)
+            if "estimate" in t:
+                entry["estimate"] = t["estimate"]
         elif sc is None:
             entry.update(status="unobservable", reason="not scored")
         elif sc.status in (ScoreStatus.UNOBSERVABLE, ScoreStatus.UNTESTABLE):
@@ -85,6 +99,51 @@ def _status(diag: Diagnosis) -> list[dict]:
     return out
 
 
+def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
+    """Per named effect, the catalogue effects at orders these targets fold onto its order
+    (:func:`~wormgear_cli.diagnosis.candidates.aliased_effects`): they explain the data equally well.
+
+    Each twin: ``name``, ``order``, and (for an effect whose size is determined) ``estimate``, the twin's
+    parameters that reproduce the named effect's fitted signature at the measured angles (least squares
+    of the named signature on the twin's columns), keyed as in the catalogue."""
+    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.models.effects import EFFECTS
+
+    g = drive_geometry(diag.spec)
+    names = [n for n in EFFECTS if n not in diag.spec.effects]
+    out = {}
+    sig = None
+    for f in diag.found:
+        twins = aliased_effects(diag.meas.angle, f.name, names, g)
+        if not twins:
+            continue
+        items = []
+        for name, order in twins:
+            item = {"name": name, "order": order}
+            if f.separable and f.kind is CandidateKind.PERIODIC:
+                sig = sig if sig is not None else diag.meas.signals()
+                own, twin = candidate(f.name, sig, g), candidate(name, sig, g)
+                eff = EFFECTS[f.name]
+                amp, ph = f.params[eff.amplitude], f.params[eff.phase]
+                signature = own.columns @ np.array([amp * math.cos(ph), amp * math.sin(ph)])
+                if twin is not None:
+                    beta = np.linalg.lstsq(twin.columns, signature, rcond=None)[0]
+                    item["estimate"] = _keys(name, candidate_params(twin, beta))
+            items.append(item)
+        out[f.name] = items
+    return out
+
+
+def _twin_text(name: str, order: float, twins: list[dict]) -> str:
+    others = " or ".join(f"{t['name']} (order {t['order']:g})" for t in twins)
+    orders = ", ".join(f"{t['order']:g}" for t in twins)
+    return (f"indistinguishable here from {others}: these targets fold order{'s' if len(twins) > 1 else ''} "
+            f"{orders} onto order {order:g}, so either explains the data equally well")
+
+
+FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell them apart"
+
+
 def _effect_order(name: str, diag: "Diagnosis") -> float:
     from wormgear_cli.analysis import geometry as drive_geometry
     from wormgear_cli.models.effects import EFFECTS
@@ -109,20 +168,32 @@ def _separate_hint(names) -> str:
     return "measure with irregular target spacing or a dense scan, in both directions"
 
 
-def _verdict(diag: Diagnosis) -> str:
+def _verdict(diag: Diagnosis, twins: dict) -> str:
     found = [f for f in diag.found if f.separable]
     mixed = [f for f in diag.found if not f.separable]
     parts = []
+
+    def named(f):
+        if f.name not in twins:
+            return f.name
+        orders = ", ".join(f"{t['order']:g}" for t in twins[f.name])
+        return (" or ".join([f.name, *(t["name"] for t in twins[f.name])])
+                + f" (indistinguishable here: these targets fold order {orders} onto order "
+                f"{_effect_order(f.name, diag):g}; {FOLD_REMEDY})")
+
     if found:
-        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(f.name for f in found))
+        parts.append(f"missing effect{'s' if len(found) > 1 else ''} found: " + ", ".join(named(f) for f in found))
     for f in mixed:
         key, (lo, hi) = next(iter(f.intervals.items())) if f.intervals else ("size", (math.nan, math.nan))
         order = _effect_order(f.name, diag)
-        parts.append(f"missing content at order {order:g} that the spec's sources cannot produce: {f.name} "
-                     f"({key} anywhere from {lo:.3g} to {hi:.3g}) or a larger "
+        folded = "".join(f" or {t['name']} at order {t['order']:g}" for t in twins.get(f.name, []))
+        also = ", ".join(f"{t['order']:g}" for t in twins.get(f.name, []))
+        where = f" (where these targets also put order {also})" if also else ""
+        parts.append(f"missing content at order {order:g}{where} that the spec's sources cannot produce: {f.name} "
+                     f"({key} anywhere from {lo:.3g} to {hi:.3g}){folded} or a larger "
                      + " or ".join(f.indistinguishable_from)
                      + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
-                     "--keep-phases)")
+                     "--keep-phases" + (f"; {FOLD_REMEDY}" if also else "") + ")")
     untestable = [n for n, sc in diag.candidates.items() if sc.status is ScoreStatus.UNTESTABLE]
     if not diag.found:
         text = "no missing effect found"
@@ -161,20 +232,117 @@ def _verdict(diag: Diagnosis) -> str:
     return "; ".join(parts)
 
 
-def _direction_warning(meas, groups: Groups) -> str | None:
-    """A note when the file has no direction column yet a pass visits a target more than once."""
+def data_findings(meas) -> list:
+    """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
+    pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
+    ``measure``'s checks (:func:`wormgear_cli.measure_report.structure_findings`), the one definition."""
     from wormgear_cli.iso230 import group_targets
+    from wormgear_cli.measure_report import structure_findings
 
-    if "direction" in meas.present:
-        return None
     tgt, _ = group_targets(meas.angle)
-    key = groups.pass_id.astype(np.int64) * (int(np.max(tgt)) + 1) + tgt.astype(np.int64)
-    if np.unique(key).shape[0] == key.shape[0]:
+    findings, _ = structure_findings(meas, tgt)
+    return findings
+
+
+def _data_verdict(findings) -> list[str]:
+    """The verdict-line parts of the data checks: the unit warnings in full, the others as measure says them."""
+    out = []
+    for f in findings:
+        if f.kind == "units":
+            out.append(f"check the units: {f.text}")
+        elif f.verdict:
+            out.append(f.verdict)
+    return out
+
+
+def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None) -> dict | None:
+    """Whether the spec's predicted error is far from the data (a spec of another drive, or a unit mix-up).
+
+    Compared on the measurement itself, not on a fitted effect: the
+    amplitude of the common and the differential mode at every physical
+    order the targets resolve and at which the spec's model has content
+    (the model with its phases fitted, so only sizes count), and the mean
+    reversal (twice the differential offset).  An item is out of line when spec and data differ
+    by at least MISMATCH_RATIO and by at least MISMATCH_NOISE times the
+    repeatability (the pooled scatter over runs per target and direction;
+    the noise floor without repeated runs).  Whether catalogue effects then
+    close the gap does not matter: an effect that cancels what the spec
+    predicts at its own order patches a wrong spec, it is not found.
+
+    Returns None, or {"items": [...], "gap_after_arcsec", "repeat_arcsec",
+    "scale": data/spec size ratio (geometric mean over the items), "units":
+    (column unit, unit read) when every item's ratio is within
+    UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}."""
+    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.measurement import ERROR_UNITS
+    from wormgear_cli.units import RAD_PER_UNIT
+
+    meas = diag.meas
+    noise = repeat_arcsec if repeat_arcsec else diag.noise_floor
+    if noise is None or not math.isfinite(noise) or noise <= 0:
         return None
-    return ("no direction column: every row is taken as forward, yet one "
-            + ("run" if "run" in meas.present else "block of rows") + " visits the same target more than once: if "
-            "some visits were made in reverse, add a direction column (+1 forward, -1 reverse)"
-            + ("" if "run" in meas.present else "; if they are repeated runs, add a run column"))
+    y = meas.error / ARCSEC
+    gap_after = float(np.sqrt(np.mean((y - diag.augmented_fitted) ** 2)))
+    g = drive_geometry(diag.spec)
+    data_t = {r["order"]: r for r in order_table(meas, y, g)}
+    model_t = {r["order"]: r for r in order_table(meas, diag.before.fitted, g)}
+    items = []
+
+    def out_of_line(spec_v, data_v):
+        lo, hi = sorted((abs(spec_v), abs(data_v)))
+        return hi - lo >= MISMATCH_NOISE * noise and hi >= MISMATCH_RATIO * lo
+
+    for order, m in model_t.items():
+        d = data_t.get(order)
+        if order == 0.0 or d is None or not (m.get("identifiable") and d.get("identifiable")):
+            continue
+        for mode, key in (("", "common_arcsec"), ("differential ", "differential_arcsec")):
+            if key not in m or key not in d:
+                continue
+            spec_a, data_a = m[key], d[key]
+            if spec_a >= MISMATCH_NOISE * noise and out_of_line(spec_a, data_a):
+                items.append({"what": f"{mode}amplitude at order {order:g} ({m['label']})", "spec_arcsec": spec_a,
+                              "data_arcsec": data_a})
+    m0, d0 = model_t.get(0.0, {}), data_t.get(0.0, {})
+    if "differential_arcsec" in m0 and "differential_arcsec" in d0:
+        spec_b, data_b = -2.0 * m0["differential_arcsec"], -2.0 * d0["differential_arcsec"]
+        if out_of_line(spec_b, data_b) or (spec_b * data_b < 0 and min(abs(spec_b), abs(data_b))
+                                           >= MISMATCH_NOISE * noise):
+            items.append({"what": "mean reversal", "spec_arcsec": spec_b, "data_arcsec": data_b})
+    if not items:
+        return None
+    ratios = [abs(it["data_arcsec"]) / abs(it["spec_arcsec"]) for it in items
+              if it["spec_arcsec"] and it["data_arcsec"]]
+    scale = float(np.exp(np.mean(np.log(ratios)))) if ratios else None
+    units = None
+    read = dict(meas.units).get("error", "arcsec")
+    if ratios and len(ratios) == len(items) and read in RAD_PER_UNIT:
+        # every item scaled alike, by the ratio of two units: a column in unit c read as unit `read`
+        for c in ERROR_UNITS:
+            unit_ratio = RAD_PER_UNIT[read] / RAD_PER_UNIT[c]
+            if c != read and all(abs(math.log(r / unit_ratio)) <= math.log(UNIT_RATIO_TOLERANCE) for r in ratios):
+                units = (c, read)
+    return {"items": items, "gap_after_arcsec": gap_after, "repeat_arcsec": noise, "scale": scale, "units": units}
+
+
+def _mismatch_text(mm: dict, spec_name: str, found) -> str:
+    """The verdict when the spec's predicted error is far from the data: what looks wrong, with the numbers."""
+    said = "; ".join(f"{it['what']}: the spec gives {it['spec_arcsec']:.3g} arcsec, the data {it['data_arcsec']:.3g}"
+                     for it in mm["items"])
+    gap = (f"{mm['gap_after_arcsec']:.3g} arcsec RMS stays unexplained against a repeatability of "
+           f"{mm['repeat_arcsec']:.2g} arcsec" if mm["gap_after_arcsec"] > EXCESS_FACTOR * mm["repeat_arcsec"]
+           else f"repeatability {mm['repeat_arcsec']:.2g} arcsec")
+    text = (f"the drive spec does not describe these data ({said}; {gap}): check that the spec is the drive "
+            "measured (its ratios, tolerances, clearances) and the unit of the error column")
+    if mm["units"] is not None:
+        col, read = mm["units"]
+        factor = 1.0 / mm["scale"] if mm["scale"] < 1 else mm["scale"]
+        text += (f"; the data are about {factor:.3g} times {'smaller' if mm['scale'] < 1 else 'larger'} than the "
+                 f"spec predicts: if the error column is in {col} (read as {read}), use --error-unit {col}")
+    if found:
+        text += ("; not naming " + ", ".join(f"{f.name} ({100 * f.share:.0f} % of the gap)" for f in found)
+                 + ": against a spec that does not fit, a catalogue effect takes up what it can")
+    return text
 
 
 def report(diag: Diagnosis) -> dict:
@@ -190,6 +358,7 @@ def _report(diag: Diagnosis) -> dict:
     meas = diag.meas
     y = meas.error / ARCSEC
     resid_after = y - diag.augmented_fitted
+    twins = folded_twins(diag)
     found = []
     for f in diag.found:
         item = {"name": f.name, "parameters": augmented_params(f),
@@ -204,10 +373,22 @@ def _report(diag: Diagnosis) -> dict:
             lo, hi = f.intervals["centre_distance_um_per_K"]
             pred = diag.thermal_prediction
             fitted = item["parameters"]["centre_distance_um_per_K"]
+            ratio = float(diag.spec.materials.housing_rise_ratio)
+            basis = ("housing, worm and wheel warming alike (housing_rise_ratio = 1)" if ratio == 1.0 else
+                     f"worm and wheel at the measured temperature, the housing rising {ratio:g} K per K of it "
+                     "(housing_rise_ratio)")
             item["prediction"] = {"centre_distance_um_per_K": pred, "inside_interval": bool(lo <= pred <= hi),
                                   "fitted_over_predicted": fitted / pred if pred else None,
-                                  "basis": "housing, worm and wheel warming alike, expansion from the spec's "
-                                           "[materials]"}
+                                  "housing_rise_ratio": ratio,
+                                  "basis": basis + ", expansion from the spec's [materials]"}
+        if f.name in twins:
+            item["indistinguishable_from"] += [t["name"] for t in twins[f.name]]
+            item["aliased_with"] = twins[f.name]
+            item["notes"].append(_twin_text(f.name, _effect_order(f.name, diag), twins[f.name])
+                                 + "".join(f"; as {t['name']}: " + ", ".join(f"{k} = {v:.4g}" for k, v in
+                                                                             t["estimate"].items())
+                                           for t in twins[f.name] if "estimate" in t)
+                                 + f" ({FOLD_REMEDY})")
         found.append(item)
     phases = []
     for s, psi in zip(diag.sources, diag.after.psi):
@@ -220,13 +401,13 @@ def _report(diag: Diagnosis) -> dict:
         "drive": diag.spec.drive.name,
         "data": str(meas.source),
         "rows": len(meas),
-        "verdict": _verdict(diag),
+        "verdict": _verdict(diag, twins),
         "effects_found": found,
         "gap_as_specified": gap_summary(meas, diag.as_specified),
         "gap_before": gap_summary(meas, diag.before.residual),
         "gap_after": gap_summary(meas, resid_after),
         "unexplained": diag.unexplained,
-        "candidates": _status(diag),
+        "candidates": _status(diag, twins),
         "fit": {
             "phases_fitted": bool(diag.fit_phases),
             "zero_offset_before_arcsec": diag.before.offset,
@@ -258,9 +439,28 @@ def _report(diag: Diagnosis) -> dict:
                                 "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
                                 "replication untestable"},
     }
-    data_warning = _direction_warning(meas, diag.groups)
+    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"])
+    doc["plausibility"] = None
+    if mismatch is not None:
+        doc["plausibility"] = {
+            "spec_fits_data": False, "items": mismatch["items"],
+            "gap_after_arcsec": mismatch["gap_after_arcsec"], "repeatability_arcsec": mismatch["repeat_arcsec"],
+            "data_over_spec": mismatch["scale"],
+            "likely_units": None if mismatch["units"] is None else {"column": mismatch["units"][0],
+                                                                   "read_as": mismatch["units"][1]},
+            "effects_not_named": [f.name for f in diag.found]}
+        doc["verdict"] = _mismatch_text(mismatch, diag.spec.drive.name, diag.found)
+        for item in found:
+            item["notes"].append("not named in the verdict: the drive spec does not describe these data "
+                                 "(see plausibility)")
+    checks = data_findings(meas)
+    data_warning = next((f.text for f in checks if f.kind in ("repeated_targets", "mixed_directions")), None)
     if data_warning:
         doc["signals"]["data_warning"] = data_warning
+    doc["signals"]["checks"] = [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in checks]
+    flags = _data_verdict(checks)
+    if flags:
+        doc["verdict"] = "; ".join([doc["verdict"], *flags]) if doc["verdict"] else "; ".join(flags)
     if info.temperature_present and not math.isnan(info.temperature_time_corr) and \
             abs(info.temperature_time_corr) > 0.95:
         doc["signals"]["warning"] = (f"temperature and time correlate {info.temperature_time_corr:.2f}: a "

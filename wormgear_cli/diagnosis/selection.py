@@ -238,6 +238,10 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             break
         twins = [o for o in step.tested if o != best and step.similar.get((best, o), 0) >= INDISTINGUISHABLE
                  and step.scores[o].p_adj < alpha]
+        # a twin at an order the target spacing folds onto best's explains the data equally well by construction:
+        # best is fitted and named together with it (the report names both); only other twins stop the selection
+        folded = {o for o, _ in alias_notes.get(best, []) if o != remaining[best].order}
+        twins = [o for o in twins if remaining[o].order not in folded]
         if twins:
             stop = Stop(StopReason.AMBIGUOUS, candidates=(best, *twins),
                         correlation=max(step.similar[(best, o)] for o in twins))
@@ -259,13 +263,15 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             say(f"checking {best} on {resamples} resamples of whole runs")
             stab = step.stability(resamples, alpha)
         frac = stab.get(best) if stab else None
+        if frac is not None:  # a folded twin scoring best is the same content
+            frac += sum(v for k, v in stab.items() if k != best and remaining[k].order in folded)
         if frac is not None and frac < MIN_STABILITY:
             rivals = sorted(((v, k) for k, v in stab.items() if k != best and v > 0), reverse=True)
             stop = Stop(StopReason.UNSTABLE, candidate=best, stability=frac,
                         rivals=tuple({"name": k, "share": v} for v, k in rivals))
             break
         near = [(o, step.similar[(best, o)]) for o in step.tested if o != best
-                and step.similar.get((best, o), 0.0) >= NEARLY]
+                and step.similar.get((best, o), 0.0) >= NEARLY and remaining[o].order not in folded]
         cand = remaining[best]
         start = lin.shape[1]
         new_lin = np.hstack([lin, cand.columns])
@@ -326,7 +332,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     try:
         from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
 
-        thermal = float(predicted_centre_distance_um_per_K(spec))
+        thermal = float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
     except (ImportError, AttributeError):
         thermal = None
     return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,

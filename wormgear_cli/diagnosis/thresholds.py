@@ -32,3 +32,10 @@ MIN_SCAN_SHARE = 0.05
 #: tolerance (share left after projecting out the model) an unexplained order needs to be held in the model the
 #: candidates are tested against
 MIN_HELD_TOLERANCE = 0.5
+#: the spec is taken not to describe the data when, at an order its sources produce or in the mean reversal,
+#: spec and data differ by at least this factor ...
+MISMATCH_RATIO = 3.0
+#: ... and by at least this multiple of the repeatability (per point)
+MISMATCH_NOISE = 5.0
+#: a data/spec size ratio within this factor of a unit ratio (e.g. 1/60) is reported as a likely unit mix-up
+UNIT_RATIO_TOLERANCE = 1.5
