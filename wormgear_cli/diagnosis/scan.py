@@ -179,9 +179,19 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
         total = sum(width(c[3]) for c in chunk)
         big = np.empty((n_rows, total))
         j = 0
+        made = {}
         for c in chunk:
-            fill(big[:, j:j + width(c[3])], c[3])
-            j += width(c[3])
+            w = width(c[3])
+            recipe = c[3]
+            if recipe[0] == "order" and recipe[2] and (recipe[1], False) in made:
+                # the differential columns of an order are its common ones times the direction
+                j0 = made[(recipe[1], False)]
+                np.multiply(big[:, j0:j0 + w], d[:, None], out=big[:, j:j + w])
+            else:
+                fill(big[:, j:j + w], recipe)
+            if recipe[0] == "order":
+                made[(recipe[1], recipe[2])] = j
+            j += w
         if key not in chunk_cache:
             means = [cells.means(big[:, j0:j0 + width(c[3])]) if c[0] == "order" and cells.replicated else None
                      for c, j0 in zip(chunk, np.cumsum([0] + [width(c[3]) for c in chunk]))]
