@@ -95,6 +95,11 @@ def annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: 
     return out
 
 
+#: test columns made and reduced at a time (N x CHUNK_COLUMNS float64 at most): 16 = four orders in
+#: both modes; wider chunks were not faster at 1e5 rows and cost 8 bytes per row per column
+CHUNK_COLUMNS = 16
+
+
 def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo, sources, cells: Cells,
                   orders_cache: dict | None = None) -> list[dict]:
     """Significant structure left in the residual: harmonics at physical and low
@@ -171,6 +176,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     # formed (B'B = n I), their Gram matrix, products with r and pass sums follow from B'big
     chunk_cache = orders_cache.setdefault("chunks", {}) if orders_cache is not None else {}
     n_rows = r.shape[0]
+    cell_tester = CellTester(cells, basis, r) if cells.replicated else None
 
     def flush():
         if not chunk:
@@ -193,16 +199,14 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
                 made[(recipe[1], recipe[2])] = j
             j += w
         if key not in chunk_cache:
-            means = [cells.means(big[:, j0:j0 + width(c[3])]) if c[0] == "order" and cells.replicated else None
-                     for c, j0 in zip(chunk, np.cumsum([0] + [width(c[3]) for c in chunk]))]
-            chunk_cache[key] = (big.T @ big, pass_sums(big, groups), np.sum(big * big, axis=0), means)
-        bb, ps_big, norms, means = chunk_cache[key]
+            chunk_cache[key] = (big.T @ big, pass_sums(big, groups), np.einsum("ij,ij->j", big, big))
+        bb, ps_big, norms = chunk_cache[key]
         cb = basis.T @ big if kb else np.zeros((0, total))
         gram = bb - cb.T @ cb / n_rows
         rr = big.T @ r - cb.T @ btr / n_rows
         ps = ps_big - sb @ cb / n_rows
         j = 0
-        for (kind, what, mode, recipe), ocols in zip(chunk, means):
+        for kind, what, mode, recipe in chunk:
             q = width(recipe)
             sl = slice(j, j + q)
             j += q
@@ -227,23 +231,24 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
             if kind == "order" and k2 < q:
                 v = res_rot[:, 0]
                 partial_dirs[(what, mode)] = v / max(float(np.linalg.norm(v)), 1e-300)
+            # the cell-means test now (its C x q means are not kept for every test)
+            cell_test = cell_tester.test(means=cells.means(big[:, sl])) if kind == "order" and cell_tester else None
             results.append((kind, what, mode, cross, kb + np.arange(k2), rot if k2 == q else None,
-                            res_rot if kind != "order" else None, ocols))
+                            res_rot if kind != "order" else None, cell_test))
         chunk.clear()
 
     for test in tests:
         chunk.append(test)
-        if sum(width(c[3]) for c in chunk) >= 48:
+        if sum(width(c[3]) for c in chunk) >= CHUNK_COLUMNS:
             flush()
     flush()
     n = r.shape[0]
-    cell_tester = CellTester(cells, basis, r) if cells.replicated else None
-    for kind, what, mode, cross, idx, full_rot, tcols, ocols in results:
+    for kind, what, mode, cross, idx, full_rot, tcols, cell_test in results:
         if kind == "order":
             vf = fit_at(cross, state.var.gp, state.var.gr)
             w = wald(cross, vf, idx, info=None)
             if cells.replicated:
-                _, df_c, p_c = cell_tester.test(means=ocols)
+                _, df_c, p_c = cell_test
                 if p_c > w.p:
                     w = Wald(w.estimate, w.cov, w.F, w.q, min(w.df, df_c), p_c)
         else:
