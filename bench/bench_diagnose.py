@@ -11,7 +11,8 @@ reports:
 * wall time and CPU time (resource.getrusage: user + system) -- the machine
   may be shared, the CPU time is the steadier figure;
 * peak RSS (ru_maxrss) of the whole process and per row, and the part above
-  the RSS after the imports (numpy, scipy, the package: a fixed cost).
+  the RSS after the imports (numpy, scipy, the package: a fixed cost; read
+  from /proc/self/status, Linux).
 
 With ``--before REV`` the same is run on a checkout of REV (``git worktree
 add`` in a temporary directory, removed afterwards) and the ratio
@@ -39,11 +40,14 @@ import json, resource, sys, time
 from pathlib import Path
 def rss_kb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def current_kb():
+    with open("/proc/self/status") as f:
+        return next(int(l.split()[1]) for l in f if l.startswith("VmRSS:"))
 import numpy, scipy.special, scipy.linalg
 from wormgear_cli.diagnosis import diagnose, report
 from wormgear_cli.measurement import read_measurement
 from wormgear_cli.spec import load_spec
-base = rss_kb()
+base = current_kb()
 spec = load_spec(Path(sys.argv[2]) / "configs" / "mch50.toml")
 t0 = time.perf_counter()
 meas = read_measurement(Path(sys.argv[1]))
@@ -62,6 +66,13 @@ print(json.dumps({"rows": len(meas), "read_s": t_read, "wall_s": wall, "cpu_s": 
 
 
 def make_csv(rows: int, path: Path) -> None:
+    """Write the measurement in a subprocess: this process stays small, so the children it forks
+    start with a small ru_maxrss (Linux carries the high-water mark across fork and exec)."""
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--make", str(rows), str(path)], check=True,
+                   cwd=ROOT)
+
+
+def _make_csv(rows: int, path: Path) -> None:
     from wormgear_cli.spec import load_spec
     from wormgear_cli.synth import Noise, Plan, Programme, format_csv, synthesize
 
@@ -101,7 +112,11 @@ def main() -> None:
     ap.add_argument("--rows", default="100000,1000000", help="comma-separated row counts")
     ap.add_argument("--repeat", type=int, default=1, help="runs per size (median time, largest peak)")
     ap.add_argument("--before", default=None, help="git revision to compare against (checked out in a temp dir)")
+    ap.add_argument("--make", nargs=2, metavar=("ROWS", "CSV"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.make:
+        _make_csv(int(args.make[0]), Path(args.make[1]))
+        return
     sizes = [int(float(s)) for s in args.rows.split(",")]
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
