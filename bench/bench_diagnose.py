@@ -1,66 +1,150 @@
-"""Speed of `wormgear diagnose` on 100 000 measured rows (the issue's bar: under 5 s).
+"""Speed and peak memory of `wormgear diagnose` at 1e5 and 1e6 measured rows (issue 10:
+1e5 rows under 2.5 s, peak memory under 1 KB per row).
 
-Makes a dense MCH50 measurement with synth (10 000 angles per pass, 5 runs
-forward and back = 100 000 rows, random phases, a warm-up with
-thermal_backlash, white and run noise), writes it to a temporary CSV, then
-times (a) the core stages in-process: reading the CSV, ``diagnose`` and the
-report, and (b) the whole command `wormgear diagnose DRIVE DATA --format
-json` as a subprocess (start-up included).  Prints the median of N repeats.
-Usage: python bench/bench_diagnose.py [N]
+Makes a dense MCH50 measurement with synth (``rows / 10`` angles per pass, 5
+runs forward and back, random phases, a warm-up with thermal_backlash, white
+and run noise), writes it to a temporary CSV, then runs each measurement in a
+fresh subprocess (so the peak RSS is that run's alone) which reads the CSV and
+times ``diagnose`` + ``report`` (the core; CSV reading reported apart) and
+reports:
+
+* wall time and CPU time (resource.getrusage: user + system) -- the machine
+  may be shared, the CPU time is the steadier figure;
+* peak RSS (ru_maxrss) of the whole process and per row, and the part above
+  the RSS after the imports (numpy, scipy, the package: a fixed cost; read
+  from /proc/self/status, Linux).
+
+With ``--before REV`` the same is run on a checkout of REV (``git worktree
+add`` in a temporary directory, removed afterwards) and the ratio
+before/after is printed: the plain alternative is the code as it was.
+
+Usage: python bench/bench_diagnose.py [--rows 100000,1000000] [--repeat N] [--before REV]
 """
 
 from __future__ import annotations
 
-import shutil
+import argparse
+import json
+import os
 import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
+#: run in a fresh interpreter with PYTHONPATH at the tree under test: argv = csv path
+CHILD = r"""
+import json, resource, sys, time
+from pathlib import Path
+def rss_kb():
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def current_kb():
+    with open("/proc/self/status") as f:
+        return next(int(l.split()[1]) for l in f if l.startswith("VmRSS:"))
+import numpy, scipy.special, scipy.linalg
+from wormgear_cli.diagnosis import diagnose, report
+from wormgear_cli.measurement import read_measurement
+from wormgear_cli.spec import load_spec
+base = current_kb()
+spec = load_spec(Path(sys.argv[2]) / "configs" / "mch50.toml")
+t0 = time.perf_counter()
+meas = read_measurement(Path(sys.argv[1]))
+t_read = time.perf_counter() - t0
+after_read = rss_kb()
+r0 = resource.getrusage(resource.RUSAGE_SELF)
+t0 = time.perf_counter()
+doc = report(diagnose(spec, meas))
+wall = time.perf_counter() - t0
+r1 = resource.getrusage(resource.RUSAGE_SELF)
+cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+print(json.dumps({"rows": len(meas), "read_s": t_read, "wall_s": wall, "cpu_s": cpu, "base_kb": base,
+                  "after_read_kb": after_read, "peak_kb": rss_kb(), "verdict": doc["verdict"],
+                  "gap_after": doc["gap_after"]["rms_arcsec"]}))
+"""
 
-def main() -> None:
-    from wormgear_cli.diagnosis import diagnose, report
-    from wormgear_cli.measurement import read_measurement
+
+def make_csv(rows: int, path: Path) -> None:
+    """Write the measurement in a subprocess: this process stays small, so the children it forks
+    start with a small ru_maxrss (Linux carries the high-water mark across fork and exec)."""
+    subprocess.run([sys.executable, str(Path(__file__).resolve()), "--make", str(rows), str(path)], check=True,
+                   cwd=ROOT)
+
+
+def _make_csv(rows: int, path: Path) -> None:
     from wormgear_cli.spec import load_spec
     from wormgear_cli.synth import Noise, Plan, Programme, format_csv, synthesize
 
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 3
     spec = load_spec(ROOT / "configs" / "mch50.toml")
-    syn = synthesize(spec, Plan(kind="dense", points=10_000, runs=5, dwell_s=0.1),
+    syn = synthesize(spec, Plan(kind="dense", points=rows // 10, runs=5, dwell_s=0.1),
                      effects={"thermal_backlash": {}}, noise=Noise(0.3, 0.2), seed=1, random_phases=True,
                      temperature=Programme("warmup", (20.0, 32.0, 3000.0)))
+    path.write_text(format_csv(syn))
+
+
+def measure(tree: Path, data: Path, repeat: int) -> dict:
+    """Median wall/CPU of ``repeat`` fresh runs of the tree's diagnose on ``data``; largest peak RSS."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    runs = []
+    for _ in range(repeat):
+        out = subprocess.run([sys.executable, "-c", CHILD, str(data), str(tree)], check=True, env=env,
+                             capture_output=True, text=True, cwd=tree).stdout
+        runs.append(json.loads(out.strip().splitlines()[-1]))
+    res = dict(runs[0])
+    for key in ("wall_s", "cpu_s", "read_s"):
+        res[key] = statistics.median(r[key] for r in runs)
+    res["peak_kb"] = max(r["peak_kb"] for r in runs)
+    return res
+
+
+def line(label: str, r: dict) -> str:
+    rows = r["rows"]
+    peak = r["peak_kb"] * 1024
+    extra = (r["peak_kb"] - r["base_kb"]) * 1024
+    return (f"{label:<7} diagnose+report {r['wall_s']:7.2f} s wall {r['cpu_s']:7.2f} s CPU | read {r['read_s']:5.2f} s"
+            f" | peak RSS {peak / 2**20:7.0f} MiB = {peak / rows:6.0f} B/row ({extra / rows:5.0f} B/row above "
+            f"imports)")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rows", default="100000,1000000", help="comma-separated row counts")
+    ap.add_argument("--repeat", type=int, default=1, help="runs per size (median time, largest peak)")
+    ap.add_argument("--before", default=None, help="git revision to compare against (checked out in a temp dir)")
+    ap.add_argument("--make", nargs=2, metavar=("ROWS", "CSV"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.make:
+        _make_csv(int(args.make[0]), Path(args.make[1]))
+        return
+    sizes = [int(float(s)) for s in args.rows.split(",")]
     with tempfile.TemporaryDirectory() as tmp:
-        data = Path(tmp) / "dense.csv"
-        data.write_text(format_csv(syn))
-        stages = {"read": [], "diagnose": [], "report": [], "core total": []}
-        for _ in range(n):
-            t0 = time.perf_counter()
-            meas = read_measurement(data)
-            t1 = time.perf_counter()
-            diag = diagnose(spec, meas)
-            t2 = time.perf_counter()
-            doc = report(diag)
-            t3 = time.perf_counter()
-            for key, v in (("read", t1 - t0), ("diagnose", t2 - t1), ("report", t3 - t2), ("core total", t3 - t0)):
-                stages[key].append(v)
-        exe = shutil.which("wormgear")
-        cmd = ([exe] if exe else [sys.executable, "-m", "wormgear_cli"]) + [
-            "diagnose", str(ROOT / "configs" / "mch50.toml"), str(data), "--format", "json"]
-        walls = []
-        for _ in range(n):
-            t0 = time.perf_counter()
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, cwd=ROOT)
-            walls.append(time.perf_counter() - t0)
-    print(f"rows: {len(meas)}, repeats: {n} (median)")
-    for key, values in stages.items():
-        print(f"{key:<11} {statistics.median(values):6.2f} s")
-    print(f"wormgear diagnose --format json (subprocess, start-up included) {statistics.median(walls):6.2f} s")
-    print(f"verdict: {doc['verdict']}; RMS gap {doc['gap_before']['rms_arcsec']:.3f} -> "
-          f"{doc['gap_after']['rms_arcsec']:.3f} arcsec")
+        tmp = Path(tmp)
+        before = None
+        if args.before:
+            before = tmp / "before"
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(before), args.before],
+                           check=True, capture_output=True)
+        try:
+            for rows in sizes:
+                data = tmp / f"dense_{rows}.csv"
+                make_csv(rows, data)
+                after = measure(ROOT, data, args.repeat)
+                print(f"rows: {after['rows']}  (verdict: {after['verdict']}; RMS gap after "
+                      f"{after['gap_after']:.3f} arcsec)")
+                print(line("now", after))
+                if before is not None:
+                    old = measure(before, data, args.repeat)
+                    print(line(args.before[:7], old))
+                    print(f"ratio before/now: wall {old['wall_s'] / after['wall_s']:.2f}x, CPU "
+                          f"{old['cpu_s'] / after['cpu_s']:.2f}x, peak RSS {old['peak_kb'] / after['peak_kb']:.2f}x"
+                          + ("" if old["verdict"] == after["verdict"] else "  (VERDICTS DIFFER)"))
+                data.unlink()
+        finally:
+            if before is not None:
+                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(before)],
+                               capture_output=True)
+    print("issue 10 bars: 1e5 rows under 2.5 s; peak memory under 1024 B/row")
 
 
 if __name__ == "__main__":

@@ -42,6 +42,8 @@ class Groups:
         starts = np.searchsorted(self.pass_id[order], np.arange(self.pass_size.shape[0]))
         object.__setattr__(self, "order", order)
         object.__setattr__(self, "starts", starts)
+        # rows already grouped by pass (the usual file): pass sums need no gathered copy
+        object.__setattr__(self, "in_order", bool(np.all(order == np.arange(order.shape[0]))))
         ind = np.zeros((self.runs, self.pass_size.shape[0]))
         ind[self.pass_run, np.arange(self.pass_size.shape[0])] = 1.0
         object.__setattr__(self, "run_indicator", ind)
@@ -101,7 +103,7 @@ def pass_sums(values: np.ndarray, groups: Groups) -> np.ndarray:
         return np.bincount(groups.pass_id, weights=values, minlength=groups.passes)
     if values.shape[1] == 0:
         return np.zeros((groups.passes, 0))
-    return np.add.reduceat(values[groups.order], groups.starts, axis=0)
+    return np.add.reduceat(values if groups.in_order else values[groups.order], groups.starts, axis=0)
 
 
 @dataclass(frozen=True)

@@ -95,6 +95,11 @@ def annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: 
     return out
 
 
+#: test columns made and reduced at a time (N x CHUNK_COLUMNS float64 at most): 16 = four orders in
+#: both modes; wider chunks were not faster at 1e5 rows and cost 8 bytes per row per column
+CHUNK_COLUMNS = 16
+
+
 def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo, sources, cells: Cells,
                   orders_cache: dict | None = None) -> list[dict]:
     """Significant structure left in the residual: harmonics at physical and low
@@ -123,24 +128,40 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
         keep, _ = unaliased_orders(theta, orders)
         if orders_cache is not None:
             orders_cache["orders"] = keep
+    # test columns are made a chunk at a time (never all N x 2K at once) from these recipes
     tests = []
     for o in keep:
-        c = np.column_stack([np.cos(o * theta), np.sin(o * theta)])
-        tests.append(("order", o, "common", c))
+        tests.append(("order", o, "common", ("order", o, False)))
         if both:
-            tests.append(("order", o, "differential", c * d[:, None]))
+            tests.append(("order", o, "differential", ("order", o, True)))
     signals = [("temperature_C", sig.temperature, info.temperature_range >= MIN_TEMPERATURE_RANGE, "K"),
                ("load_Nm", sig.load, info.load_range > 0, "N m"),
                ("time_s", sig.time, info.time_range > 0, "s")]
     for name, values, varies, unit in signals:
         if not varies:
             continue
-        col = (values - np.mean(values))[:, None]
-        tests.append(("trend", name, "common", col))
+        tests.append(("trend", name, "common", ("trend", values, False)))
         if both:
-            tests.append(("trend", name, "differential", col * d[:, None]))
+            tests.append(("trend", name, "differential", ("trend", values, True)))
     if both:
-        tests.append(("reversal", None, "differential", d[:, None].astype(float)))
+        tests.append(("reversal", None, "differential", ("reversal", None, True)))
+
+    def width(recipe):
+        return 2 if recipe[0] == "order" else 1
+
+    def fill(out, recipe):
+        kind, what, diff = recipe
+        if kind == "order":
+            np.multiply(theta, what, out=out[:, 0])
+            np.sin(out[:, 0], out=out[:, 1])
+            np.cos(out[:, 0], out=out[:, 0])
+        elif kind == "trend":
+            np.subtract(what, np.mean(what), out=out[:, 0])
+        else:
+            out[:, 0] = d
+        if diff and kind != "reversal":
+            out *= d[:, None]
+
     m = len(tests)
     out = []
     kb = basis.shape[1]
@@ -150,19 +171,43 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     chunk: list = []
     partial_dirs: dict = {}
 
+    # per chunk of test columns: what depends on the angles only (Gram matrix, pass sums, cell means) is
+    # kept between the scans of one measurement; the residualised columns res = big - B (B'big) / n are never
+    # formed (B'B = n I), their Gram matrix, products with r and pass sums follow from B'big
+    chunk_cache = orders_cache.setdefault("chunks", {}) if orders_cache is not None else {}
+    n_rows = r.shape[0]
+    cell_tester = CellTester(cells, basis, r) if cells.replicated else None
+
     def flush():
-        # residualise a block of test columns on the model at once, then test each set
         if not chunk:
             return
-        big = np.hstack([c[3] for c in chunk])
-        res = residualise(basis, big)
-        gram = res.T @ res
-        rr = res.T @ r
-        ps = pass_sums(res, groups)
-        norms = np.sum(big * big, axis=0)
+        key = tuple((c[0], c[1], c[2]) for c in chunk)
+        total = sum(width(c[3]) for c in chunk)
+        big = np.empty((n_rows, total))
         j = 0
-        for kind, what, mode, cols in chunk:
-            q = cols.shape[1]
+        made = {}
+        for c in chunk:
+            w = width(c[3])
+            recipe = c[3]
+            if recipe[0] == "order" and recipe[2] and (recipe[1], False) in made:
+                # the differential columns of an order are its common ones times the direction
+                j0 = made[(recipe[1], False)]
+                np.multiply(big[:, j0:j0 + w], d[:, None], out=big[:, j:j + w])
+            else:
+                fill(big[:, j:j + w], recipe)
+            if recipe[0] == "order":
+                made[(recipe[1], recipe[2])] = j
+            j += w
+        if key not in chunk_cache:
+            chunk_cache[key] = (big.T @ big, pass_sums(big, groups), np.einsum("ij,ij->j", big, big))
+        bb, ps_big, norms = chunk_cache[key]
+        cb = basis.T @ big if kb else np.zeros((0, total))
+        gram = bb - cb.T @ cb / n_rows
+        rr = big.T @ r - cb.T @ btr / n_rows
+        ps = ps_big - sb @ cb / n_rows
+        j = 0
+        for kind, what, mode, recipe in chunk:
+            q = width(recipe)
             sl = slice(j, j + q)
             j += q
             g = gram[sl, sl]
@@ -180,27 +225,30 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
             xtx[kb:, kb:] = rot.T @ g @ rot
             cross = Cross(xtx, np.concatenate([btr, rot.T @ rr[sl]]), float(r @ r), np.hstack([sb, ps[:, sl] @ rot]),
                           sr, groups)
+            res_rot = None
+            if kind != "order" or k2 < q:
+                res_rot = (big[:, sl] - basis @ cb[:, sl] / n_rows) @ rot if kb else big[:, sl] @ rot
             if kind == "order" and k2 < q:
-                v = (res[:, sl] @ rot)[:, 0]
+                v = res_rot[:, 0]
                 partial_dirs[(what, mode)] = v / max(float(np.linalg.norm(v)), 1e-300)
+            # the cell-means test now (its C x q means are not kept for every test)
+            cell_test = cell_tester.test(means=cells.means(big[:, sl])) if kind == "order" and cell_tester else None
             results.append((kind, what, mode, cross, kb + np.arange(k2), rot if k2 == q else None,
-                            res[:, sl] @ rot if kind != "order"
-                            else None, cells.means(cols) if kind == "order" and cells.replicated else None))
+                            res_rot if kind != "order" else None, cell_test))
         chunk.clear()
 
     for test in tests:
         chunk.append(test)
-        if sum(c[3].shape[1] for c in chunk) >= 48:
+        if sum(width(c[3]) for c in chunk) >= CHUNK_COLUMNS:
             flush()
     flush()
     n = r.shape[0]
-    cell_tester = CellTester(cells, basis, r) if cells.replicated else None
-    for kind, what, mode, cross, idx, full_rot, tcols, ocols in results:
+    for kind, what, mode, cross, idx, full_rot, tcols, cell_test in results:
         if kind == "order":
             vf = fit_at(cross, state.var.gp, state.var.gr)
             w = wald(cross, vf, idx, info=None)
             if cells.replicated:
-                _, df_c, p_c = cell_tester.test(means=ocols)
+                _, df_c, p_c = cell_test
                 if p_c > w.p:
                     w = Wald(w.estimate, w.cov, w.F, w.q, min(w.df, df_c), p_c)
         else:

@@ -208,6 +208,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
         def nonlinear(cand, current=current, current_lin=current_lin):
             return same_order_test(ctx, current, current_lin, cand, cells)
 
+        step = None  # the previous step's design (N x columns) freed before the next is built
         step = Step(state, remaining, groups, info, lin_names, sources, alias_notes, alpha, cells,
                     nonlinear if fit_phases else None, few_runs=few_runs)
         if step.better_null is not None and redo < 3:
@@ -294,6 +295,9 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
         accepted.append(Accepted(best, cand, sc, frac, len(steps),
                                  (prev_rss - new_rss) / rss_before if rss_before else 0.0, tuple(near), stab_note))
     after = state
+    # the last step's design (N x columns) is not needed any more: keep its scores only
+    last_slices, last_scores = step.slices, step.scores
+    step = None
     found = final_inference(after, accepted, lin_names, groups, fittable, fit_phases, fixed)
     for f in found:
         final_scores[f.name] = Score(f.name, ScoreStatus.NAMED)
@@ -305,15 +309,16 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             same_order_range(f, ctx, after, lin, sl, cand, g)
     likely = None
     if stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.MAX_EFFECTS) \
-            and stop.best in remaining and stop.best in step.slices:
+            and stop.best in remaining and stop.best in last_slices:
         best = stop.best
-        sc = step.scores[best]
+        sc = last_scores[best]
         if sc.p_adj < min(NEAR_FACTOR * alpha, 0.5) or stop.reason is StopReason.MAX_EFFECTS:
             say(f"checking whether {best} is a likely further effect")
             likely = likely_effect(ctx, after, lin, lin_names, accepted, found,
                                     best, remaining[best], sc, fittable, fit_phases, len(steps), fixed)
             if likely is not None:
                 final_scores[best].status = ScoreStatus.LIKELY
+    cands = remaining = None  # the candidates' columns are not needed any more
     say("scanning the residual for structure")
     # what is left, tested with the held structure in the model, plus the held structure itself (as found)
     unexplained = scan_residual(after, sig, groups, g, alpha, info, sources, cells, scan_orders)
