@@ -20,6 +20,25 @@ from wormgear_cli.tolerance.engine import Block, Setup, Summary
 from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.tolerance.metrics import METRIC_SETS
 
+#: longest line accepted in a samples CSV (a row holds a few dozen numbers; bounds the read of
+#: a file with no line ends, such as /dev/zero)
+MAX_LINE_BYTES = 1 << 16
+
+
+def _bounded_lines(fh, name: str):
+    """The lines of ``fh``, each at most :data:`MAX_LINE_BYTES` long (DataError beyond)."""
+    number = 0
+    while True:
+        line = fh.readline(MAX_LINE_BYTES + 1)
+        number += 1
+        if not line:
+            return
+        if len(line) > MAX_LINE_BYTES or "\x00" in line:
+            raise DataError(f"{name}: line {number}: binary or longer than {MAX_LINE_BYTES} characters; not a "
+                            "samples CSV of wormgear tolerance --format csv")
+        yield line
+
+
 def csv_header(s: Setup) -> str:
     return ",".join(("sample", *s.columns, *s.metrics)) + "\n"
 
@@ -35,10 +54,20 @@ def csv_rows(s: Setup, block: Block) -> str:
 def read_header(path: Path) -> tuple[tuple[str, ...], str]:
     """The varied columns of a samples CSV and its metric set (a key of METRIC_SETS)."""
     name = str(path)
-    if not Path(path).is_file():
-        raise DataError(f"{name}: file not found, expected a samples CSV of wormgear tolerance --format csv")
-    with open(path, encoding="utf-8", newline="") as fh:
-        header = fh.readline().strip()
+    expected = "expected a samples CSV of wormgear tolerance --format csv"
+    if Path(path).is_dir():
+        raise DataError(f"{name}: is a directory, {expected}")
+    if not Path(path).exists():
+        raise DataError(f"{name}: file not found, {expected}")
+    with open(path, "rb") as fh:
+        raw = fh.readline(MAX_LINE_BYTES + 1)  # bounded: /dev/zero or a binary file has no end of line
+    if len(raw) > MAX_LINE_BYTES or b"\x00" in raw:
+        raise DataError(f"{name}: line 1: binary or not a CSV line (over {MAX_LINE_BYTES} bytes or a NUL byte), "
+                        f"{expected}")
+    try:
+        header = raw.decode("utf-8").strip()
+    except UnicodeDecodeError:
+        raise DataError(f"{name}: line 1: not UTF-8 text, {expected}") from None
     cols = tuple(header.split(","))
     if not cols or cols[0] != "sample":
         raise DataError(f"{name}: line 1: expected a header starting with \"sample\" "
@@ -68,8 +97,12 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
     expected_next = None
     line_no = 1
     with open(path, encoding="utf-8", newline="") as fh:
-        fh.readline()
-        first_line = fh.readline()
+        source = _bounded_lines(fh, name)
+        try:
+            next(source)
+            first_line = next(source, "")
+        except UnicodeDecodeError:
+            raise DataError(f"{name}: not UTF-8 text, expected a samples CSV") from None
         if not first_line.strip():
             raise DataError(f"{name}: no sample rows after the header")
         try:
@@ -81,7 +114,10 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
         pending = [first_line]
         size = BLOCK - first % BLOCK
         while True:
-            lines = pending + list(itertools.islice(fh, size - len(pending)))
+            try:
+                lines = pending + list(itertools.islice(source, size - len(pending)))
+            except UnicodeDecodeError:
+                raise DataError(f"{name}: after line {line_no}: not UTF-8 text, expected a samples CSV") from None
             pending, size = [], BLOCK
             if not lines:
                 break
