@@ -15,7 +15,6 @@ from typing import Annotated, Optional
 
 import typer
 
-from wormgear_cli.measurement import ReadOptions
 
 
 class ErrorUnit(str, Enum):
@@ -42,9 +41,11 @@ AngleUnitOption = Annotated[Optional[InputAngleUnit], typer.Option(
     case_sensitive=False, show_default=False)]
 
 
-def read_options(column_map: Optional[list[str]], error_unit=None, angle_unit=None) -> ReadOptions:
-    """:class:`ReadOptions` from the option values; UsageError (one line per bad ``--map``) otherwise."""
+def read_options(column_map: Optional[list[str]], error_unit=None, angle_unit=None):
+    """:class:`~wormgear_cli.measurement.ReadOptions` from the option values; UsageError (one line
+    per bad ``--map``) otherwise.  (The measurement module is imported here, not at start-up.)"""
     from wormgear_cli.errors import UsageError
+    from wormgear_cli.measurement import ReadOptions
 
     pairs = []
     problems = []
