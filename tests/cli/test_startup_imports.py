@@ -12,7 +12,8 @@ import pytest
 
 from tests.conftest import MCH50, ROOT
 
-HEAVY = ("scipy", "matplotlib", "wormgear_cli.diagnosis", "wormgear_cli.tolerance", "statsmodels")
+HEAVY = ("scipy", "matplotlib", "wormgear_cli.diagnosis", "wormgear_cli.tolerance", "statsmodels",
+         "wormgear_cli.measurement", "wormgear_cli.api")
 
 PROBE = """
 import json, sys
