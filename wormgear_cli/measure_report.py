@@ -161,21 +161,28 @@ def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list
     mixed = False
     if "direction" not in m.present:
         key = m.run.astype(np.int64) * (int(target_index.max()) + 1) + target_index.astype(np.int64)
-        if np.unique(key).shape[0] != n and "run" not in m.present:
-            out.append(Finding(
-                "repeated_targets",
-                "no direction column: every row is taken as forward, yet the block of rows visits the same target "
-                "more than once: if some visits were made in reverse, add a direction column (+1 forward, -1 "
-                "reverse); if they are repeated runs, add a run column", True,
-                "targets repeat without direction or run column"))
-        elif np.unique(key).shape[0] != n:
+        if np.unique(key).shape[0] != n:
+            # forward and reverse visits cannot be told apart: the one-direction figures would mix them
             mixed = True
-            out.append(Finding(
-                "mixed_directions",
-                "no direction column: every row is taken as forward, yet one run visits the same target more "
-                "than once: if some visits were made in reverse, add a direction column (+1 forward, -1 reverse); "
-                "the one-direction figures (s, R, A, E) are withheld",
-                True, "targets repeat within a run without a direction column: one-direction figures withheld"))
+            read = {cell for _, cell in m.columns}
+            unread = [h for h in m.header if h and h not in read]
+            hint = (f"; columns not read: {', '.join(unread)} (map one with --map direction=HEADER or "
+                    "--map run=HEADER)") if unread else ""
+            if "run" not in m.present:
+                out.append(Finding(
+                    "repeated_targets",
+                    "no direction or run column: every row is taken as forward, yet the rows visit the same target "
+                    "more than once, so forward and reverse visits cannot be told apart: add a direction column "
+                    "(+1 forward, -1 reverse) or, for repeated one-direction runs, a run column; the one-direction "
+                    f"figures (s, R, A, E) are withheld{hint}", True,
+                    "targets repeat without direction or run column: one-direction figures withheld"))
+            else:
+                out.append(Finding(
+                    "mixed_directions",
+                    "no direction column: every row is taken as forward, yet one run visits the same target more "
+                    "than once: if some visits were made in reverse, add a direction column (+1 forward, -1 "
+                    f"reverse); the one-direction figures (s, R, A, E) are withheld{hint}",
+                    True, "targets repeat within a run without a direction column: one-direction figures withheld"))
     dups = duplicate_rows(m, repeated)
     if dups:
         out.append(Finding("duplicates", f"{dups} row{'s are exact duplicates' if dups > 1 else ' is an exact duplicate'}"

@@ -138,9 +138,11 @@ def test_output_is_deterministic_and_written_atomically(runner, tmp_path):
 
 
 def test_target_grouping_tolerance_and_one_direction_only(runner, tmp_path):
-    # 10 and 10.0000001 deg (1e-7 deg apart) are one target; no reverse rows at all
+    # 10 and 10.0000001 deg (1e-7 deg apart) are one target; no reverse rows at all (two forward runs;
+    # without the run column the repeated visits could be reverse ones, and the figures are withheld:
+    # test_repeated_targets_without_direction_or_run_withhold_the_one_direction_figures)
     path = tmp_path / "fwd.csv"
-    path.write_text("angle_deg,error_arcsec\n10,1\n10.0000001,3\n50,2\n50,2\n")
+    path.write_text("angle_deg,error_arcsec,run\n10,1,1\n10.0000001,3,2\n50,2,1\n50,2,2\n")
     doc = json.loads(invoke(runner, path, "-f", "json").stdout)
     assert doc["targets"] == 2
     assert doc["per_target"][0]["n_forward"] == 2
@@ -151,8 +153,7 @@ def test_target_grouping_tolerance_and_one_direction_only(runner, tmp_path):
     assert iso["A_forward"] == pytest.approx(4 * math.sqrt(2))
     assert iso["E_forward"] == pytest.approx(0.0)
     assert any("no reverse" in n for n in doc["notes"])
-    # repeated visits without a run or direction column: warned, figures kept (they may be repeated runs)
-    assert any("visits the same target more than once" in w for w in doc["warnings"])
+    assert not any("same target more than once" in w for w in doc["warnings"])  # runs say it: no mix-up
 
 
 def test_single_run_leaves_s_r_and_a_undefined(runner, tmp_path):
@@ -319,3 +320,20 @@ def test_absurd_orders_are_refused(runner):
     assert r.exit_code == 2
     assert r.stderr == ("error: --orders: 1e9 is above 100000 cycles per revolution, finer than angle "
                         "readings resolve\n")
+
+
+def test_repeated_targets_without_direction_or_run_withhold_the_one_direction_figures(runner, tmp_path):
+    """Up/down visits flattened into one block with neither column: forward and reverse cannot be
+    told apart, so s, R, A, E are withheld (not a forward repeatability from mixed visits), and the
+    unread header cells are named for --map."""
+    path = tmp_path / "flat.csv"
+    # one up/down run over 3 targets, +5 arcsec reversal: 0, 10, 20 up, then 20, 10, 0 down
+    path.write_text("Position,Deviation,Richtung\n0,5,1\n10,6,1\n20,5,1\n20,0,-1\n10,1,-1\n0,0,-1\n")
+    result = invoke(runner, path, "--map", "angle_deg=Position", "--map", "error_arcsec=Deviation", "-f", "json")
+    assert result.exit_code == 0
+    doc = json.loads(result.stdout)
+    assert doc["iso230_2"]["R"] is None and doc["iso230_2"]["A"] is None and doc["iso230_2"]["E"] is None
+    assert "columns not read: Richtung" in result.stderr
+    mapped = invoke(runner, path, "--map", "angle_deg=Position", "--map", "error_arcsec=Deviation",
+                    "--map", "direction=Richtung", "-f", "json")
+    assert json.loads(mapped.stdout)["iso230_2"]["B"] == pytest.approx(5.0)  # mean up - mean down at each target
