@@ -73,9 +73,9 @@ def _budget_tables(r: dict, unit: str) -> list:
     note = escape(f"total_with_budget: linear sum {a(t['transmission_error_linear'])}, root-sum-square "
                   f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
                   "(docs/budget.md); the paper's total above is unchanged")
-    vt = Table(title="values used [um]", title_justify="left")
-    for col in ("key", "value", "origin"):
-        vt.add_column(col, justify="right" if col == "value" else "left")
+    vt = Table(title="values used", title_justify="left")
+    for col in ("key", escape("value [um]"), "origin"):
+        vt.add_column(col, justify="right" if col.startswith("value") else "left")
     for v in r["values_used"]:
         vt.add_row(v["key"], f"{v['value_um']:g}", v["origin"])
     return [bt, note, vt]

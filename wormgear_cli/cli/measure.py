@@ -68,7 +68,7 @@ def measure(
 
     Example: wormgear measure test.csv --drive configs/mch50.toml --format json
 
-    Example: wormgear measure export.csv --map angle_deg=Position --map error_arcsec=Abweichung
+    Example: wormgear measure export.csv --map angle_deg="Position (deg)" --map error_arcsec=Deviation
     """
     from wormgear_cli.measure_report import measure as run, parse_orders, report
 
