@@ -53,3 +53,52 @@ def test_bad_utf8_after_valid_rows(runner, samples_csv):
 
 def test_the_valid_file_still_summarizes(runner, samples_csv):
     assert _summarize(runner, samples_csv).exit_code == 0
+
+
+def _parts(runner, tmp_path, n=400, k=4):
+    parts = []
+    for i in range(1, k + 1):
+        r = runner.invoke(app, [*ARGS[:2], "--samples", str(n), "--metrics", "paper", "--format", "csv",
+                                "--shard", f"{i}/{k}"])
+        assert r.exit_code == 0
+        parts.append(r.stdout.splitlines(keepends=True))
+    return parts
+
+
+def _joined(path, parts):
+    path.write_text("".join(parts[0][:1] + [line for p in parts for line in p[1:]]))
+    return path
+
+
+def test_a_missing_last_or_first_part_is_refused(runner, tmp_path):
+    parts = _parts(runner, tmp_path)
+    args = [*ARGS[:2], "--samples", "400", "--metrics", "paper", "--summarize"]
+    r = runner.invoke(app, [*args, str(_joined(tmp_path / "three.csv", parts[:3]))])
+    assert r.exit_code == 2 and "300 samples (0 to 299), expected 400" in r.stderr
+    r = runner.invoke(app, [*args, str(_joined(tmp_path / "nofirst.csv", parts[1:]))])
+    assert r.exit_code == 2 and "the samples start at 100, expected 0" in r.stderr
+    assert runner.invoke(app, [*args, str(_joined(tmp_path / "all.csv", parts))]).exit_code == 0
+
+
+@pytest.mark.parametrize("bad", ["nan", "inf", "1e400"])
+def test_a_non_finite_number_names_its_line_and_column(runner, samples_csv, bad):
+    lines = samples_csv.read_text().splitlines()
+    cells = lines[2].split(",")
+    cells[-1] = bad
+    lines[2] = ",".join(cells)
+    samples_csv.write_text("\n".join(lines) + "\n")
+    r = _summarize(runner, samples_csv)
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: {samples_csv}: line 3: total_backlash: expected a finite number")
+
+
+def test_a_byte_order_mark_is_tolerated(runner, samples_csv):
+    samples_csv.write_bytes(b"\xef\xbb\xbf" + samples_csv.read_bytes())
+    assert _summarize(runner, samples_csv).exit_code == 0
+
+
+def test_an_enormous_cell_is_clipped_in_the_message(runner, samples_csv):
+    header = samples_csv.read_text().splitlines()[0]
+    samples_csv.write_text(header + "\n" + "1" * 60_000 + "\n")
+    r = _summarize(runner, samples_csv)
+    assert r.exit_code == 2 and len(r.stderr) < 400

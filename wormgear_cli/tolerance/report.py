@@ -25,6 +25,11 @@ from wormgear_cli.tolerance.metrics import METRIC_SETS
 MAX_LINE_BYTES = 1 << 16
 
 
+def _clip(text: str, most: int = 60) -> str:
+    """``text`` cut to ``most`` characters for a message (a cell may be megabytes long)."""
+    return text if len(text) <= most else text[:most] + f"... ({len(text)} characters)"
+
+
 def _bounded_lines(fh, name: str):
     """The lines of ``fh``, each at most :data:`MAX_LINE_BYTES` long (DataError beyond)."""
     number = 0
@@ -65,7 +70,7 @@ def read_header(path: Path) -> tuple[tuple[str, ...], str]:
         raise DataError(f"{name}: line 1: binary or not a CSV line (over {MAX_LINE_BYTES} bytes or a NUL byte), "
                         f"{expected}")
     try:
-        header = raw.decode("utf-8").strip()
+        header = raw.decode("utf-8-sig").strip()  # a byte-order mark (spreadsheets) is tolerated
     except UnicodeDecodeError:
         raise DataError(f"{name}: line 1: not UTF-8 text, {expected}") from None
     cols = tuple(header.split(","))
@@ -96,7 +101,7 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
     width = 1 + len(s.columns) + len(s.metrics)
     expected_next = None
     line_no = 1
-    with open(path, encoding="utf-8", newline="") as fh:
+    with open(path, encoding="utf-8-sig", newline="") as fh:
         source = _bounded_lines(fh, name)
         try:
             next(source)
@@ -108,8 +113,11 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
         try:
             first = int(first_line.split(",", 1)[0])
         except ValueError:
-            raise DataError(f"{name}: line 2: expected a sample number first, got {first_line.split(',', 1)[0]!r}") \
-                from None
+            raise DataError(f"{name}: line 2: expected a sample number first, got "
+                            f"{_clip(first_line.split(',', 1)[0])!r}") from None
+        if first != s.start:
+            raise DataError(f"{name}: line 2: the samples start at {first}, expected {s.start}: the first part "
+                            "is missing (concatenate every --shard part, in order)")
         # chunks end at the random-stream block boundaries, as the run's blocks do (same sums, same bytes)
         pending = [first_line]
         size = BLOCK - first % BLOCK
@@ -125,7 +133,13 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
                 data = np.loadtxt(lines, delimiter=",", dtype=float, ndmin=2)
             except ValueError as exc:
                 raise DataError(f"{name}: lines {line_no + 1}-{line_no + len(lines)}: not {width} numbers per row "
-                                f"({str(exc).splitlines()[0]})") from None
+                                f"({_clip(str(exc).splitlines()[0])})") from None
+            finite = np.isfinite(data)
+            if not finite.all():
+                row, col = np.argwhere(~finite)[0]
+                what = ("sample", *s.columns, *s.metrics)[col] if col < width else f"column {col + 1}"
+                raise DataError(f"{name}: line {line_no + 1 + int(row)}: {what}: expected a finite number, got "
+                                f"{data[row, col]!r}")
             if data.shape[1] != width:
                 raise DataError(f"{name}: line {line_no + 1}: expected {width} values per row, got {data.shape[1]}")
             sample = data[:, 0]
@@ -140,6 +154,10 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
             mets = {m: data[:, 1 + len(s.columns) + i] for i, m in enumerate(s.metrics)}
             yield Block(start, expected_next, cols, mets)
             line_no += len(lines)
+        if expected_next != s.stop:
+            raise DataError(f"{name}: {expected_next - first} samples ({first} to {expected_next - 1}), expected "
+                            f"{s.stop - s.start} (--samples {s.stop - s.start}): a part is missing at the end, or "
+                            "give the run's --samples")
 
 
 def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: str | None = None) -> dict:
