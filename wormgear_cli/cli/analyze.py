@@ -19,6 +19,7 @@ from wormgear_cli.cli.common import (
     fmt_angle,
     json_text,
     render,
+    stdout_is_terminal,
 )
 
 
@@ -206,6 +207,13 @@ def check(
     if fmt == "json":
         emit(json_text({"files": results, "passed": not (invalid or failed)}), output, drives)
     elif lines:
+        if output is None and stdout_is_terminal():  # on a screen, long findings wrap at spaces;
+            import shutil                            # piped or to a file, one finding per line (grep)
+            import textwrap
+
+            width = shutil.get_terminal_size((80, 24)).columns
+            lines = [textwrap.fill(ln, width, subsequent_indent="    ", break_long_words=False,
+                                   break_on_hyphens=False) for ln in lines]
         emit("\n".join(lines) + "\n", output, drives)
     if invalid:
         raise typer.Exit(2)
