@@ -58,3 +58,19 @@ def test_part2_extrapolation_warns_and_grade_3_has_no_composite(runner):
     r = runner.invoke(app, ["grade", "-g", "3", "--module-mm", "2", "--diameter-mm", "100", "--face-width-mm",
                             "20", "-f", "json"])
     assert r.exit_code == 0 and json.loads(r.stdout)["F_i2T_um"] is None
+
+
+def test_teeth_derived_from_the_diameter_name_the_options_given(runner):
+    from wormgear_cli.cli import app
+
+    r = runner.invoke(app, ["grade", "-g", "6", "--module-mm", "2", "--diameter-mm", "8", "--face-width-mm", "20"])
+    assert r.exit_code == 2
+    assert r.stderr.startswith("error: --diameter-mm/--module-mm (z = d/m = 8/2 = 4): teeth 4 outside")
+
+
+def test_teeth_that_contradict_the_diameter_are_warned(runner):
+    from wormgear_cli.cli import app
+
+    r = runner.invoke(app, ["grade", "-g", "6", "--module-mm", "2", "--diameter-mm", "100", "--face-width-mm", "20",
+                            "--teeth", "10"])
+    assert r.exit_code == 0 and "warning: --teeth 10 with --module-mm 2 gives d = z m = 20 mm" in r.stderr

@@ -51,7 +51,13 @@ def grade(
         opt = ("--grade" if text.startswith("grade") else
                {"module": "--module-mm", "diameter": "--diameter-mm", "face_width": "--face-width-mm",
                 "teeth": "--teeth"}[text.split(" ", 1)[0]])
+        if opt == "--teeth" and teeth is None:  # not given: derived from the diameter and the module
+            opt = f"--diameter-mm/--module-mm (z = d/m = {diameter_mm:g}/{module_mm:g} = {z})"
         raise UsageError(f"{opt}: {text}") from None
+    if teeth is not None and abs(teeth * module_mm - diameter_mm) > 0.5 * module_mm:
+        typer.echo(f"warning: --teeth {teeth} with --module-mm {module_mm:g} gives d = z m = {teeth * module_mm:g} "
+                   f"mm, not the --diameter-mm {diameter_mm:g} (helical gears: d = z m_n / cos(beta)); the "
+                   "tolerances use the given diameter", err=True)
     doc = {"standard": "ISO 1328-1:2013", "grade": grade, "module_mm": module_mm, "diameter_mm": diameter_mm,
            "face_width_mm": face_width_mm, "teeth": z,
            "f_pT_um": tol.f_pT, "F_pT_um": tol.F_pT, "f_HalphaT_um": tol.f_HalphaT, "f_falphaT_um": tol.f_falphaT,
