@@ -502,3 +502,19 @@ def test_kinematic_peak_is_a_stationary_point(l, de, alpha_deg):
     assert abs(float(f1)) <= 1e-12 * abs(float(f2))
     _, h1, h2 = gear.load_factor_derivatives(peak.phi0, l, de, a)
     assert (float(peak.h1), float(peak.h2)) == (float(h1), float(h2))
+
+
+@pytest.mark.parametrize("r1, r2, de, d1", [(20.0, 80.0, 0.5, 0.002), (22.5, 180.0, 0.03, 0.004),
+                                            (40.0, 60.0, 0.2, 0.05), (10.0, 200.0, 2.0, 0.01)])
+def test_fast_maximum_is_a_stationary_point(r1, r2, de, d1):
+    """Newton settled, not stopped after the first step: Delta phi_cc = l/(2 R2) (F + s H), s = 2 delta1 / l
+    (the module's G), so at the maximum F' + s H' = 0; checked with the analytic derivatives (themselves
+    checked against finite differences above) to 1e-9 of |F'' + s H''| (one Newton step leaves ~1e-7)."""
+    a = math.radians(20.0)
+    l, s = r1 + r2, 2 * d1 / (r1 + r2)
+    _, where = gear.gear_te_max_fast(r1, r2, de, a, d1)
+    f1, f2 = gear.kinematic_bracket_derivatives(where, l, de, a)
+    _, h1, h2 = gear.load_factor_derivatives(where, l, de, a)
+    g1, g2 = float(f1 + s * h1), float(f2 + s * h2)
+    assert g2 < 0.0
+    assert abs(g1) <= 1e-9 * abs(g2)
