@@ -210,6 +210,9 @@ def test_phased_peak_of_two_sines_by_hand():
     src = [_sine_source("a", 3.0, 1.0), _sine_source("b", 1.0, 2.0), _sine_source("zero", 0.0, 5.0)]
     assert phased_peak(src, {"a": 0.3, "b": 0.6}) == pytest.approx(3.4849949, rel=1e-7)
     assert phased_peak(src) == pytest.approx(3.4849949, rel=1e-7)
+    # an override that changes the maximum: b at pi/2: 3 sin t + cos 2t = 1 + 3 s - 2 s^2, s = sin t,
+    # largest at s = 3/4: 1 + 2.25 - 1.125 = 2.125
+    assert phased_peak(src, {"b": math.pi / 2}) == pytest.approx(2.125, rel=1e-9)
     # one sine of order 7 and phase 1.0: its amplitude, reached off the grid of 4096 samples
     assert phased_peak([_sine_source("c", 2.0, 7.0)], {"c": 1.0}) == pytest.approx(2.0, rel=1e-12)
 
