@@ -230,6 +230,8 @@ def test_a_draw_starting_past_the_first_block():
     whole = sampling.draw(varied, 8, 0, b + 10)
     part = sampling.draw(varied, 8, b + 5, b + 10)
     assert (part.start, part.stop) == (b + 5, b + 10)
+    assert whole.values["worm_pair.lead_error_mm"].shape == (b + 10,)
+    assert part.values["worm_pair.lead_error_mm"].shape == (5,)
     assert np.array_equal(part.values["worm_pair.lead_error_mm"], whole.values["worm_pair.lead_error_mm"][b + 5:])
 
 
