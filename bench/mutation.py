@@ -72,6 +72,25 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                    ("make_groups", "_pass_sums", "weighted", "_neg2_reml", "_fit_at", "reml",
                     "_full_neg2_reml", "_level_shares", "containment_df", "_variance_info", "_df_of",
                     "wald", "contrast_df")),
+    # ISO 1328 grades: pure functions of the grade and the geometry
+    "iso1328": (("wormgear_cli/models/iso1328.py",),
+                ("tests/models/test_iso1328.py",), None),
+    # the error budget (lines, sums, phased peak); analysis is run for real by its tests
+    "budget": (("wormgear_cli/budget.py",),
+               ("tests/models/test_budget.py",), None),
+    # tolerance analysis: the input distributions and the streaming statistics
+    "tolerance-sampling": (("wormgear_cli/tolerance/sampling.py",),
+                           ("tests/tolerance/test_sampling.py",), None),
+    "tolerance-statistics": (("wormgear_cli/tolerance/statistics.py",),
+                             ("tests/tolerance/test_statistics.py",), None),
+    # the gear functions that compute values (the maximiser is scored with them; the location of
+    # its maximum is checked against scipy's bounded minimiser in test_models_hand.py)
+    "gear-values": (("wormgear_cli/models/gear.py",),
+                    ("tests/test_models_hand.py",),
+                    ("eccentricity_ratio", "contact_phase_angle", "kinematic_bracket", "gear_kinematic_te",
+                     "gear_deformation_te", "gear_te", "gear_te_max", "gear_backlash", "gear_backlash_max",
+                     "pitch_arc_to_angle", "_bracket_constants", "kinematic_bracket_derivatives",
+                     "load_factor_derivatives", "kinematic_peak", "gear_te_max_fast", "involute_stage")),
 }
 
 

@@ -395,3 +395,126 @@ def test_fast_maximum_is_vectorised_like_the_scalar_calls():
         assert v[k] == pytest.approx(float(vk), rel=1e-12) and w[k] == pytest.approx(float(wk), abs=1e-12)
         want = _argmax_reference(lambda x: gear.gear_te(x, r1[k], r2[k], de[k], a, d1[k]))
         assert w[k] == pytest.approx(want, abs=1e-6)
+
+
+# --- mutation-testing round 2 (issue 13): the maximisers' fall-back and edge cases, involute stage --
+
+
+def test_involute_stage_every_term_by_hand():
+    """r1 50 mm, tan(alpha) 0.75 (cos 0.8): r_b1 = 40 mm; e 0.02, Delta a 0.01, delta 0.004, E_sn 0.06 mm:
+    TE_e = 0.02/40 = 5e-4; TE_d = 0.004/40 = 1e-4; lost motion 2 * 0.004/40 = 2e-4; thickness 0.06/50 = 1.2e-3;
+    backlash = 2 (0.01 + 0.02) 0.75 / 50 + 1.2e-3 + 2e-4 = 9e-4 + 1.4e-3 = 2.3e-3 rad."""
+    st = gear.involute_stage(50.0, math.atan(0.75), 0.02, 0.01, 0.004, 0.06)
+    assert st.te_eccentricity == pytest.approx(5e-4, rel=1e-12)
+    assert st.te_deformation == pytest.approx(1e-4, rel=1e-12)
+    assert st.backlash_deformation == pytest.approx(2e-4, rel=1e-12)
+    assert st.backlash_thickness == pytest.approx(1.2e-3, rel=1e-12)
+    assert st.backlash == pytest.approx(2.3e-3, rel=1e-12)
+    assert tuple(st) == (st.te_eccentricity, st.te_deformation, st.backlash, st.backlash_deformation,
+                         st.backlash_thickness)
+
+
+def test_bracketing_maximiser_is_vectorised_like_the_scalar_calls():
+    a = math.radians(20.0)
+    r1, r2 = np.array([20.0, 22.5, 40.0]), np.array([80.0, 180.0, 60.0])
+    de, d1 = np.array([0.5, 0.03, 0.2]), np.array([0.002, 0.0, 0.05])
+    v, w = gear.gear_te_max(r1, r2, de, a, d1)
+    assert v.shape == (3,) and w.shape == (3,)
+    for k in range(3):
+        vk, wk = gear.gear_te_max(r1[k], r2[k], de[k], a, d1[k])
+        assert v[k] == pytest.approx(float(vk), rel=1e-12) and w[k] == pytest.approx(float(wk), abs=1e-9)
+
+
+def test_zero_and_flat_curves():
+    """No eccentricity and no load: the curve is 0 and its maximum is put at phi = 0 (both maximisers).
+    No eccentricity with load: the constant delta1 sin(alpha)/R2 (9.284767e-6, see above); the location
+    of a constant is arbitrary but must lie in [0, 2 pi) as documented (the fast form puts it at 0)."""
+    a = math.atan(0.4)
+    for fn in (gear.gear_te_max, gear.gear_te_max_fast):
+        value, where = fn(20.0, 80.0, 0.0, a, 0.0)
+        assert (float(value), float(where)) == (0.0, 0.0)
+        assert np.asarray(where).dtype == np.float64
+        value, where = fn(20.0, 80.0, 0.0, a, 0.002)
+        assert float(value) == pytest.approx(9.284767e-6, rel=1e-6)
+        assert 0.0 <= float(where) < 2 * np.pi
+    assert float(gear.gear_te_max_fast(20.0, 80.0, 0.0, a, 0.002)[1]) == 0.0
+
+
+@pytest.mark.parametrize("r1, r2, de, d1", [(20.0, 80.0, 5.0, 0.002), (20.0, 80.0, 3.0, 0.0), (40.0, 60.0, 8.0, 0.05)])
+def test_fast_maximum_beyond_the_newton_range_against_an_optimiser(r1, r2, de, d1):
+    """Delta e / l = 0.03 .. 0.08 > 0.01: the fast form hands these to the bracketing search; value
+    and location against dense samples refined by scipy's bounded optimiser."""
+    a = math.radians(20.0)
+    f = lambda x: gear.gear_te(x, r1, r2, de, a, d1)  # noqa: E731
+    want = _argmax_reference(f)
+    value, where = gear.gear_te_max_fast(r1, r2, de, a, d1)
+    assert float(where) == pytest.approx(want, abs=1e-6)
+    assert float(value) == pytest.approx(float(f(want)), rel=1e-10)
+
+
+def test_fast_maximum_of_mixed_designs_with_array_angles_and_a_given_peak():
+    """One call over designs of every kind (Newton, beyond the Newton range, unloaded, no eccentricity),
+    with arrays of eccentricities and pressure angles, and again with the kinematic peak given: each
+    design against the optimiser (de = 0: the load term delta1 sin(alpha)/R2 at phi = 0)."""
+    r1 = np.array([20.0, 20.0, 22.5, 40.0, 10.0])
+    r2 = np.array([80.0, 80.0, 180.0, 60.0, 200.0])
+    de = np.array([0.5, 5.0, 0.03, 0.0, 2.0])
+    alpha = np.radians([20.0, 25.0, 14.5, 20.0, 30.0])
+    d1 = np.array([0.002, 0.002, 0.0, 0.05, 0.01])
+    peak = gear.kinematic_peak(r1 + r2, de, alpha)
+    for kwargs in ({}, {"peak": peak}):
+        v, w = gear.gear_te_max_fast(r1, r2, de, alpha, d1, **kwargs)
+        for k in range(5):
+            if de[k] == 0.0:
+                assert v[k] == pytest.approx(d1[k] * math.sin(alpha[k]) / r2[k], rel=1e-12) and w[k] == 0.0
+                continue
+            f = lambda x: gear.gear_te(x, r1[k], r2[k], de[k], alpha[k], d1[k])  # noqa: E731
+            want = _argmax_reference(f)
+            assert w[k] == pytest.approx(want, abs=1e-6), k
+            assert v[k] == pytest.approx(float(f(want)), rel=1e-10), k
+
+
+def test_fast_maximum_needs_no_fall_back_within_the_newton_range(monkeypatch):
+    """Within Delta e / l <= 0.01 the documented fast path settles by itself: the bracketing search
+    is never called (a mutant that switches the fast path off is caught here)."""
+    def boom(*args, **kwargs):
+        raise AssertionError("fell back to the bracketing search")
+
+    a = np.radians([20.0, 25.0, 14.5])
+    r1, r2 = np.array([20.0, 22.5, 40.0]), np.array([80.0, 180.0, 60.0])
+    de, d1 = np.array([0.5, 0.03, 0.2]), np.array([0.002, 0.004, 0.05])
+    want = [_argmax_reference(lambda x, k=k: gear.gear_te(x, r1[k], r2[k], de[k], a[k], d1[k])) for k in range(3)]
+    monkeypatch.setattr(gear, "gear_te_max", boom)
+    _, w = gear.gear_te_max_fast(r1, r2, de, a, d1)
+    np.testing.assert_allclose(w, want, atol=1e-6)
+
+
+@pytest.mark.parametrize("l, de, alpha_deg", [(100.0, 1.0, 20.0), (100.0, 1.0, 10.0), (100.0, 1.0, 35.0),
+                                              (100.0, 0.2, 20.0), (202.5, 0.03, 14.5)])
+def test_kinematic_peak_is_a_stationary_point(l, de, alpha_deg):
+    """Newton converged, not one step short: F'(phi0) = 0 to 1e-12 of |F''(phi0)| (phi0 within ~1e-12 rad
+    of the peak; one Newton step from the start leaves ~5e-7 rad), F'' < 0, with the analytic derivatives
+    (themselves checked against finite differences above)."""
+    a = math.radians(alpha_deg)
+    peak = gear.kinematic_peak(l, de, a)
+    f1, f2 = gear.kinematic_bracket_derivatives(peak.phi0, l, de, a)
+    assert float(f2) < 0.0
+    assert abs(float(f1)) <= 1e-12 * abs(float(f2))
+    _, h1, h2 = gear.load_factor_derivatives(peak.phi0, l, de, a)
+    assert (float(peak.h1), float(peak.h2)) == (float(h1), float(h2))
+
+
+@pytest.mark.parametrize("r1, r2, de, d1", [(20.0, 80.0, 0.5, 0.002), (22.5, 180.0, 0.03, 0.004),
+                                            (40.0, 60.0, 0.2, 0.05), (10.0, 200.0, 2.0, 0.01)])
+def test_fast_maximum_is_a_stationary_point(r1, r2, de, d1):
+    """Newton settled, not stopped after the first step: Delta phi_cc = l/(2 R2) (F + s H), s = 2 delta1 / l
+    (the module's G), so at the maximum F' + s H' = 0; checked with the analytic derivatives (themselves
+    checked against finite differences above) to 1e-9 of |F'' + s H''| (one Newton step leaves ~1e-7)."""
+    a = math.radians(20.0)
+    l, s = r1 + r2, 2 * d1 / (r1 + r2)
+    _, where = gear.gear_te_max_fast(r1, r2, de, a, d1)
+    f1, f2 = gear.kinematic_bracket_derivatives(where, l, de, a)
+    _, h1, h2 = gear.load_factor_derivatives(where, l, de, a)
+    g1, g2 = float(f1 + s * h1), float(f2 + s * h2)
+    assert g2 < 0.0
+    assert abs(g1) <= 1e-9 * abs(g2)

@@ -191,3 +191,72 @@ def test_paper_mode_leaves_the_paper_keys_and_involute_differs_by_hand(mch50_spe
     assert float(to_unit(inv.angles["gear_transmission_error"], "arcsec")) == pytest.approx(1.90, abs=0.01)
     assert float(to_unit(inv.angles["gear_backlash"], "arcsec")) == pytest.approx(143.4, abs=0.1)
     assert float(to_unit(inv.angles["gear_backlash_thickness"], "arcsec")) == pytest.approx(114.6, abs=0.1)
+
+
+# --- mutation-testing round 2 (issue 13): the phased peak by hand, the report, the static lines ----
+
+from wormgear_cli.budget import Budget, BudgetLine, phased_peak  # noqa: E402
+from wormgear_cli.simulation import Source  # noqa: E402
+
+
+def _sine_source(name, amplitude, order):
+    return Source(name, "x", order, amplitude, 0.0, lambda t, p: amplitude * np.sin(order * t + p))
+
+
+def test_phased_peak_of_two_sines_by_hand():
+    # max of 3 sin(u) + sin(2u): 3 cos u + 2 cos 2u = 0 -> 4 c^2 + 3 c - 2 = 0, c = (-3 + sqrt 41)/8 = 0.4253905,
+    # sin u = 0.9050100, sin 2u = 2 * 0.9050100 * 0.4253905 = 0.7699649 -> 2.7150300 + 0.7699649 = 3.4849949.
+    # The phases (given as overrides by name) shift u = theta + 0.3 only: same maximum, off the sample grid.
+    src = [_sine_source("a", 3.0, 1.0), _sine_source("b", 1.0, 2.0), _sine_source("zero", 0.0, 5.0)]
+    assert phased_peak(src, {"a": 0.3, "b": 0.6}) == pytest.approx(3.4849949, rel=1e-7)
+    assert phased_peak(src) == pytest.approx(3.4849949, rel=1e-7)
+    # an override that changes the maximum: b at pi/2: 3 sin t + cos 2t = 1 + 3 s - 2 s^2, s = sin t,
+    # largest at s = 3/4: 1 + 2.25 - 1.125 = 2.125
+    assert phased_peak(src, {"b": math.pi / 2}) == pytest.approx(2.125, rel=1e-9)
+    # one sine of order 7 and phase 1.0: its amplitude, reached off the grid of 4096 samples
+    assert phased_peak([_sine_source("c", 2.0, 7.0)], {"c": 1.0}) == pytest.approx(2.0, rel=1e-12)
+
+
+def test_phased_peak_without_sources_is_zero():
+    assert phased_peak([]) == 0.0
+    assert phased_peak([_sine_source("zero", 0.0, 1.0)]) == 0.0
+
+
+def test_report_by_hand():
+    # lines 3 and 1 (arcsec, in rad), linear 4: shares 75 % and 25 %; phase 0.5 rad = 28.6479 deg
+    a = ARCSEC
+    b = Budget("d", (BudgetLine("x", "gear", "shaft", 1.0, 3 * a, "spec", 0.5),
+                     BudgetLine("y", "worm", "static", 0.0, 1 * a, "default")), 4 * a, 3.5 * a, 3.8 * a)
+    r = b.report("arcsec")
+    assert r["budget"][0] == {"source": "x", "stage": "gear", "kind": "shaft", "order": 1.0,
+                              "amplitude": pytest.approx(3.0, rel=1e-12), "origin": "spec",
+                              "phase_deg": pytest.approx(28.6479, abs=1e-4), "share_pct": pytest.approx(75.0)}
+    assert r["budget"][1]["share_pct"] == pytest.approx(25.0) and r["budget"][1]["phase_deg"] == 0.0
+    assert r["total_with_budget"] == pytest.approx({"transmission_error_linear": 4.0, "transmission_error_rss": 3.5,
+                                                    "transmission_error_peak": 3.8}, rel=1e-12)
+    empty = Budget("d", (BudgetLine("x", "gear", "shaft", 1.0, 0.0, "spec"),), 0.0, 0.0, 0.0).report("arcsec")
+    assert empty["budget"][0]["share_pct"] == 0.0
+
+
+def test_static_lines_and_fields_of_the_rotary_table():
+    # i_c = 180/20 = 9: the worm deflection is referred to the output by 1/9; both loads given in the spec
+    from wormgear_cli.spec import load_spec
+
+    spec = load_spec(CONFIGS / "rotary-table-precision.toml")
+    a = analyze(spec)
+    b = budget(spec, a)
+    assert b.drive == a.drive
+    lines = {ln.source: ln for ln in b.lines}
+    g, w = lines["gear_deflection"], lines["worm_deflection"]
+    assert (g.stage, g.kind, g.order, g.origin) == ("gear", "static", 0.0, "spec")
+    assert (w.stage, w.kind, w.order, w.origin) == ("worm", "static", 0.0, "spec")
+    assert g.amplitude == pytest.approx(float(a.angles["gear_te_deformation"]), rel=1e-12)
+    assert w.amplitude == pytest.approx(float(a.angles["worm_te_deformation"]) / 9.0, rel=1e-12)
+    ecc = lines["gear_eccentricity"]
+    assert (ecc.stage, ecc.kind) == ("gear", "shaft") and lines["pinion_single_pitch"].kind == "mesh"
+
+
+def test_a_line_keeps_its_sources_phase():
+    s = bare(**{"gear_pair.output_gear": "cumulative_pitch_deviation_mm = 0.025\ncumulative_pitch_phase_deg = 30.0"})
+    [line] = [ln for ln in budget(s).lines if ln.source == "output_gear_cumulative_pitch"]
+    assert line.phase == pytest.approx(math.radians(30.0), rel=1e-12)

@@ -89,3 +89,76 @@ def test_radial_composite_extrapolated_warns_and_grades_are_4_to_12():
                            "extrapolated",)
     with pytest.raises(GradeError, match=r"\[4, 12\]"):
         radial_composite(3, 2.0, 100.0)
+
+
+# --- mutation-testing round 2 (issue 13): every field, the boundaries, the messages -------------
+
+def test_every_field_of_the_worked_example_by_hand():
+    # hand, A = 6: s = sqrt(2) = 1.414214; m = 2, d = 100, b = 20 (sqrt(d) = 10, sqrt(b) = 4.472136)
+    # f_pT  = (0.1 + 0.8 + 5) s = 8.344 -> 8.5;  F_pT = (0.2 + 5.5 + 1.4 + 12) s = 27.012 -> 27
+    # f_HaT = (0.8 + 0.1 + 4) s = 6.930 -> 7.0;  f_faT = (1.1 + 5) s = 8.627 -> 8.5
+    # F_aT  = hypot(6.930, 8.627) = 11.065 -> 11
+    # f_HbT = (0.5 + 1.565248 + 4) s = 8.578 -> 8.5;  f_fbT = (0.7 + 2.012461 + 4) s = 9.493 -> 9.5
+    # F_bT  = hypot(8.578, 9.493) = 12.794 -> 13;  F_rT = 0.9 * 27.012 = 24.31 -> 24
+    t = flank_tolerances(6, 2.0, 100.0, 20.0)
+    assert t == iso1328.FlankTolerances(6, 8.5, 27.0, 7.0, 8.5, 11.0, 8.5, 9.5, 13.0, 24.0)
+
+
+def test_every_field_class5_large_diameter_by_hand():
+    # hand, A = 5: s = 1; m = 2, d = 360, b = 40 (sqrt(d) = 18.973666, sqrt(b) = 6.324555)
+    # f_pT  = 0.36 + 0.8 + 5 = 6.16 -> 6.0;  F_pT = 0.72 + 10.435516 + 1.4 + 12 = 24.556 -> 25
+    # f_HaT = 0.8 + 0.36 + 4 = 5.16 -> 5.0 (0.5 steps from 5 um);  f_faT = 1.1 + 5 = 6.1 -> 6.0
+    # F_aT  = hypot(5.16, 6.1) = 7.990 -> 8.0
+    # f_HbT = 0.948683 + 2.213594 + 4 = 7.162 -> 7.0;  f_fbT = 1.328157 + 2.846050 + 4 = 8.174 -> 8.0
+    # F_bT  = hypot(7.162, 8.174) = 10.868 -> 11;  F_rT = 0.9 * 24.556 = 22.10 -> 22
+    t = flank_tolerances(5, 2.0, 360.0, 40.0, 180)
+    assert t == iso1328.FlankTolerances(5, 6.0, 25.0, 5.0, 6.0, 8.0, 7.0, 8.0, 11.0, 22.0)
+
+
+@pytest.mark.parametrize("raw, rounded", [(5.3, 5.5), (5.2, 5.0), (5.74, 5.5), (9.76, 10.0), (10.49, 10.0)])
+def test_rounding_between_5_and_10_um_is_to_half_a_micrometre(raw, rounded):
+    assert round_tolerance(raw) == rounded
+
+
+def test_the_scope_bounds_are_inclusive():
+    # clause 1: 0.5 <= m <= 70, 5 <= d <= 15000, 4 <= b <= 1200, 5 <= z <= 1000 -- the ends are inside
+    flank_tolerances(6, 0.5, 5.0, 4.0, 5)
+    flank_tolerances(6, 70.0, 15000.0, 1200.0, 1000)
+
+
+@pytest.mark.parametrize("grade", [True, 6.0])
+def test_a_grade_must_be_an_integer(grade):
+    with pytest.raises(GradeError, match=r"ISO 1328-1:2013's range, expected an integer in \[1, 11\]"):
+        flank_tolerances(grade, 2.0, 100.0, 20.0)
+
+
+def test_messages_name_the_standard_word_for_word():
+    with pytest.raises(GradeError) as e:
+        flank_tolerances(6, 2.0, 100.0, 20.0, 4)
+    assert str(e.value) == "teeth 4 outside ISO 1328-1:2013's scope [5, 1000] (its formulas are not extrapolated)"
+    with pytest.raises(GradeError) as e:
+        flank_tolerances(12, 2.0, 100.0, 20.0)
+    assert str(e.value) == "grade 12 outside ISO 1328-1:2013's range, expected an integer in [1, 11]"
+    with pytest.raises(GradeError) as e:
+        radial_composite(13, 2.0, 100.0)
+    assert str(e.value) == "grade 13 outside ISO 1328-2:1997's range, expected an integer in [4, 12]"
+
+
+def test_radial_composite_range_upper_bounds_are_inclusive():
+    # "above 1.5 up to and including 2.5": m = 2.5 -> sqrt(1.5 * 2.5) = 1.9365; d = 125 -> sqrt(50 * 125) = 79.057
+    rc = radial_composite(6, 2.5, 125.0)
+    assert rc.grade == 6
+    assert rc.module_mean == pytest.approx(1.9365, abs=1e-4)
+    assert rc.diameter_mean == pytest.approx(79.057, abs=1e-3)
+
+
+def test_radial_composite_beyond_the_last_range_uses_the_last_range():
+    # d = 1500 > 1000: the last range (560, 1000] -> sqrt(560000) = 748.331; m = 12 > 10: (6, 10] -> sqrt(60) = 7.7460
+    # F_i'' = (3.2 * 7.7460 + 1.01 * 27.3556 + 6.4) sqrt(2) = (24.787 + 27.629 + 6.4) sqrt(2) = 83.18 -> 83
+    rc = radial_composite(6, 12.0, 1500.0)
+    assert rc.diameter_mean == pytest.approx(748.331, abs=1e-3)
+    assert rc.module_mean == pytest.approx(7.7460, abs=1e-4)
+    assert rc.F_i2T == 83.0
+    assert rc.warnings == (
+        "module 12 outside ISO 1328-2:1997's scope [0.2, 10] mm: its formulas are extrapolated",
+        "diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: its formulas are extrapolated")

@@ -183,3 +183,69 @@ def test_appending_a_quantity_to_the_registry_keeps_every_sample(monkeypatch):
     for k in before.phases:
         assert np.array_equal(before.phases[k], after.phases[k])
     assert after.values["x.new_mm"].max() <= 0.01
+
+
+# --- mutation-testing round 2 (issue 13): the inverse CDFs against scipy.stats, the streams' rows --
+
+U = np.array([0.0, 0.01, 0.2, 0.5, 0.77, 0.999])
+
+
+def test_normal_with_only_cpk_is_centred_with_cp_equal_to_cpk():
+    # module doc: only cpk given -> cp = cpk, centred: sigma = 2T / (6 * 1.33), mean 0, truncated at +-3.99 sigma
+    from scipy.stats import truncnorm
+
+    sigma = 2 * T / (6 * 1.33)
+    ref = truncnorm(-T / sigma, T / sigma, loc=0.0, scale=sigma).ppf(U)
+    x = sampling.sample_values(_varied("worm_pair.lead_error_mm", "normal", None, 1.33), U)
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12)
+
+
+def test_normal_on_a_radial_interval_is_centred_on_its_middle():
+    # radial quantity: [L, U] = [0, T]; cp = cpk = 1: mean T/2, sigma = T/6 (scipy.stats.truncnorm as the oracle)
+    from scipy.stats import truncnorm
+
+    ref = truncnorm(-3.0, 3.0, loc=T / 2, scale=T / 6).ppf(U)
+    x = sampling.sample_values(_varied("assembly.wheel_eccentricity_mm", "normal"), U)
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("cp, cpk, c", [(None, 1.33, 1.33), (1.5, None, 1.5), (2.0, 0.8, 0.8), (None, None, 1.0)])
+def test_rayleigh_capability_sets_sigma(cp, cpk, c):
+    # module doc: sigma = T / (3 c), c = cpk, else cp, else 1; truncated at T: x = F^-1(u F(T)) (scipy.stats.rayleigh)
+    from scipy.stats import rayleigh
+
+    law = rayleigh(scale=T / (3 * c))
+    ref = law.ppf(U * law.cdf(T))
+    x = sampling.sample_values(_varied("assembly.wheel_eccentricity_mm", "rayleigh", cp, cpk), U)
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-15)
+
+
+def test_zero_tolerance_keeps_the_shape_of_the_uniforms():
+    x = sampling.sample_values(_varied("assembly.worm_eccentricity_mm", "uniform", tol=0.0), np.full((3, 4), 0.5))
+    assert x.shape == (3, 4) and np.all(x == 0.0)
+
+
+def test_a_draw_starting_past_the_first_block():
+    varied = (_varied("worm_pair.lead_error_mm", "uniform"),)
+    b = sampling.BLOCK
+    whole = sampling.draw(varied, 8, 0, b + 10)
+    part = sampling.draw(varied, 8, b + 5, b + 10)
+    assert (part.start, part.stop) == (b + 5, b + 10)
+    assert whole.values["worm_pair.lead_error_mm"].shape == (b + 10,)
+    assert part.values["worm_pair.lead_error_mm"].shape == (5,)
+    assert np.array_equal(part.values["worm_pair.lead_error_mm"], whole.values["worm_pair.lead_error_mm"][b + 5:])
+
+
+def test_each_element_of_an_array_key_has_its_own_interval_and_stream():
+    # element k of worm_pair_errors_mm (kind unknown: [0, T_k]) with T_k = 0.01 (k + 1), uniform:
+    # each lies in its own interval, reaches near its top, and the six columns are uncorrelated
+    from wormgear_cli.tolerance.quantities import QUANTITY_BY_PATH
+
+    tol = tuple(0.01 * (k + 1) for k in range(6))
+    v = Varied(QUANTITY_BY_PATH["assembly.worm_pair_errors_mm"], tol, "uniform")
+    d = sampling.draw((v,), 4, 0, 20_000)
+    cols = [d.values[f"assembly.worm_pair_errors_mm[{k}]"] for k in range(6)]
+    for k, x in enumerate(cols):
+        assert x.min() >= 0.0 and x.max() <= tol[k] and x.max() > 0.99 * tol[k]
+    r = np.corrcoef(np.array(cols))
+    assert np.max(np.abs(r - np.eye(6))) < 0.05  # 20 000 samples: standard error 0.007
