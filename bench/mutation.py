@@ -39,28 +39,28 @@ ROOT = Path(__file__).resolve().parent.parent
 #: one core.
 TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | None]] = {
     "worm": (("wormgear_cli/models/worm.py",),
-             ("tests/test_models_hand.py", "tests/test_models.py"), None),
+             ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
     "deformation": (("wormgear_cli/models/deformation.py",),
-                    ("tests/test_models_hand.py", "tests/test_models.py"), None),
+                    ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
     "thermal": (("wormgear_cli/models/thermal.py",),
-                ("tests/test_models_hand.py",), None),
+                ("tests/models/test_hand_worked.py",), None),
     "gear": (("wormgear_cli/models/gear.py",),
-             ("tests/test_models_hand.py", "tests/test_models.py"), None),
+             ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
     # the catalogue's records (_phase, _tref) are built when the module is imported, before mutmut
     # switches a mutant on, so their mutants cannot be seen in a forked worker: they are left out
-    # here and checked by tests/test_effects_hand.py::test_*_parameter_record and by hand
+    # here and checked by tests/models/test_effects_hand.py::test_*_parameter_record and by hand
     # (docs/development-testing.md)
     "effects": (("wormgear_cli/models/effects.py",),
-                ("tests/test_effects_hand.py", "tests/test_effects.py"),
+                ("tests/models/test_effects_hand.py", "tests/models/test_effects.py"),
                 ("output_gear_runout", "intermediate_shaft_runout", "worm_runout", "gear_mesh_error",
                  "thermal_backlash", "thermal_drift", "torsional_compliance", "bearing_clearance", "make",
                  "param", "effect_error", "params_from_keys", "params_to_keys")),
     "iso230": (("wormgear_cli/iso230.py",),
-               ("tests/test_iso230_hand.py",), None),
+               ("tests/measurement/test_iso230_hand.py",), None),
     # the aliasing decisions (correlations, groups, folding); the least-squares fits are left to
     # a later round (run them with a functions list of their own)
     "harmonics": (("wormgear_cli/harmonics.py",),
-                  ("tests/test_aliasing_tolerance.py", "tests/measurement/test_harmonics.py"),
+                  ("tests/measurement/test_aliasing.py", "tests/measurement/test_harmonics.py"),
                   ("_sampling", "_correlations", "order_correlations", "offset_correlations", "_groups",
                    "alias_groups", "folded_orders", "_folded")),
     # the diagnosis statistics: REML, GLS sufficient statistics, Wald/Satterthwaite, containment
@@ -84,9 +84,9 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     "tolerance-statistics": (("wormgear_cli/tolerance/statistics.py",),
                              ("tests/tolerance/test_statistics.py",), None),
     # the gear functions that compute values (the maximiser is scored with them; the location of
-    # its maximum is checked against scipy's bounded minimiser in test_models_hand.py)
+    # its maximum is checked against scipy's bounded minimiser in test_hand_worked.py)
     "gear-values": (("wormgear_cli/models/gear.py",),
-                    ("tests/test_models_hand.py",),
+                    ("tests/models/test_hand_worked.py",),
                     ("eccentricity_ratio", "contact_phase_angle", "kinematic_bracket", "gear_kinematic_te",
                      "gear_deformation_te", "gear_te", "gear_te_max", "gear_backlash", "gear_backlash_max",
                      "pitch_arc_to_angle", "_bracket_constants", "kinematic_bracket_derivatives",

@@ -7,7 +7,7 @@ Delta phi_wh 0.3176 deg, Delta phi_c 0.0142 deg, Delta phi_h 0.0477 deg.
 Tolerance: 8 % (the acceptance bar; docs/paper.md explains every deviation above 2 %).
 
 What these tests are, and are not:
-* The formulas are checked by hand-worked numbers in tests/test_models_hand.py (every input
+* The formulas are checked by hand-worked numbers in tests/models/test_hand_worked.py (every input
   non-zero, independent of the MCH50).  The paper's figures cannot check them: the paper omits
   several worm-stage inputs (S, C, e_i), which the MCH50 spec chooses so the worm stage lands
   near the paper -- a calibration record, named so below.
@@ -77,7 +77,7 @@ def test_snapshot_deviation_from_the_paper(report, stage, quantity):
 
 def test_calibration_record_worm_stage_within_2_percent(report):
     """Calibration record, not a check: the worm stage's free inputs (S, C, e_i) were chosen so it
-    lands within 2 % of the paper.  The worm formulas are checked in test_models_hand.py."""
+    lands within 2 % of the paper.  The worm formulas are checked in test_hand_worked.py."""
     for quantity in ("transmission_error", "backlash"):
         assert value(report, "worm", quantity) == pytest.approx(PAPER_DEG[("worm", quantity)], rel=0.02)
 
@@ -85,7 +85,7 @@ def test_calibration_record_worm_stage_within_2_percent(report):
 def test_calibration_record_empirical_a1_gives_the_papers_load_share(mch50_spec):
     """Calibration record, not a check: the empirical model's default A1 was calibrated to the
     paper's ~0.11 % load share of the gear TE.  The empirical formula itself is checked by hand in
-    test_models_hand.py::test_empirical_deflection_by_hand."""
+    test_hand_worked.py::test_empirical_deflection_by_hand."""
     a = analyze(with_values(mch50_spec, {"stiffness.model": "empirical"}))
     assert a.info["gear_load_share_pct"] == pytest.approx(0.11, abs=0.01)
 

@@ -127,7 +127,7 @@ def test_effect_without_phase_deg_has_phase_zero(name, amp_key, theta, peak):
 def test_spec_default_phases_are_zero():
     """The drive spec's phase keys default to 0 deg: a spec without them loads phases of exactly 0,
     and an [effects] table without phase_deg gets phase 0."""
-    from tests.test_effects import SPEC_HEAD
+    from tests.models.test_effects import SPEC_HEAD
     from wormgear_cli.spec import loads_spec
 
     spec = loads_spec(SPEC_HEAD + "[effects.gear_mesh_error]\namplitude_um = 3\n", "d.toml")

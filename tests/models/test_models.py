@@ -119,7 +119,7 @@ def test_worm_te_single_source_in_paper_units():
 
 def test_worm_te_is_root_sum_square():
     """f_hL 3, S1 4, F_i 12 um, lambda 5 deg (cos^2 = 0.9924039): 9e-6 + 1.6e-5/0.9924039 + 1.44e-4
-    = 1.6912254e-4 mm^2 -> h = sqrt/2 = 6.502355e-3 mm (all six sources: test_models_hand.py)."""
+    = 1.6912254e-4 mm^2 -> h = sqrt/2 = 6.502355e-3 mm (all six sources: test_hand_worked.py)."""
     lam, a2 = math.radians(5.0), math.radians(20.0)
     h = worm.worm_te_halfwidth(0.003, 0.004, 0.0, 0.012, 0.0, 0.0, lam, a2)
     assert h == pytest.approx(6.502355e-3, rel=1e-6)
@@ -157,7 +157,7 @@ def test_deflection_is_linear_in_load(mch50_spec):
 
 def test_spur_contact_ratio_of_a_standard_pair():
     # 20 deg, z = 20/40, h* = 1: eps_alpha = 1.635186 (hand calculation from ISO 21771 geometry,
-    # worked step by step in test_models_hand.py::test_spur_contact_ratio_by_hand)
+    # worked step by step in test_hand_worked.py::test_spur_contact_ratio_by_hand)
     assert deformation.spur_contact_ratio(20, 40, ALPHA) == pytest.approx(1.635186, abs=2e-6)
 
 

@@ -12,6 +12,7 @@ from wormgear_cli.analysis import geometry
 from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys, params_to_keys
 from wormgear_cli.models.thermal import centre_distance_growth, predicted_centre_distance_um_per_K
 from wormgear_cli.spec import loads_spec
+from tests.conftest import MCH50
 
 AS = math.pi / 648000.0  # rad per arcsec, written out independently of the package
 
@@ -29,11 +30,9 @@ FIXED = {
 
 @pytest.fixture(scope="module")
 def spec():
-    from pathlib import Path
-
     from wormgear_cli.spec import load_spec
 
-    return load_spec(Path(__file__).resolve().parent.parent / "configs" / "mch50.toml")
+    return load_spec(MCH50)
 
 
 @pytest.fixture(scope="module")
