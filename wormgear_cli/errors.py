@@ -31,3 +31,13 @@ class DataError(WormgearError):
 
 class UsageError(WormgearError):
     """A command-line option value that makes no sense."""
+
+
+def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: float = 0.6) -> str:
+    """The hint of every "unknown key" message: `` (did you mean X?)`` for the closest of
+    ``choices`` to ``word`` (difflib ratio >= ``cutoff``), shown through ``show`` (a prefix,
+    quotes), else ``otherwise`` (e.g. the list of valid names, or nothing)."""
+    import difflib
+
+    near = difflib.get_close_matches(word, list(choices), n=1, cutoff=cutoff)
+    return f" (did you mean {show(near[0])}?)" if near else otherwise

@@ -16,14 +16,13 @@ one line each: ``FILE: KEY: what is expected``.
 from __future__ import annotations
 
 import copy
-import difflib
 import math
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
 from typing import Any
 
-from wormgear_cli.errors import SpecError
+from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.models.deformation import DEFORMATION_MODELS
 
 DEG = math.pi / 180.0
@@ -534,8 +533,7 @@ def _check_value(f: Field, raw) -> tuple[str | None, Any]:
             return f"expected a single-line name without control characters, got {_quote(raw)}", None
         if f.choices and raw not in f.choices:
             lowered = {c.lower(): c for c in f.choices}
-            near = [lowered[m] for m in difflib.get_close_matches(raw.lower(), list(lowered), n=1)]
-            hint = f' (did you mean "{near[0]}"?)' if near else ""
+            hint = did_you_mean(raw.lower(), lowered, show=lambda m: f'"{lowered[m]}"')
             return f"expected {f.expected()}, got {_quote(raw)}{hint}", None
         return None, raw
     if f.kind == "floats":
@@ -605,14 +603,9 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
             problems.append(f"{source}: {path}: {_NOT_COVERED[path]}")
             continue
         if key not in known:
-            candidates = sorted(known)
-            near = difflib.get_close_matches(key, candidates, n=1, cutoff=0.6)
-            if not near:
-                # try the full path against every valid path (misplaced key)
-                near_full = difflib.get_close_matches(path, [f.path for f in FIELDS], n=1, cutoff=0.75)
-                hint = f" (did you mean {near_full[0]}?)" if near_full else ""
-            else:
-                hint = f" (did you mean {(prefix + '.' if prefix else '') + near[0]}?)"
+            # the nearest key of this table, else the nearest full path (a misplaced key)
+            hint = (did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
+                    or did_you_mean(path, [f.path for f in FIELDS], cutoff=0.75))
             what = "table" if isinstance(value, dict) else "key"
             problems.append(f"{source}: {path}: unknown {what}{hint}")
             continue
@@ -636,8 +629,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
     for name, params in table.items():
         path = f"effects.{name}"
         if name not in EFFECTS:
-            near = difflib.get_close_matches(name, list(EFFECTS), n=1)
-            hint = f" (did you mean effects.{near[0]}?)" if near else f" (known: {', '.join(EFFECTS)})"
+            hint = did_you_mean(name, EFFECTS, show=lambda m: f"effects.{m}", otherwise=f" (known: {', '.join(EFFECTS)})")
             problems.append(f"{source}: {path}: unknown effect{hint}")
             continue
         if not isinstance(params, dict):
@@ -648,8 +640,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
         ok = True
         for key in params:
             if key not in keys:
-                near = difflib.get_close_matches(key, keys, n=1)
-                hint = f" (did you mean {path}.{near[0]}?)" if near else f" (valid: {', '.join(keys)})"
+                hint = did_you_mean(key, keys, show=lambda m: f"{path}.{m}", otherwise=f" (valid: {', '.join(keys)})")
                 problems.append(f"{source}: {path}.{key}: unknown key{hint}")
                 ok = False
         for p in eff.params:

@@ -31,7 +31,6 @@ Units: lengths [mm], forces [N], angles [rad] (conversion to an output unit is t
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import itertools
 import math
 from dataclasses import dataclass
@@ -39,7 +38,7 @@ from typing import Callable, Iterator, Optional
 
 import numpy as np
 
-from wormgear_cli.errors import UsageError
+from wormgear_cli.errors import UsageError, did_you_mean
 
 #: the columns of the (i, l) sweep, in order; the first five are the stable interface
 BASE_COLUMNS = ("i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash",
@@ -648,8 +647,7 @@ def parse_param(text: str) -> ParamAxis:
             raise UsageError(f"--param {key}: effect parameters cannot be swept with --param (the [effects.*] "
                              "tables feed simulate and diagnose, not the analyze metrics of a sweep); vary it "
                              "in the drive file and run wormgear simulate")
-        near = difflib.get_close_matches(key, list(FIELD_BY_PATH) + effect_keys, n=1, cutoff=0.6)
-        hint = f" (did you mean {near[0]}?)" if near else " (see the key reference: wormgear new)"
+        hint = did_you_mean(key, list(FIELD_BY_PATH) + effect_keys, otherwise=" (see the key reference: wormgear new)")
         raise UsageError(f"--param {key}: unknown spec key{hint}")
     if field.kind not in ("float", "int"):
         what = {"str": f"takes {field.expected()}", "floats": "is an array"}.get(field.kind, "is not a number")

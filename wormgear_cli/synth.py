@@ -36,7 +36,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from wormgear_cli.errors import UsageError
+from wormgear_cli.errors import UsageError, did_you_mean
 from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys, params_to_keys
 
 ARCSEC = math.pi / 648000.0
@@ -256,12 +256,9 @@ def parse_effect(text: str, option: str = "--effect") -> tuple[str, dict]:
 
     Checks the name and the keys against the catalogue (values are checked
     by :func:`resolve_effects`)."""
-    import difflib
-
     name, _, rest = text.strip().partition(":")
     if name not in EFFECTS:
-        near = difflib.get_close_matches(name, list(EFFECTS), n=1)
-        hint = f" (did you mean {near[0]}?)" if near else f" (known: {', '.join(EFFECTS)})"
+        hint = did_you_mean(name, EFFECTS, otherwise=f" (known: {', '.join(EFFECTS)})")
         raise UsageError(f"{option}: unknown effect {name!r}{hint}")
     keys = [p.key for p in EFFECTS[name].params]
     values: dict = {}
@@ -271,8 +268,7 @@ def parse_effect(text: str, option: str = "--effect") -> tuple[str, dict]:
         if not eq:
             raise UsageError(f"{option}: expected key=value, got {item!r} in {text!r}")
         if key not in keys:
-            near = difflib.get_close_matches(key, keys, n=1)
-            hint = f" (did you mean {near[0]}?)" if near else f" (valid: {', '.join(keys)})"
+            hint = did_you_mean(key, keys, otherwise=f" (valid: {', '.join(keys)})")
             raise UsageError(f"{option}: {name}: unknown key {key!r}{hint}")
         if key in values:
             raise UsageError(f"{option}: {name}.{key} is given twice in {text!r}")

@@ -23,12 +23,11 @@ path::
 
 from __future__ import annotations
 
-import difflib
 import math
 from dataclasses import dataclass
 from enum import Enum
 
-from wormgear_cli.errors import SpecError
+from wormgear_cli.errors import SpecError, did_you_mean
 
 
 class Kind(str, Enum):
@@ -263,8 +262,7 @@ def statistics_table(spec) -> dict[str, dict]:
                 problems.append(f"{where}: cannot be varied: the key has no tolerance (a nominal value such as "
                                 f"teeth or module); toleranced keys: {', '.join(valid[:3])}, ...")
             else:
-                near = difflib.get_close_matches(path, valid, n=1, cutoff=0.5)
-                hint = f" (did you mean \"{near[0]}\"?)" if near else ""
+                hint = did_you_mean(path, valid, show=lambda m: f'"{m}"', cutoff=0.5)
                 problems.append(f"{where}: unknown key, expected the TOML path of a toleranced key{hint}")
             continue
         if not hasattr(entry, "items"):
@@ -278,15 +276,14 @@ def statistics_table(spec) -> dict[str, dict]:
         ok = True
         for key in entry:
             if key not in ENTRY_KEYS:
-                near = difflib.get_close_matches(key, ENTRY_KEYS, n=1)
-                hint = f" (did you mean {near[0]}?)" if near else f" (valid: {', '.join(ENTRY_KEYS)})"
+                hint = did_you_mean(key, ENTRY_KEYS, otherwise=f" (valid: {', '.join(ENTRY_KEYS)})")
                 problems.append(f"{where}.{key}: unknown key{hint}")
                 ok = False
         name = entry.get("distribution", DEFAULT_DISTRIBUTION[q.kind])
         if not isinstance(name, str) or name not in DISTRIBUTIONS:
             shown = f'"{name}"' if isinstance(name, str) else repr(name)
-            near = difflib.get_close_matches(str(name).lower(), list(DISTRIBUTIONS), n=1)
-            hint = f" (did you mean \"{near[0]}\"?)" if near else f" (known: {', '.join(DISTRIBUTIONS)})"
+            hint = did_you_mean(str(name).lower(), DISTRIBUTIONS, show=lambda m: f'"{m}"',
+                                otherwise=f" (known: {', '.join(DISTRIBUTIONS)})")
             problems.append(f"{where}.distribution: unknown distribution {shown}{hint}")
             continue
         law = DISTRIBUTIONS[name]
