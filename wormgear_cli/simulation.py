@@ -139,7 +139,7 @@ def periodic_sources(spec, all_budget_sources: bool = False) -> list[Source]:
             return de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase)) / r2
 
         gear_amp = _first_harmonic(lambda phi: gear_model.gear_kinematic_te(phi, r1, r2, de, alpha))
-        gear_peak = float(gear_model.gear_te_max(r1, r2, de, alpha, 0.0)[0])
+        gear_peak = float(gear_model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0])
     else:
         # involute: e/r_b at the pinion's order, i.e. e/r_b1 at the output (models.gear.involute_stage);
         # the static part of the lost motion (centre distance, thickness allowances) is constant
@@ -250,7 +250,7 @@ def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
         gp = spec.gear_pair
         r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
         if gp.kinematics == "paper":
-            _, phi_star = gear_model.gear_te_max(r1, r2, gear_eccentricity(spec), gp.pressure_angle, 0.0)
+            _, phi_star = gear_model.gear_te_max_fast(r1, r2, gear_eccentricity(spec), gp.pressure_angle, 0.0)
             out["gear_eccentricity"] = float(phi_star)
     return out
 
