@@ -37,7 +37,7 @@ def _files(tmp_path, jitter: bool, s2_mm: float, seed: int):
 
 
 def _run(runner, spec, data, *extra):
-    from wormgear_cli.cli.app import app
+    from wormgear_cli.cli._app import app
 
     res = runner.invoke(app, ["diagnose", str(spec), str(data), "--resamples", "20", *extra])
     assert res.exit_code == 0, res.output

@@ -39,7 +39,7 @@ def _spec_copy(tmp_path, line: str):
 
 
 def _prediction(runner, spec):
-    from wormgear_cli.cli.app import app
+    from wormgear_cli.cli._app import app
 
     res = runner.invoke(app, ["diagnose", str(spec), str(CONFIGS / "mch50-warm.csv"), "-f", "json",
                               "--resamples", "10"])
@@ -74,7 +74,7 @@ def test_default_prediction_says_it_assumes_uniform_warming(runner):
 
 @pytest.mark.parametrize("value", ["0.0", "-0.2", "1.6"])
 def test_housing_rise_ratio_outside_its_range_is_refused(runner, tmp_path, value):
-    from wormgear_cli.cli.app import app
+    from wormgear_cli.cli._app import app
 
     res = runner.invoke(app, ["analyze", str(_spec_copy(tmp_path, f"housing_rise_ratio = {value}"))])
     assert res.exit_code == 2

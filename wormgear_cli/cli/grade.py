@@ -6,7 +6,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from wormgear_cli.cli.app import app
+from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import OutputOption, TableJsonFormat, emit, json_text, render
 
 

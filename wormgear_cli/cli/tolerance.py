@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from wormgear_cli.cli.app import app
+from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (DriveArgument, FormatOption, OutputOption, Progress, UnitOption, emit,
                                      json_text, render, write_stdout)
 
