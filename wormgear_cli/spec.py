@@ -25,7 +25,7 @@ from typing import Any
 from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.models.deformation import DEFORMATION_MODELS
 
-DEG = math.pi / 180.0
+from wormgear_cli.units import ARCSEC, DEG  # noqa: E402  (the one definition of each)
 
 #: unit suffix -> factor to the internal unit
 UNIT_SCALE = {
@@ -35,7 +35,7 @@ UNIT_SCALE = {
     "N": 1.0,
     "GPa": 1000.0,
     "ppm/K": 1e-6,
-    "arcsec": math.pi / 648000.0,
+    "arcsec": ARCSEC,
     "-": 1.0,
     "": 1.0,
 }

@@ -39,7 +39,7 @@ import numpy as np
 from wormgear_cli.errors import UsageError, did_you_mean
 from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys, params_to_keys
 
-ARCSEC = math.pi / 648000.0
+from wormgear_cli.units import ARCSEC  # noqa: E402  (the one definition)
 
 #: the data columns, in file order
 COLUMNS = ("angle_deg", "error_arcsec", "direction", "run", "load_Nm", "temperature_C", "time_s")

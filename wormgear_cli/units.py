@@ -20,6 +20,8 @@ RAD_PER_UNIT: dict[str, float] = {
 
 #: one second of arc [rad]
 ARCSEC = RAD_PER_UNIT["arcsec"]
+#: radians per degree
+DEG = RAD_PER_UNIT["deg"]
 
 #: units offered on the command line (``--unit``)
 ANGLE_UNITS = ("deg", "arcmin", "arcsec", "urad")

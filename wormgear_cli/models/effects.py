@@ -13,15 +13,13 @@ effect's parameters in internal units, and return the error at the output
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
 UM = 1e-3  # mm per um
-ARCSEC = math.pi / 648000.0  # rad per arcsec
-DEG = math.pi / 180.0
+from wormgear_cli.units import ARCSEC, DEG  # noqa: E402,F401  (rad per arcsec, per degree: one definition)
 
 
 @dataclass(frozen=True)
