@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
 
@@ -13,6 +11,8 @@ import pytest
 from wormgear_cli.cli import app
 from wormgear_cli.measurement import read_measurement
 from wormgear_cli.spec import load_spec
+
+from tests.test_synth import _rows  # the one parser of synth's CSV in the tests
 from wormgear_cli.synth import COLUMNS
 
 from tests.conftest import MCH50
@@ -23,10 +23,6 @@ def spec():
     return load_spec(MCH50)
 
 
-def _rows(text: str):
-    lines = [ln for ln in text.splitlines() if not ln.startswith("#")]
-    rows = list(csv.reader(io.StringIO("\n".join(lines))))
-    return rows[0], {c: np.array([float(r[j]) for r in rows[1:]]) for j, c in enumerate(rows[0])}
 
 
 def _synth(runner, tmp_path, *args, name="d.csv"):
