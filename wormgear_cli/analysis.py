@@ -50,7 +50,7 @@ class Deflections:
 
 def geometry(spec):
     """Derived geometry used by the effect catalogue and simulation (a ``DriveGeometry``)."""
-    from wormgear_cli.models.effects import DriveGeometry
+    from wormgear_cli.models.geometry import DriveGeometry
 
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth

@@ -8,21 +8,28 @@ them to get exactly the bytes the CLI writes.
   sweep's 10^6-row files).
 * :func:`json_text`: deterministic JSON (NaN/inf -> null).
 * :func:`fmt_angle`: an angle for a table cell, at the unit's natural resolution.
-* :class:`Table`, :class:`Column`, :class:`Cell`: a table as data (title, columns, rows of
-  text); the CLI draws it with rich (``wormgear_cli.cli.common.render``).
+* Tables as data (:class:`Table`, :class:`Column`, :class:`Cell`) live in
+  :mod:`wormgear_cli.tables` (still importable from here).
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import math
-from dataclasses import dataclass, field
-from typing import Iterable, Optional
+from typing import Iterable
 
 #: significant digits of numbers in the sweep's (i, l) CSV ('%.12g'; ~1e-12 relative)
 CSV_DIGITS = 12
+
+
+def __getattr__(name: str):
+    # the table classes moved to wormgear_cli.tables (one topic per module, and ``analyze``
+    # does not pay for three dataclasses it does not draw); the old names still work
+    if name in ("Cell", "Column", "Table"):
+        from wormgear_cli import tables
+
+        return getattr(tables, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def json_text(doc) -> str:
@@ -61,6 +68,9 @@ def fmt_number(x) -> str:
 
 def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) -> str:
     """CSV text (stdlib csv, "\\n" line ends) of ``rows``, numbers by :func:`fmt_number`."""
+    import csv  # only the CSV paths pay for it (start-up of ``analyze --format json``)
+    import io
+
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     if header:
@@ -79,43 +89,6 @@ def fmt_angle(x: float, unit: str) -> str:
     if unit == "arcsec":
         return f"{x:.2f}"
     return f"{x:.1f}"
-
-
-# --- tables as data --------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Cell:
-    """A table cell: its text and an optional style name (e.g. "bold red", "dim")."""
-
-    text: str
-    style: Optional[str] = None
-
-
-@dataclass(frozen=True)
-class Column:
-    """A table column: header text and alignment ("left" or "right")."""
-
-    header: str
-    justify: str = "left"
-
-
-@dataclass
-class Table:
-    """A table as data: ``rows`` hold str or :class:`Cell` values, one per column.
-
-    ``show_header`` False hides the header row.  Rendering (and the rule that a number is
-    never cut to fit the width) is the CLI's: :func:`wormgear_cli.cli.common.render`.
-    """
-
-    title: str
-    columns: list
-    rows: list = field(default_factory=list)
-    caption: Optional[str] = None
-    show_header: bool = True
-
-    def add_row(self, *cells) -> None:
-        self.rows.append(list(cells))
 
 
 # --- fast deterministic number formatting ----------------------------------------------------

@@ -68,14 +68,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
 from wormgear_cli.analysis import deflections, gear_eccentricity, geometry
 from wormgear_cli.models import gear as gear_model
 from wormgear_cli.models import worm as worm_model
-from wormgear_cli.models.effects import EFFECTS, DriveGeometry, Signals
+from wormgear_cli.models.geometry import DriveGeometry  # noqa: F401  (annotations)
+
+if TYPE_CHECKING:
+    from wormgear_cli.models.effects import Signals
 
 
 @dataclass(frozen=True)
@@ -307,6 +310,8 @@ def components(spec, signals: Signals, phases: dict | None = None,
     out["lost_motion"] = -d * lost / 2.0
     out["deformation"] = -d * comp.process_lag + comp.per_Nm * signals.load
     g = geometry(spec)
+    from wormgear_cli.models.effects import EFFECTS  # the catalogue: not needed by ``analyze``
+
     for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
     return out
@@ -323,6 +328,8 @@ def simulate(spec, signals: Signals, phases: dict | None = None, offset: float =
 
 def max_reversal(spec, revolutions: int = 1, points: int = 20000) -> float:
     """Largest simulated lost motion over the given turns [rad] (for tests and docs)."""
+    from wormgear_cli.models.effects import Signals
+
     theta = np.linspace(0.0, 2.0 * np.pi * revolutions, points, endpoint=False)
     fwd = simulate(spec, Signals.make(theta, 1.0))
     rev = simulate(spec, Signals.make(theta, -1.0))

@@ -320,6 +320,12 @@ def _class_name(section: str) -> str:
 
 
 _SECTION_CLASSES: dict[str, type] = {sec: type(_class_name(sec), (Section,), {"__slots__": ()}) for sec in SECTIONS}
+_SECTION_SET = frozenset(SECTIONS)
+#: section -> its fields, and its direct sub-sections; sections deepest first (built once)
+_FIELDS_OF: dict[str, tuple] = {sec: tuple(f for f in FIELDS if f.section == sec) for sec in SECTIONS}
+_SUBSECTIONS_OF: dict[str, tuple] = {
+    sec: tuple(c for c in SECTIONS if "." in c and c.rsplit(".", 1)[0] == sec) for sec in SECTIONS}
+_SECTIONS_DEEPEST_FIRST = tuple(sorted(SECTIONS, key=lambda s: -s.count(".")))
 
 
 @dataclass(frozen=True)
@@ -577,19 +583,22 @@ def _number_problem(f: Field, raw) -> str | None:
     return None
 
 
-def _known_children(prefix: str) -> set[str]:
+def _known_children(prefix: str) -> frozenset[str]:
     """Keys and sub-tables valid directly under ``prefix`` ("" = top level)."""
-    out: set[str] = set()
-    depth = 0 if not prefix else prefix.count(".") + 1
+    return _KNOWN_CHILDREN.get(prefix, frozenset())
+
+
+def _children_table() -> dict[str, frozenset[str]]:
+    out: dict[str, set[str]] = {"": {"effects", "statistics"}}  # free-form tables, validated by their own modules
     for f in FIELDS:
-        if prefix and not f.path.startswith(prefix + "."):
-            continue
         parts = f.path.split(".")
-        if len(parts) > depth:
-            out.add(parts[depth])
-    if not prefix:
-        out.update(("effects", "statistics"))  # free-form tables, validated by their own modules
-    return out
+        for depth in range(len(parts)):
+            out.setdefault(".".join(parts[:depth]), set()).add(parts[depth])
+    return {k: frozenset(v) for k, v in out.items()}
+
+
+#: table path ("" = top level) -> the keys and sub-tables valid directly under it (built once)
+_KNOWN_CHILDREN = _children_table()
 
 
 def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> None:
@@ -609,7 +618,7 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
             what = "table" if isinstance(value, dict) else "key"
             problems.append(f"{source}: {path}: unknown {what}{hint}")
             continue
-        is_section = any(s == path for s in SECTIONS) or path in ("effects", "statistics")
+        is_section = path in _SECTION_SET or path in ("effects", "statistics")
         if is_section and not isinstance(value, dict):
             problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(value)}")
         elif not is_section and isinstance(value, dict):
@@ -697,13 +706,11 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
             v["gear_pair.output_gear.teeth"], v["gear_pair.pinion.teeth"], v["gear_pair.pressure_angle_deg"]))
 
     built: dict[str, Any] = {}
-    for sec in sorted(SECTIONS, key=lambda s: -s.count(".")):
-        cls = _SECTION_CLASSES[sec]
-        kwargs = {f.attr: v[f.path] for f in FIELDS if f.section == sec}
-        for child in SECTIONS:
-            if child.rsplit(".", 1)[0] == sec and "." in child:
-                kwargs[child.rsplit(".", 1)[1]] = built[child]
-        built[sec] = cls(**kwargs)
+    for sec in _SECTIONS_DEEPEST_FIRST:
+        kwargs = {f.attr: v[f.path] for f in _FIELDS_OF[sec]}
+        for child in _SUBSECTIONS_OF[sec]:
+            kwargs[child.rsplit(".", 1)[1]] = built[child]
+        built[sec] = _SECTION_CLASSES[sec](**kwargs)
     top = {s: built[s] for s in SECTIONS if "." not in s}
     return Spec(**top, effects=MappingProxyType(effects), source=source, raw=_freeze(data))
 

@@ -178,12 +178,12 @@ class Progress:
 
 
 def _rich_table(t):
-    """A :class:`wormgear_cli.formats.Table` as a rich Table (text is never read as markup)."""
+    """A :class:`wormgear_cli.tables.Table` as a rich Table (text is never read as markup)."""
     from rich.markup import escape
     from rich.table import Table
     from rich.text import Text
 
-    from wormgear_cli.formats import Cell
+    from wormgear_cli.tables import Cell
 
     out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header)
     for c in t.columns:
@@ -259,7 +259,7 @@ def fit_table(table, console, width: int) -> list:
 def _draw(console, renderables: list, width: int) -> None:
     from rich.table import Table as RichTable
 
-    from wormgear_cli.formats import Table
+    from wormgear_cli.tables import Table
 
     for r in renderables:
         if isinstance(r, Table):
@@ -269,7 +269,7 @@ def _draw(console, renderables: list, width: int) -> None:
 
 
 def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
-    """Draw tables (:class:`wormgear_cli.formats.Table` or rich renderables) to stdout
+    """Draw tables (:class:`wormgear_cli.tables.Table` or rich renderables) to stdout
     (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
     import io
 

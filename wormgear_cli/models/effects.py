@@ -20,27 +20,7 @@ import numpy as np
 
 UM = 1e-3  # mm per um
 from wormgear_cli.units import ARCSEC, DEG  # noqa: E402,F401  (rad per arcsec, per degree: one definition)
-
-
-@dataclass(frozen=True)
-class DriveGeometry:
-    """Derived quantities of a drive that the effect signatures need.
-
-    Attributes (internal units): ``output_pitch_radius`` r_1 [mm],
-    ``output_base_radius`` r_b1 [mm], ``wheel_pitch_radius`` [mm],
-    ``gear_ratio`` i_c = z1/z2 [-], ``worm_order`` n_w = i_c z3 / z_worm [-]
-    (worm revolutions per output revolution), ``output_teeth`` z1,
-    ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm].
-    """
-
-    output_pitch_radius: float
-    output_base_radius: float
-    wheel_pitch_radius: float
-    gear_ratio: float
-    worm_order: float
-    output_teeth: int
-    axial_pressure_angle: float
-    worm_centre_distance: float
+from wormgear_cli.models.geometry import DriveGeometry  # noqa: E402,F401  (re-exported: its old home)
 
 
 @dataclass(frozen=True)

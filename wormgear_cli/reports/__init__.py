@@ -2,7 +2,7 @@
 
 Core code (no I/O, no typer, no rich), shared by the CLI and the Python API: each function
 takes results of the core and returns data -- dicts for JSON, bytes/str for CSV, and
-:class:`wormgear_cli.formats.Table` for tables.  Formatting of numbers lives in
+:class:`wormgear_cli.tables.Table` for tables.  Formatting of numbers lives in
 :mod:`wormgear_cli.formats`.
 
 * :mod:`wormgear_cli.reports.analyze` -- ``wormgear analyze`` (stages, totals, budget, values used).

@@ -12,7 +12,8 @@ from typing import Callable, Iterator, Optional
 
 import numpy as np
 
-from wormgear_cli.formats import Cell, Column, Table, csv_block, csv_text, fmt_angle
+from wormgear_cli.formats import csv_block, csv_text, fmt_angle
+from wormgear_cli.tables import Cell, Column, Table
 from wormgear_cli import sweep as core
 from wormgear_cli.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
 from wormgear_cli.units import to_unit

@@ -1,0 +1,44 @@
+"""Tables as data: a title, columns and rows of text, built by the core, drawn by the CLI.
+
+No I/O, no rich.  :func:`wormgear_cli.cli.common.render` draws a :class:`Table` with rich,
+within the terminal's width and never cutting a number.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+
+@dataclass(frozen=True)
+class Cell:
+    """A table cell: its text and an optional style name (e.g. "bold red", "dim")."""
+
+    text: str
+    style: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class Column:
+    """A table column: header text and alignment ("left" or "right")."""
+
+    header: str
+    justify: str = "left"
+
+
+@dataclass
+class Table:
+    """A table as data: ``rows`` hold str or :class:`Cell` values, one per column.
+
+    ``show_header`` False hides the header row.  Rendering (and the rule that a number is
+    never cut to fit the width) is the CLI's: :func:`wormgear_cli.cli.common.render`.
+    """
+
+    title: str
+    columns: list
+    rows: list = field(default_factory=list)
+    caption: Optional[str] = None
+    show_header: bool = True
+
+    def add_row(self, *cells) -> None:
+        self.rows.append(list(cells))
