@@ -117,6 +117,9 @@ def read_text_file(path: str | Path, expected: str, error: type = UsageError, en
     _remember_input(path)
     blob = b"".join(chunks)
     try:
+        if encoding == "utf-8-sig":  # the same text, without importing the utf_8_sig codec (start-up)
+            text = blob.decode("utf-8")
+            return text[1:] if text.startswith("\ufeff") else text
         return blob.decode(encoding)
     except UnicodeDecodeError as exc:
         raise error(f"{name}: not UTF-8 text (byte {exc.start}), expected {expected}") from None

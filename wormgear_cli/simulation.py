@@ -67,8 +67,7 @@ Relation to ``analyze`` (tested in tests/test_simulate.py):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable
+from typing import Callable, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
@@ -81,8 +80,9 @@ if TYPE_CHECKING:
     from wormgear_cli.models.effects import Signals
 
 
-@dataclass(frozen=True)
-class Source:
+# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
+# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
+class Source(NamedTuple):
     """A periodic error source of the spec.
 
     ``name``: identifier; ``phase_path``: TOML path of its phase key;
@@ -110,7 +110,11 @@ class Source:
 
 
 def _sine(amplitude, order):
-    return lambda theta, phase: amplitude * np.sin(order * theta + phase)
+    def curve(theta, phase):
+        return amplitude * np.sin(order * theta + phase)
+
+    curve.sine = (amplitude, order)  # a pure sinusoid: the budget's peak adds these as phasors
+    return curve
 
 
 #: the full budget's sources beyond the paper's five (docs/budget.md)
@@ -258,8 +262,9 @@ def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
     return out
 
 
-@dataclass(frozen=True)
-class Compliance:
+# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
+# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
+class Compliance(NamedTuple):
     """Tooth-stiffness terms [rad]: ``process_lag`` per direction under the
     spec's loads, ``per_Nm`` output wind-up per N m of external torque."""
 
