@@ -146,64 +146,17 @@ def check(
 
     Example: wormgear check configs/*.toml --format json
     """
-    from wormgear_cli.analysis import analyze as run
-    from wormgear_cli.errors import WormgearError
-    from wormgear_cli.requirements import evaluate
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.requirements import check_file
 
     fmt = getattr(format, "value", format)
-    results, lines = [], []
-    invalid = failed = False
-    for path in drives:
-        entry = {"file": str(path), "valid": True, "passed": True, "problems": [], "requirements": []}
-        try:
-            spec = load_spec(path)
-        except WormgearError as exc:
-            invalid = True
-            entry.update(valid=False, passed=False, problems=exc.problems)
-            for p in exc.problems:
-                typer.echo(f"error: {p}", err=True)
-            results.append(entry)
-            continue
-        verdicts = evaluate(spec, run(spec))
-        try:  # requirements.min_yield: a Monte Carlo estimate (wormgear tolerance); imported only then
-            yc, by_yield = None, set()
-            if spec.requirements.min_yield is not None:
-                from wormgear_cli.tolerance.engine import YIELD_REQUIREMENTS, check_yield
-
-                yc = check_yield(spec)
-                by_yield = {f"requirements.{a}_arcsec" for a in YIELD_REQUIREMENTS}  # the limits the yield counts
-            elif "statistics" in spec.raw:  # validated even when no yield is required
-                from wormgear_cli.tolerance.quantities import statistics_table
-
-                statistics_table(spec)
-        except WormgearError as exc:
-            invalid = True
-            entry.update(valid=False, passed=False, problems=exc.problems)
-            for p in exc.problems:
-                typer.echo(f"error: {p}", err=True)
-            results.append(entry)
-            continue
-        for v in verdicts:
-            entry["requirements"].append({"key": v.key, "limit_arcsec": v.limit_arcsec,
-                                          "value_arcsec": v.value_arcsec, "passed": v.passed})
-            if not v.passed and v.key in by_yield:  # with min_yield the sampled limits are judged by the yield
-                entry["requirements"][-1]["passed"] = None
-                lines.append(f"{path}: worst case over {v.key}: limit {v.limit_arcsec:g} arcsec, corner value "
-                             f"{v.value_arcsec:.2f} arcsec (judged by requirements.min_yield)")
-            elif not v.passed:
-                entry["passed"] = False
-                failed = True
-                lines.append(f"{path}: FAIL {v.key}: limit {v.limit_arcsec:g} arcsec, value {v.value_arcsec:.2f} "
-                             "arcsec")
-        if yc is not None:
-            entry["yield"], entry["passed"], failed = yc.to_dict(), yc.passed, failed or not yc.passed
-            lines.append(f"{path}: {yc.line()}")
-        if entry["passed"] and yc is None:
-            n = len(verdicts)
-            lines.append(f"{path}: ok ({n} requirement{'s' if n != 1 else ''} met)" if n else
-                         f"{path}: ok (valid; no requirements)")
-        results.append(entry)
+    checks = [check_file(path) for path in drives]
+    for c in checks:
+        for p in c.problems:
+            typer.echo(f"error: {p}", err=True)
+    invalid = any(not c.valid for c in checks)
+    failed = any(c.valid and not c.passed for c in checks)
+    results = [c.to_dict() for c in checks]
+    lines = [ln for c in checks for ln in c.findings]
     if fmt == "json":
         emit(json_text({"files": results, "passed": not (invalid or failed)}), output, drives)
     elif lines:
