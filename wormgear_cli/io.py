@@ -571,7 +571,8 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
     command, together with the other outputs).  A symlink to a regular file
     keeps the link; its final target is replaced.  A special file (FIFO,
     device such as /dev/null) or a symlink to one is written in place, at
-    commit.  Text is written as UTF-8, bytes as they are.
+    commit.  Text is written as UTF-8, bytes as they are.  :func:`atomic_stream`
+    does the same for content written piece by piece.
 
     Parameters
     ----------
@@ -592,11 +593,25 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
     StdoutClosed
         ``path`` is a pipe whose reader went away.
     """
+    with atomic_stream(path, inputs, option) as write:
+        write(data)
+
+
+@contextmanager
+def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = None):
+    """:func:`atomic_write` for content produced piece by piece: yields ``write(chunk)``
+    (str or bytes) that appends to the staged file, so a large output is never held in
+    memory whole.  The staged file becomes ``path`` when the block ends without an error
+    (inside :func:`output_transaction`: at commit); on any error it is removed.  A special
+    file is written at commit (its content is held until then).  Raises as :func:`atomic_write`.
+    """
     path = Path(path)
     refuse_input(path, inputs, option or "-o")
     kind, dest = _destination(path, option)
-    blob = _as_bytes(data)
     if kind == "special":
+        pieces: list[bytes] = []
+        yield lambda chunk: pieces.append(_as_bytes(chunk))
+        blob = b"".join(pieces)
         if _CURRENT is not None:
             _CURRENT.direct.append((path, blob))
             return
@@ -620,7 +635,7 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
             if _CURRENT is not None:
                 _CURRENT.staged.append((str(tmp), dest))
-        _write_all(fd, blob)
+        yield lambda chunk: _write_all(fd, _as_bytes(chunk))
         fd, _fd = None, fd
         os.close(_fd)  # a deferred write error (NFS, quota) surfaces here
         if mode is not None:

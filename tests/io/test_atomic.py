@@ -10,7 +10,7 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
-from wormgear_cli.io import atomic_write, output_transaction
+from wormgear_cli.io import atomic_stream, atomic_write, output_transaction
 
 from tests.conftest import MCH50
 
@@ -37,6 +37,23 @@ def test_transaction_discards_on_error_and_commits_on_success(tmp_path):
         assert not a.exists()  # renamed into place only at the end
     assert a.read_text() == "x" and b.read_bytes() == b"y"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+
+
+def test_streamed_output_appears_whole_or_not_at_all(tmp_path):
+    out = tmp_path / "big.csv"
+    out.write_text("old\n")
+    with pytest.raises(RuntimeError):  # fails half-way: the old file stays, no staged file is left
+        with atomic_stream(out) as write:
+            write("a,b\n")
+            write(b"1,2\n")
+            raise RuntimeError("boom")
+    assert out.read_text() == "old\n" and [p.name for p in tmp_path.iterdir()] == ["big.csv"]
+    with output_transaction():
+        with atomic_stream(out) as write:
+            for k in range(3):
+                write(f"{k},{k * k}\n")
+        assert out.read_text() == "old\n"  # renamed into place only when the command commits
+    assert out.read_text() == "0,0\n1,1\n2,4\n" and [p.name for p in tmp_path.iterdir()] == ["big.csv"]
 
 
 def test_special_files_are_written_in_place_not_replaced(runner, tmp_path):

@@ -246,9 +246,21 @@ def test_check_validates_statistics_without_min_yield(runner, tmp_path):
                         'distribution "lognormal" (did you mean "normal"?)\n')
 
 
-def test_csv_file_size_limit(runner, tmp_path):
-    r = _run(runner, MCH50, "-n", 2_000_000, "--format", "csv", "-o", tmp_path / "x.csv")
-    assert r.exit_code == 2
-    assert r.stderr == ("error: --format csv -o: 2000000 samples are more than the limit of 500000 for a file "
-                        "written at once; write to stdout instead (it is streamed: > FILE) or use --shard K/N\n")
-    assert not (tmp_path / "x.csv").exists()
+def test_csv_file_is_streamed_and_equals_stdout_over_several_blocks(runner, tmp_path, monkeypatch):
+    # -o streams block by block through a staged file (no cap on the sample count): the file holds
+    # exactly the bytes stdout gets, across block boundaries, and no staged file is left behind.
+    # Blocks of 1000 samples (both runs alike) keep the test fast.
+    from wormgear_cli.tolerance import engine, sampling
+
+    monkeypatch.setattr(engine, "BLOCK", 1000)
+    monkeypatch.setattr(sampling, "BLOCK", 1000)
+    n = 2 * 1000 + 7
+    out = tmp_path / "x.csv"
+    to_file = _run(runner, MCH50, "-n", n, "--metrics", "budget", "--format", "csv", "-o", out)
+    to_stdout = _run(runner, MCH50, "-n", n, "--metrics", "budget", "--format", "csv")
+    assert to_file.exit_code == 0 and to_stdout.exit_code == 0
+    assert to_file.stdout == "" and to_file.stderr.endswith(f"wrote {out}\n")
+    text = out.read_text()
+    assert text == to_stdout.stdout
+    assert len(text.splitlines()) == n + 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.csv"]
