@@ -95,13 +95,13 @@ def test_budget_yields_equal_the_fractions_counted_from_the_csv(runner, tmp_path
     assert r.exit_code == 0, r.output
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     doc = json.loads(_run(runner, drive, "-n", 4000, "--metrics", "paper+budget", "--format", "json").stdout)
-    for key, column, limit in (("max_budget_rss_arcsec", "budget_rss", 12.0),
-                               ("max_budget_linear_arcsec", "budget_linear", 20.0)):
+    for key, column, limit in (("max_budget_rss_arcsec", "budget_rss_arcsec", 12.0),
+                               ("max_budget_linear_arcsec", "budget_linear_arcsec", 20.0)):
         passing = sum(float(row[column]) <= limit for row in rows)
         assert 0 < passing < 4000  # the limit cuts through the distribution
         assert doc["yield"][f"requirements.{key}"]["value"] == passing / 4000
-    both = sum(float(row["budget_rss"]) <= 12.0 and float(row["budget_linear"]) <= 20.0
-               and float(row["total_transmission_error"]) <= 20.0 and float(row["total_backlash"]) <= 70.0
+    both = sum(float(row["budget_rss_arcsec"]) <= 12.0 and float(row["budget_linear_arcsec"]) <= 20.0
+               and float(row["total_transmission_error_arcsec"]) <= 20.0 and float(row["total_backlash_arcsec"]) <= 70.0
                for row in rows)
     assert doc["yield"]["all"]["value"] == both / 4000
 

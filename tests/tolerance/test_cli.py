@@ -69,7 +69,7 @@ def test_yield_equals_the_fraction_counted_from_the_csv(runner, tmp_path):
     assert r.exit_code == 0, r.output
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     assert [int(row["sample"]) for row in rows] == list(range(5000))
-    passing = sum(float(row["total_transmission_error"]) <= 36.0 for row in rows)
+    passing = sum(float(row["total_transmission_error_arcsec"]) <= 36.0 for row in rows)
     doc = json.loads(_run(runner, drive, "-n", 5000, "--metrics", "paper", "--format", "json").stdout)
     y = doc["yield"]["requirements.max_transmission_error_arcsec"]
     assert 0 < passing < 5000  # the limit cuts through the distribution
@@ -86,9 +86,39 @@ def test_csv_columns(runner):
     assert header[0] == "sample"
     assert "assembly.wheel_eccentricity_mm" in header and "assembly.worm_pair_errors_mm[5]" in header
     assert "worm_pair.lead_error_phase_deg" in header
-    assert header[-8:] == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B", "iso230_M",
-                           "iso230_A", "budget_linear", "budget_rss"]
+    assert header[-8:] == ["total_transmission_error_deg", "total_backlash_deg", "iso230_E_deg", "iso230_B_deg",
+                           "iso230_M_deg", "iso230_A_deg", "budget_linear_deg", "budget_rss_deg"]
     assert len(r.stdout.splitlines()) == 4
+
+
+def test_summarize_reads_the_samples_in_the_unit_they_were_written_in(runner, tmp_path):
+    # samples written in deg, summarized with the default --unit arcsec: the same yields and, in
+    # arcsec, the percentiles of the run made in arcsec (3600 arcsec per deg, to rounding)
+    drive = _tight(tmp_path)
+    in_deg = tmp_path / "deg.csv"
+    assert _run(runner, drive, "-n", 3000, "--metrics", "paper", "--format", "csv", "--unit", "deg",
+                "-o", in_deg).exit_code == 0
+    summarized = json.loads(_run(runner, drive, "-n", 3000, "--metrics", "paper", "--summarize", in_deg,
+                                 "--format", "json").stdout)
+    direct = json.loads(_run(runner, drive, "-n", 3000, "--metrics", "paper", "--format", "json").stdout)
+    assert summarized["yield"] == direct["yield"]
+    te_s, te_d = (d["metrics"]["total_transmission_error"] for d in (summarized, direct))
+    for q in ("50", "99"):
+        assert te_s["percentiles"][q] == pytest.approx(te_d["percentiles"][q], rel=1e-9)
+    assert te_s["mean"] == pytest.approx(te_d["mean"], rel=1e-9)
+    assert 10.0 < te_d["percentiles"]["50"] < 100.0  # in arcsec, not deg
+
+
+def test_summarize_still_reads_a_header_without_units_in_the_runs_unit(runner, tmp_path):
+    drive = _tight(tmp_path)
+    new = tmp_path / "new.csv"
+    assert _run(runner, drive, "-n", 500, "--metrics", "paper", "--format", "csv", "-o", new).exit_code == 0
+    old = tmp_path / "old.csv"
+    lines = new.read_text().split("\n", 1)
+    old.write_text(lines[0].replace("_arcsec", "") + "\n" + lines[1])
+    a, b = (_run(runner, drive, "-n", 500, "--metrics", "paper", "--summarize", f, "--format", "json").stdout
+            for f in (new, old))
+    assert a == b
 
 
 @pytest.mark.parametrize("n,parts", [(1000, 3), (70_000, 2)])  # 70 000 spans two random-stream blocks

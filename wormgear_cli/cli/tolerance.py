@@ -106,7 +106,7 @@ def tolerance(
     spec = load_spec(drive)
     n_rows = None
     if summarize is not None:
-        _, metric_set = report.read_header(summarize)
+        metric_set = report.read_header(summarize).metric_set
     options = engine.Options(samples=samples, seed=seed, metrics=metric_set, plan=getattr(plan, "value", plan),
                              targets=targets, points=points, unit=unit, shard=k_n)
     if summarize is not None:

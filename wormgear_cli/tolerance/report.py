@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, NamedTuple
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from wormgear_cli.errors import DataError
 from wormgear_cli.tolerance.engine import Block, Setup, Summary
 from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.tolerance.metrics import METRIC_SETS
+from wormgear_cli.units import ANGLE_UNITS, RAD_PER_UNIT
 
 #: longest line accepted in a samples CSV (a row holds a few dozen numbers; bounds the read of
 #: a file with no line ends, such as /dev/zero)
@@ -45,7 +46,19 @@ def _bounded_lines(fh, name: str):
 
 
 def csv_header(s: Setup) -> str:
-    return ",".join(("sample", *s.columns, *s.metrics)) + "\n"
+    """``sample``, the varied columns, then each metric named with its unit (``total_backlash_arcsec``),
+    so that ``--summarize`` reads the values in the unit they were written in."""
+    return ",".join(("sample", *s.columns, *(f"{m}_{s.options.unit}" for m in s.metrics))) + "\n"
+
+
+class SamplesHeader(NamedTuple):
+    """The header of a samples CSV: varied ``columns``, ``metric_set`` (a key of METRIC_SETS) and
+    the ``unit`` of its metric columns (None for a file written before the columns carried it:
+    read in the summarizing run's ``--unit``)."""
+
+    columns: tuple
+    metric_set: str
+    unit: str | None
 
 
 def csv_rows(s: Setup, block: Block) -> str:
@@ -56,8 +69,8 @@ def csv_rows(s: Setup, block: Block) -> str:
     return "".join(",".join(row) + "\n" for row in zip(*cols))
 
 
-def read_header(path: Path) -> tuple[tuple[str, ...], str]:
-    """The varied columns of a samples CSV and its metric set (a key of METRIC_SETS)."""
+def read_header(path: Path) -> SamplesHeader:
+    """The varied columns of a samples CSV, its metric set and the unit of its metrics."""
     name = str(path)
     expected = "expected a samples CSV of wormgear tolerance --format csv"
     if Path(path).is_dir():
@@ -77,12 +90,13 @@ def read_header(path: Path) -> tuple[tuple[str, ...], str]:
     if not cols or cols[0] != "sample":
         raise DataError(f"{name}: line 1: expected a header starting with \"sample\" "
                         "(a CSV of wormgear tolerance --format csv)")
-    for key, names in sorted(METRIC_SETS.items(), key=lambda kv: -len(kv[1])):  # the longest match first
-        k = len(names)
-        if cols[-k:] == names:
-            return cols[1:-k], key
-    raise DataError(f"{name}: line 1: expected the metric columns to end the header "
-                    f"({', '.join(METRIC_SETS['all'])}, or the paper, budget or iso part)")
+    for unit in (*ANGLE_UNITS, None):
+        for key, names in sorted(METRIC_SETS.items(), key=lambda kv: -len(kv[1])):  # the longest match first
+            k = len(names)
+            if cols[-k:] == tuple(names if unit is None else (f"{n}_{unit}" for n in names)):
+                return SamplesHeader(cols[1:-k], key, unit)
+    raise DataError(f"{name}: line 1: expected the metric columns, each named with its unit, to end the header "
+                    f"({', '.join(n + '_arcsec' for n in METRIC_SETS['all'])}, or the paper, budget or iso part)")
 
 
 def read_samples(path: Path, s: Setup) -> Iterator[Block]:
@@ -91,7 +105,10 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
     Raises :class:`DataError` for other columns, a malformed number or row, or
     sample numbers that are not consecutive (a part missing or given twice)."""
     name = str(path)
-    columns, _ = read_header(path)
+    header = read_header(path)
+    columns = header.columns
+    # metric values in the file's unit -> the run's (exactly 1 when they agree: same sums, same bytes)
+    scale = 1.0 if header.unit in (None, s.options.unit) else RAD_PER_UNIT[header.unit] / RAD_PER_UNIT[s.options.unit]
     if columns != s.columns:
         missing = [c for c in s.columns if c not in columns]
         extra = [c for c in columns if c not in s.columns]
@@ -152,6 +169,8 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
             expected_next = start + len(sample)
             cols = {c: data[:, 1 + i] for i, c in enumerate(s.columns)}
             mets = {m: data[:, 1 + len(s.columns) + i] for i, m in enumerate(s.metrics)}
+            if scale != 1.0:
+                mets = {m: v * scale for m, v in mets.items()}
             yield Block(start, expected_next, cols, mets)
             line_no += len(lines)
         if expected_next != s.stop:
