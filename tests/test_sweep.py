@@ -217,3 +217,37 @@ def test_undercut_min_teeth_is_safe_for_any_angle():
     assert all(b <= a for a, b in zip(counts, counts[1:]))  # fewer teeth needed at larger angles
     assert counts[0] == MAX_MIN_TEETH and counts[-1] == 4  # 2/sin^2(45 deg) = 4
 
+
+
+@pytest.mark.parametrize("config", ["rotary-table-precision.toml", "radar-pedestal-2start.toml"])
+def test_involute_drives_are_swept_with_the_involute_stage(config):
+    """A drive with ``gear_pair.kinematics = "involute"`` is swept by the stage analyze uses for it:
+    at the spec's own point and at snapped designs the sweep equals analyze (the paper's
+    Delta phi_cc would give other numbers)."""
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import load_spec, with_values
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    from tests.conftest import CONFIGS
+
+    spec = load_spec(CONFIGS / config)
+    gp = spec.gear_pair
+    assert gp.kinematics == "involute"
+    i0 = gp.output_gear.teeth / gp.pinion.teeth
+    l0 = gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2
+    a = analyze(spec).angles
+    data = RatioDistanceSweep(spec, [i0], [l0]).collect()
+    for key in ("gear_transmission_error", "total_transmission_error", "total_backlash", "gear_backlash"):
+        assert data[key][0] == pytest.approx(a[key], rel=1e-12), key
+    paper = analyze(with_values(spec, {"gear_pair.kinematics": "paper"})).angles
+    assert abs(paper["gear_backlash"] - a["gear_backlash"]) > 1e-3 * a["gear_backlash"]  # the readings differ here
+    m = gp.module
+    sw = RatioDistanceSweep(spec, [0.5 * i0, i0, 2.0 * i0], [0.8 * l0, l0], module=m)
+    snapped = sw.collect()
+    assert snapped["z1"].size > 0
+    for k in range(snapped["z1"].size):
+        z1, z2 = int(snapped["z1"][k]), int(snapped["z2"][k])
+        other = with_values(spec, {"gear_pair.output_gear.teeth": z1, "gear_pair.pinion.teeth": z2})
+        b = analyze(other).angles
+        for key in ("gear_transmission_error", "total_backlash"):
+            assert snapped[key][k] == pytest.approx(b[key], rel=1e-9), (key, z1, z2)

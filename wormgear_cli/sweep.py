@@ -218,7 +218,7 @@ class RatioDistanceSweep:
 
     def __init__(self, spec, i_values, l_values, hold: str = "force", module: Optional[float] = None,
                  min_teeth: Optional[int] = None):
-        from wormgear_cli.analysis import analyze
+        from wormgear_cli.analysis import analyze, gear_eccentricity
         from wormgear_cli.models import gear
         from wormgear_cli.spec import with_values
 
@@ -241,7 +241,7 @@ class RatioDistanceSweep:
         self.module = module
         gp = spec.gear_pair
         self.alpha = gp.pressure_angle
-        self.eccentricity = spec.assembly.gear_eccentricity
+        self.eccentricity = gear_eccentricity(spec)  # the one the chosen kinematics uses, as analyze
         self.min_teeth = (min_teeth if min_teeth is not None else undercut_min_teeth(self.alpha)) \
             if module is not None else None
         raw = spec.raw
@@ -264,8 +264,9 @@ class RatioDistanceSweep:
         # the structure: the kinematic peak depends on l only -> once per grid centre distance
         # (precomputed for up to one block of l values; a longer l axis gets it per block,
         # which keeps memory bounded: every l then appears at most twice in a block)
+        self._paper = gp.kinematics == "paper"  # the involute stage has no kinematic peak to search
         self._peak = gear.kinematic_peak(self.l_values, self.eccentricity, self.alpha) \
-            if module is None and self.l_values.size <= CHUNK_POINTS else None
+            if self._paper and module is None and self.l_values.size <= CHUNK_POINTS else None
         self._peak_blocks: dict = {}
 
     # -- shape -----------------------------------------------------------------------------------
@@ -364,11 +365,19 @@ class RatioDistanceSweep:
         else:
             z1, z2 = (np.asarray(z, dtype=float) for z in teeth)
             r1, r2 = m * z2 / 2.0, m * z1 / 2.0
-        if peak is None:
-            peak = gear.kinematic_peak(r1 + r2, self.eccentricity, self.alpha)
         d1, worm_scale = self._deflections(z1, z2, m, r2, i)
-        te, phi = gear.gear_te_max_fast(r1, r2, self.eccentricity, self.alpha, d1, peak=peak)
-        bl = gear.gear_backlash_max(m, z1, self.eccentricity, self.alpha, d1)
+        gp = self.spec.gear_pair
+        if gp.kinematics == "involute":  # the same stage as analyze's (models.gear.involute_stage)
+            inv = gear.involute_stage(r2, self.alpha, self.eccentricity,
+                                      self.spec.assembly.gear_centre_distance_error, d1,
+                                      gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
+            te, bl = inv.te_eccentricity + inv.te_deformation, inv.backlash
+            phi = np.full(np.shape(te), 0.5 * np.pi)  # e sin(phi) peaks at a quarter turn of the pinion
+        else:
+            if peak is None:
+                peak = gear.kinematic_peak(r1 + r2, self.eccentricity, self.alpha)
+            te, phi = gear.gear_te_max_fast(r1, r2, self.eccentricity, self.alpha, d1, peak=peak)
+            bl = gear.gear_backlash_max(m, z1, self.eccentricity, self.alpha, d1)
         ref = self.reference
         w_te = ref.worm_te[0] + (ref.worm_te[1] - ref.worm_te[0]) * worm_scale
         w_bl = ref.worm_backlash[0] + (ref.worm_backlash[1] - ref.worm_backlash[0]) * worm_scale
@@ -421,16 +430,18 @@ class RatioDistanceSweep:
             i_nom, l_nom = self.i_values[ii], self.l_values[li]
             point = np.arange(a, b, dtype=np.int64)
             if self.module is None:
-                peak = self._peak_at(li)
+                peak = self._peak_at(li) if self._paper else None
                 metrics = self.evaluate(i_nom, l_nom, peak=peak)
                 block = {"i": i_nom, "l_mm": l_nom, **metrics, "_point": point}
             else:
                 z1, z2, keep = self.snap(i_nom, l_nom)
                 z1, z2, i_nom, l_nom, point = z1[keep], z2[keep], i_nom[keep], l_nom[keep], point[keep]
                 i_used, l_used = z1 / z2, self.module * (z1 + z2) / 2.0
-                uniq, inverse = np.unique(l_used, return_inverse=True)
-                peak_u = gear.kinematic_peak(uniq, self.eccentricity, self.alpha)
-                metrics = self.evaluate(i_used, l_used, peak=tuple(p[inverse] for p in peak_u), teeth=(z1, z2))
+                peak = None
+                if self._paper:
+                    uniq, inverse = np.unique(l_used, return_inverse=True)
+                    peak = tuple(p[inverse] for p in gear.kinematic_peak(uniq, self.eccentricity, self.alpha))
+                metrics = self.evaluate(i_used, l_used, peak=peak, teeth=(z1, z2))
                 block = {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64),
                          "z2": z2.astype(np.int64), "i_used": i_used, "l_used_mm": l_used, "_point": point}
             if progress is not None:
