@@ -121,7 +121,8 @@ def test_summarize_still_reads_a_header_without_units_in_the_runs_unit(runner, t
     assert a == b
 
 
-@pytest.mark.parametrize("n,parts", [(1000, 3), (70_000, 2)])  # 70 000 spans two random-stream blocks
+# 70 000 samples span two random-stream blocks (slow: run in CI)
+@pytest.mark.parametrize("n,parts", [(1000, 3), pytest.param(70_000, 2, marks=pytest.mark.slow)])
 def test_shards_concatenate_to_the_whole_run_and_summarize_reproduces_it(runner, tmp_path, n, parts):
     args = [MCH50, "-n", n, "--metrics", "paper" if n > 10_000 else "all", "--seed", 5]
     whole = tmp_path / "whole.csv"
