@@ -35,38 +35,44 @@ R, M = 8, 6
 N, P = 2 * R * M, 2 * R
 
 
-def design(seed=1, s_run=2.0, s_pass=1.5, s_white=0.5):
+X_R = np.array([-3.0, 1.0, 4.0, -2.0, 0.0, 2.0, -1.0, 3.0])  # run-level covariate (first `runs` values)
+
+
+def design(seed=1, s_run=2.0, s_pass=1.5, s_white=0.5, runs=R):
     rng = np.random.default_rng(seed)
-    run = np.repeat(np.arange(R), 2 * M)
-    d = np.tile(np.repeat([1.0, -1.0], M), R)
+    n = 2 * runs * M
+    run = np.repeat(np.arange(runs), 2 * M)
+    d = np.tile(np.repeat([1.0, -1.0], M), runs)
     pattern = np.array([-2.5, -1.5, -0.5, 0.5, 1.5, 2.5])  # zero mean within a pass
-    w = np.tile(pattern, 2 * R)
-    x_r = np.array([-3.0, 1.0, 4.0, -2.0, 0.0, 2.0, -1.0, 3.0])  # run-level covariate
+    w = np.tile(pattern, 2 * runs)
+    x_r = X_R[:runs]
     x = x_r[run]
-    X = np.column_stack([np.ones(N), d, x, w])
+    X = np.column_stack([np.ones(n), d, x, w])
     pass_index = run * 2 + (d < 0)
-    y = (1.0 + 0.7 * d + 0.4 * x + 0.3 * w + rng.normal(0, s_run, R)[run]
-         + rng.normal(0, s_pass, P)[pass_index] + rng.normal(0, s_white, N))
+    y = (1.0 + 0.7 * d + 0.4 * x + 0.3 * w + rng.normal(0, s_run, runs)[run]
+         + rng.normal(0, s_pass, 2 * runs)[pass_index] + rng.normal(0, s_white, n))
     return X, y, make_groups(d, run + 1), run, d, w, x_r
 
 
 def anova(y, run, d, w, x_r):
     """The three strata by hand: (MS_run, MS_pass, MS_white) and the stratum OLS estimates."""
-    up = np.array([y[(run == r) & (d > 0)].mean() for r in range(R)])
-    dn = np.array([y[(run == r) & (d < 0)].mean() for r in range(R)])
+    runs = x_r.shape[0]
+    n = y.shape[0]
+    up = np.array([y[(run == r) & (d > 0)].mean() for r in range(runs)])
+    dn = np.array([y[(run == r) & (d < 0)].mean() for r in range(runs)])
     z = (up + dn) / 2.0
     xc = x_r - x_r.mean()
     b_x = float(xc @ (z - z.mean()) / (xc @ xc))
     res_run = z - z.mean() - b_x * xc
-    ms_run = 2 * M * float(res_run @ res_run) / (R - 2)
+    ms_run = 2 * M * float(res_run @ res_run) / (runs - 2)
     diff = up - dn
     b_d = diff.mean() / 2.0
-    ms_pass = (M / 2.0) * float(np.sum((diff - diff.mean()) ** 2)) / (R - 1)
+    ms_pass = (M / 2.0) * float(np.sum((diff - diff.mean()) ** 2)) / (runs - 1)
     pass_mean = np.where(d > 0, up[run], dn[run])
     dev = y - pass_mean
     b_w = float(w @ dev / (w @ w))
     res_w = dev - b_w * w
-    ms_white = float(res_w @ res_w) / (N - P - 1)
+    ms_white = float(res_w @ res_w) / (n - 2 * runs - 1)
     return dict(ms_run=ms_run, ms_pass=ms_pass, ms_white=ms_white, b_x=b_x, b_d=b_d, b_w=b_w,
                 sxx=float(xc @ xc), sww=float(w @ w))
 
