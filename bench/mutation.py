@@ -71,7 +71,8 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     # ~11 minutes).  The names follow the package split (pass_sums, fit_at, level_shares and
     # variance_info lost their underscore: the first round's list never ran them).
     "statistics": (("wormgear_cli/diagnosis/runs.py", "wormgear_cli/diagnosis/mixed.py"),
-                   ("tests/diagnosis/test_dof.py",),
+                   ("tests/diagnosis/test_dof.py", "tests/diagnosis/test_statistics_groups.py",
+                    "tests/diagnosis/test_statistics_reml.py"),
                    ("make_groups", "pass_sums", "weighted", "_neg2_reml", "fit_at", "reml",
                     "_full_neg2_reml", "level_shares", "containment_df", "variance_info", "_df_of",
                     "wald", "contrast_df")),

@@ -365,3 +365,62 @@ def test_reml_on_the_run_boundary_pools_the_run_and_pass_strata():
         for column in (1, 2):
             assert wald(cross, vf, [column]).df == pytest.approx(2 * R - 3, rel=0.03), (seed, column)
     assert seen >= 5
+
+
+def test_reml_on_the_pass_boundary_pools_the_pass_and_white_strata():
+    """No pass-to-pass noise (s_pass = 0): where MS_pass <= MS_white, the REML maximum lies on
+    s_p^2 = 0; pass differences and rows within passes then share E[MS] = s^2 and REML pools them,
+    s^2 = ((R - 1) MS_pass + (N - P - 1) MS_white) / (R - 1 + N - P - 1), while run means give
+    s^2 + 2 m s_r^2 = MS_run.  The direction (pass level) is then judged on the pooled 86 df, the
+    run-level x on R - 2 = 6.  Every such seed of 1..20."""
+    seen = 0
+    for seed in range(1, 21):
+        X, y, groups, run, d, w, x_r = design(seed, s_pass=0.0)
+        a = anova(y, run, d, w, x_r)
+        pooled = ((R - 1) * a["ms_pass"] + (N - P - 1) * a["ms_white"]) / (R - 1 + N - P - 1)
+        if a["ms_pass"] > a["ms_white"] or a["ms_run"] <= pooled:
+            continue
+        seen += 1
+        cross = Cross.build(X, y, groups)
+        vf = reml(cross)
+        assert vf.gp == 0.0, seed
+        assert vf.sigma2 == pytest.approx(pooled, rel=0.01), seed
+        assert vf.sigma2 * vf.gr == pytest.approx((a["ms_run"] - pooled) / (2 * M), rel=0.02), seed
+        assert wald(cross, vf, [1]).df == pytest.approx(R - 1 + N - P - 1, rel=0.03), seed
+        assert wald(cross, vf, [2]).df == pytest.approx(R - 2, rel=0.03), seed
+    assert seen >= 5
+
+
+def _scaled_info(cross, vf, factor):
+    """The variance information with W (the covariance of the variance parameters) multiplied by
+    ``factor``: every Satterthwaite df 2 c^2 / (g' W g) is divided by it."""
+    from wormgear_cli.diagnosis.mixed import variance_info
+
+    W, dC = variance_info(cross, vf)
+    return factor * W, dC
+
+
+def test_fai_cornelius_with_directions_between_two_and_three_df():
+    """W x 2.5 puts d at 7 / 2.5 = 2.8 and x at 6 / 2.5 = 2.4 df (each read from its own one-column
+    test): E = 2.8 / 0.8 + 2.4 / 0.4 = 9.5 and df = 2E / (E - 2) = 2.53 (Fai-Cornelius, computed
+    here from the two one-column df)."""
+    _, _, _, cross, vf, _ = fitted()
+    info = _scaled_info(cross, vf, 2.5)
+    d1 = wald(cross, vf, [1], info=info).df
+    d2 = wald(cross, vf, [2], info=info).df
+    assert 2.0 < d2 < d1 < 3.0
+    assert wald(cross, vf, [1, 2], info=info).df == pytest.approx(_fai_cornelius([d1, d2]), rel=1e-9)
+
+
+def test_degrees_of_freedom_stay_between_one_and_n_minus_k():
+    """W x 1e6 (df about 6e-6): every df is floored at 1; W x 1e-6 (df about 6e6): a contrast's df
+    is capped at n - k."""
+    from wormgear_cli.diagnosis import contrast_df
+
+    _, _, _, cross, vf, _ = fitted()
+    big, small = _scaled_info(cross, vf, 1e6), _scaled_info(cross, vf, 1e-6)
+    assert wald(cross, vf, [2], info=big).df == 1.0
+    assert wald(cross, vf, [1, 2], info=big).df == 1.0
+    assert contrast_df(vf, [0.0, 1.0, 1.0, 0.0], big) == 1.0
+    assert contrast_df(vf, [0.0, 1.0, 1.0, 0.0], small) == vf.dof == N - 4
+    assert wald(cross, vf, [2], info=small).df == N - 4
