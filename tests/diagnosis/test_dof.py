@@ -372,10 +372,11 @@ def test_reml_on_the_pass_boundary_pools_the_pass_and_white_strata():
     s_p^2 = 0; pass differences and rows within passes then share E[MS] = s^2 and REML pools them,
     s^2 = ((R - 1) MS_pass + (N - P - 1) MS_white) / (R - 1 + N - P - 1), while run means give
     s^2 + 2 m s_r^2 = MS_run.  The direction (pass level) is then judged on the pooled 86 df, the
-    run-level x on R - 2 = 6.  Every such seed of 1..20."""
+    run-level x on R - 2 = 6.  Every such seed of 1..20, and of 21..40 with s_white = 2 (seed 31
+    there is one where the two-ratio search alone stopped at g_p = 0.002)."""
     seen = 0
-    for seed in range(1, 21):
-        X, y, groups, run, d, w, x_r = design(seed, s_pass=0.0)
+    for seed, s_white in [(s, 0.5) for s in range(1, 21)] + [(s, 2.0) for s in range(21, 41)]:
+        X, y, groups, run, d, w, x_r = design(seed, s_pass=0.0, s_white=s_white)
         a = anova(y, run, d, w, x_r)
         pooled = ((R - 1) * a["ms_pass"] + (N - P - 1) * a["ms_white"]) / (R - 1 + N - P - 1)
         if a["ms_pass"] > a["ms_white"] or a["ms_run"] <= pooled:
