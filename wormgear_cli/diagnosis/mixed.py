@@ -140,7 +140,12 @@ def fit_at(cross: Cross, gp: float, gr: float) -> VarFit:
 
 
 def reml(cross: Cross) -> VarFit:
-    """Variance ratios by REML (grid, then a shrinking local grid in log scale; 0 allowed)."""
+    """Variance ratios by REML (grid, then a shrinking local grid in log scale; 0 allowed).
+
+    With runs and passes the search is also run along each edge (g_r = 0, g_p = 0) and the
+    best of the three is kept: the local steps of the two-ratio search cannot walk a ratio
+    down to 0 when the coarse grid's best point holds a positive one, so a maximum on an edge
+    would otherwise be missed."""
     g = cross.groups
     if not g.random or cross.n - cross.k < 2:
         return fit_at(cross, 0.0, 0.0)
@@ -148,31 +153,39 @@ def reml(cross: Cross) -> VarFit:
     lo = math.log10(1e-3 / mbar)
     hi = 4.0
     axis = np.concatenate([[-np.inf], np.linspace(lo, hi, 15)])
-    r_axis = axis if g.nested else np.array([-np.inf])
-    lp, lr = np.meshgrid(axis, r_axis, indexing="ij")
-    lp, lr = lp.ravel(), lr.ravel()
-    val = _neg2_reml(cross, 10.0**lp, 10.0**lr)[0]
-    best = int(np.argmin(val))
-    cp, cr, cv = lp[best], lr[best], val[best]
-    step = (hi - lo) / 14.0
-    for _ in range(6):
-        step /= 2.0
-        offs = np.array([-2, -1, 0, 1, 2]) * step
+    zero = np.array([-np.inf])
 
-        def around(centre):
-            if np.isinf(centre):
-                return np.concatenate([[-np.inf], lo + (np.arange(3)) * step])
-            pts = centre + offs
-            return np.where(pts < lo - 1e-12, -np.inf, pts)
+    def search(p_free: bool, r_free: bool):
+        lp, lr = np.meshgrid(axis if p_free else zero, axis if r_free else zero, indexing="ij")
+        lp, lr = lp.ravel(), lr.ravel()
+        val = _neg2_reml(cross, 10.0**lp, 10.0**lr)[0]
+        best = int(np.argmin(val))
+        cp, cr, cv = lp[best], lr[best], val[best]
+        step = (hi - lo) / 14.0
+        for _ in range(6):
+            step /= 2.0
+            offs = np.array([-2, -1, 0, 1, 2]) * step
 
-        pa = around(cp)
-        ra = around(cr) if g.nested else np.array([-np.inf])
-        gp_, gr_ = np.meshgrid(pa, ra, indexing="ij")
-        gp_, gr_ = gp_.ravel(), gr_.ravel()
-        v = _neg2_reml(cross, 10.0**gp_, 10.0**gr_)[0]
-        j = int(np.argmin(v))
-        if v[j] < cv:
-            cp, cr, cv = gp_[j], gr_[j], v[j]
+            def around(centre):
+                if np.isinf(centre):
+                    return np.concatenate([[-np.inf], lo + (np.arange(3)) * step])
+                pts = centre + offs
+                return np.where(pts < lo - 1e-12, -np.inf, pts)
+
+            pa = around(cp) if p_free else zero
+            ra = around(cr) if r_free else zero
+            gp_, gr_ = np.meshgrid(pa, ra, indexing="ij")
+            gp_, gr_ = gp_.ravel(), gr_.ravel()
+            v = _neg2_reml(cross, 10.0**gp_, 10.0**gr_)[0]
+            j = int(np.argmin(v))
+            if v[j] < cv:
+                cp, cr, cv = gp_[j], gr_[j], v[j]
+        return cv, cp, cr
+
+    found = [search(True, g.nested)]
+    if g.nested:
+        found += [search(True, False), search(False, True)]
+    _, cp, cr = min(found, key=lambda f: f[0])
     return fit_at(cross, float(10.0**cp), float(10.0**cr))
 
 
