@@ -181,10 +181,22 @@ def sources_total(sources, sig, psi):
     return out
 
 
-def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None):
+def _sum_parts(parts, n: int) -> np.ndarray:
+    """Sum of the (N,) arrays ``parts``, added in list order: the same numbers as
+    ``np.sum(parts, axis=0)`` without its (len(parts), N) stacked copy."""
+    if not parts:
+        return np.zeros(n)
+    out = parts[0].copy()
+    for p in parts[1:]:
+        out += p
+    return out
+
+
+def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None):
     """d contribution / d phase [arcsec/rad] per source: central differences, or forward
-    differences from the contributions ``parts`` already computed at ``psi``."""
-    cols = np.empty((sig.theta.shape[0], len(sources)))
+    differences from the contributions ``parts`` already computed at ``psi``; written into
+    ``out`` (N, m) when given (e.g. the first columns of a design)."""
+    cols = np.empty((sig.theta.shape[0], len(sources))) if out is None else out
     for j, (s, p) in enumerate(zip(sources, psi)):
         if parts is None:
             cols[:, j] = (s.contrib(sig, p + h) - s.contrib(sig, p - h)) / (2 * h)
@@ -214,8 +226,9 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     y, sig, groups, base, sources = ctx.y, ctx.sig, ctx.groups, ctx.base, ctx.sources
     m = len(sources) if fit_phases else 0
     psi = np.array(psi, dtype=float)
+    n = y.shape[0]
     parts = [s.contrib(sig, p) for s, p in zip(sources, psi)]
-    src = np.sum(parts, axis=0) if parts else np.zeros(y.shape[0])
+    src = _sum_parts(parts, n)
     # start with the linear coefficients solved exactly
     r0 = y - base - src
     cr = Cross.build(lin, r0, groups)
@@ -224,9 +237,12 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     resid = r0 - lin @ beta
     cost = gls_cost(resid, groups, gp, gr)
     mu = 1e-3
+    # [Jacobian | linear columns], allocated once: the Jacobian columns are rewritten in place each iteration
+    design = np.empty((n, m + lin.shape[1]))
+    design[:, m:] = lin
     for _ in range(iters):
-        jac = _jacobian(sources, sig, psi, h=1e-6, parts=parts) if m else np.zeros((y.shape[0], 0))
-        design = np.hstack([jac, lin])
+        if m:
+            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m])
         cr = Cross.build(design, resid, groups)
         A, b, _, _ = cr.weighted([gp], [gr])
         A, b = A[0], b[0]
@@ -242,7 +258,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
             psi_new = psi + step[:m]
             beta_new = beta + step[m:]
             parts_new = [s.contrib(sig, p) for s, p in zip(sources, psi_new)] if m else parts
-            src_new = np.sum(parts_new, axis=0) if m else src
+            src_new = _sum_parts(parts_new, n) if m else src
             resid_new = y - base - src_new - lin @ beta_new
             cost_new = gls_cost(resid_new, groups, gp, gr)
             if cost_new <= cost:

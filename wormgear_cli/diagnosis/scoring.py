@@ -65,15 +65,16 @@ class Score:
 
 
 def _blocks(lin_names, sources, jac, lin):
-    """Named parts of the current model, for saying what absorbs a candidate."""
-    out = [(name, lin[:, sl]) for name, sl in lin_names]
+    """Named parts of the current model, for saying what absorbs a candidate: (label, columns()),
+    the columns taken only when asked for (a source's Jacobian columns are gathered copies)."""
+    out = [(name, lambda sl=sl: lin[:, sl]) for name, sl in lin_names]
     orders = {}
     for j, s in enumerate(sources):
         orders.setdefault(s.order, []).append(j)
     for order, idx in orders.items():
         names = ", ".join(sources[j].name for j in idx)
         out.append((f"the fitted phase{'s' if len(idx) > 1 else ''} of the spec's order-{order:g} "
-                    f"source{'s' if len(idx) > 1 else ''} ({names})", jac[:, idx]))
+                    f"source{'s' if len(idx) > 1 else ''} ({names})", lambda idx=idx: jac[:, idx]))
     return out
 
 
@@ -85,8 +86,7 @@ class Step:
                  few_runs: bool = False):
         self.state = state
         self.groups = groups
-        nuis = np.hstack([state.lin, state.jac])
-        basis0, _ = orthonormal(nuis)
+        basis0, _ = orthonormal(np.hstack([state.lin, state.jac]))
         blocks = _blocks(lin_names, sources, state.jac, state.lin)
         self.scores: dict[str, Score] = {}
         self.better_null = None
@@ -105,8 +105,10 @@ class Step:
                                               aliases=alias_notes.get(name, []))
                     untestable_cols.append(cand.columns)
                     blocks.append((f"{name}'s signature (untestable with {groups.runs} run"
-                                   f"{'s' if groups.runs != 1 else ''})", cand.columns))
-        self.basis = orthonormal(np.hstack([nuis, *untestable_cols]))[0] if untestable_cols else basis0
+                                   f"{'s' if groups.runs != 1 else ''})", lambda c=cand.columns: c))
+        self.basis = orthonormal(np.hstack([state.lin, state.jac, *untestable_cols]))[0] if untestable_cols \
+            else basis0
+        basis0 = None
         kb = self.basis.shape[1]
         tested_cols = []
         slices = {}
@@ -142,7 +144,7 @@ class Step:
             if why is None:
                 sc.tolerance = tolerance(self.basis, cand.columns)
                 if sc.tolerance < MIN_TOLERANCE:
-                    sc.absorbed_by = [label for label, blk in blocks if r2(blk, cand.columns) > 0.5] or \
+                    sc.absorbed_by = [label for label, blk in blocks if r2(blk(), cand.columns) > 0.5] or \
                         [label for label, _ in blocks]
                     why = "absorbed by " + " and ".join(sc.absorbed_by)
                     if any("fitted phase" in a for a in sc.absorbed_by):
