@@ -82,7 +82,17 @@ def order_table(meas, resid, geometry) -> list[dict]:
     mode, joint least squares at the exact orders the targets resolve; standard
     errors assume white noise).  Orders the targets cannot resolve are listed
     with what they are aliased with."""
-    from wormgear_cli.harmonics import fit_modes, physical_orders
+    return order_tables(meas, [resid], geometry)[0]
+
+
+def order_tables(meas, resids, geometry) -> list[list[dict]]:
+    """:func:`order_table` of each residual in ``resids`` (each (N,) [arcsec]) of one measurement.
+
+    Which orders are fitted depends on the angles only, and the joint fit's
+    design is built once for all residuals
+    (:func:`wormgear_cli.harmonics.fit_modes_each`): the same tables as one
+    call per residual, for little more than the cost of one."""
+    from wormgear_cli.harmonics import fit_modes_each, physical_orders
 
     phys = physical_orders(geometry, 3)
     bases = (1.0, float(geometry.gear_ratio), float(geometry.output_teeth), float(geometry.worm_order))
@@ -92,10 +102,14 @@ def order_table(meas, resid, geometry) -> list[dict]:
 
     priority = sorted((o for o, _ in phys), key=lambda o: (harmonic(o), o))
     keep, aliased = jointly_fittable_orders(meas.angle, [o for o, _ in phys], priority)
-    fit = None
+    fits = [None] * len(resids)
     if keep:
         with np.errstate(invalid="ignore", divide="ignore"):
-            fit = fit_modes(meas.angle, resid, meas.direction, keep)
+            fits = fit_modes_each(meas.angle, resids, meas.direction, keep)
+    return [_order_rows(fit, phys, keep, aliased) for fit in fits]
+
+
+def _order_rows(fit, phys, keep, aliased) -> list[dict]:
     out = []
     if fit is not None:
         row = {"order": 0.0, "label": "constant (common: offset; differential: half the mean reversal change)",
