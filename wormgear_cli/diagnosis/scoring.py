@@ -290,7 +290,7 @@ def same_order_test(ctx: FitContext, state: ModelFit, lin, cand: Candidate, cell
     k1 = lin1.shape[1] + len(ctx.sources)
     cost0 = gls_cost(state.residual, ctx.groups, gp, gr)
     # the refit may have found phases the null fit missed: the null must get the same chance
-    null = levenberg_marquardt(ctx, alt.psi, lin, gp, gr, True)
+    null = levenberg_marquardt(ctx, alt.psi, lin, gp, gr, True, parts=alt.parts)
     better = None
     if null.cost < cost0 * (1.0 - 1e-6):
         better = null.psi
