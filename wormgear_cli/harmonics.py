@@ -166,6 +166,9 @@ def _solve_blocks_each(block, n: int, p: int, ys, weights: np.ndarray | None, rc
     single = n <= BLOCK_ROWS
     if single:
         xw_all = xblock(0, n)
+    if n_fixed >= p:
+        sq = np.ones(p)  # no column is scaled: the norms are not needed
+    elif single:
         sq = np.einsum("ij,ij->j", xw_all, xw_all)
     else:
         sq = np.zeros(p)
@@ -409,12 +412,19 @@ def fit_modes_each(theta, ys, direction, orders: Sequence[float], weights=None, 
     tr = np.zeros((n, 0)) if trend is None else np.asarray(trend, dtype=float).reshape(n, -1)
     both = bool(np.any(d > 0) and np.any(d < 0))
 
-    def block(a, b):
-        base = np.hstack([np.ones((b - a, 1)), harmonic_columns(theta[a:b], ords), tr[a:b]])
-        return np.hstack([base, base * d[a:b, None]]) if both else base
-
     p_mode = 1 + 2 * m + tr.shape[1]
     ncols = 2 * p_mode if both else p_mode
+
+    def block(a, b):
+        # [1, cos/sin per order, trend] and, with both directions, the same times the direction
+        out = np.empty((b - a, ncols))
+        out[:, 0] = 1.0
+        out[:, 1:1 + 2 * m] = harmonic_columns(theta[a:b], ords)
+        out[:, 1 + 2 * m:p_mode] = tr[a:b]
+        if both:
+            np.multiply(out[:, :p_mode], d[a:b, None], out=out[:, p_mode:])
+        return out
+
     return [_mode_fit(sol, ords, p_mode, both, ncols) for sol in _solve_blocks_each(block, n, ncols, ys, w, rcond,
                                                                                     ncols)]
 
@@ -566,6 +576,17 @@ def alias_groups(theta, orders: Sequence[float], tol: float = ALIAS_TOL, weights
     if ords.shape[0] == 0:
         return []
     return _groups(ords, *_correlations(theta, ords, weights), tol)
+
+
+def aliasing(theta, orders: Sequence[float], tol: float = ALIAS_TOL,
+             weights=None) -> tuple[list[tuple[float, ...]], list[float]]:
+    """(:func:`alias_groups`, :func:`folded_orders`) of the same samples and orders, from one
+    pass over the sampled angles (each alone makes the same pass)."""
+    ords = np.atleast_1d(np.asarray(orders, dtype=float))
+    if ords.shape[0] == 0:
+        return [], []
+    c_minus, c_plus, c_zero = _correlations(theta, ords, weights)
+    return _groups(ords, c_minus, c_plus, c_zero, tol), _folded(ords, c_plus, tol)
 
 
 def folded_orders(theta, orders: Sequence[float], tol: float = ALIAS_TOL, weights=None) -> list[float]:
