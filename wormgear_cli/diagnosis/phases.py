@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Callable
 
 import numpy as np
@@ -27,7 +28,11 @@ class PhaseSource:
     ``effect:NAME``; ``key``: TOML path of its phase key; ``order``
     [cycles/output rev]; ``amplitude`` [arcsec] (first harmonic, as
     specified); ``phase`` [rad] as specified; ``contrib(signals, psi)`` ->
-    its whole contribution [arcsec] (common part and lost-motion part)."""
+    its whole contribution [arcsec] (common part and lost-motion part).
+    ``pointwise``: the contribution at a row depends on that row's angle
+    and direction only (a source of :func:`simulation.periodic_sources`), so
+    it may be evaluated once per distinct (angle, direction) pair
+    (:meth:`FitContext.values`)."""
 
     name: str
     key: str
@@ -35,6 +40,7 @@ class PhaseSource:
     amplitude: float
     phase: float
     contrib: Callable
+    pointwise: bool = False
 
 
 def _source_contrib(src):
@@ -65,7 +71,7 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     out = []
     for src in periodic_sources(spec):
         out.append(PhaseSource(src.name, src.phase_path, float(src.order), float(src.amplitude) / ARCSEC,
-                               float(src.phase), _source_contrib(src)))
+                               float(src.phase), _source_contrib(src), pointwise=True))
     for name, params in spec.effects.items():
         eff = EFFECTS[name]
         if eff.phase is None or eff.order is None:
@@ -138,6 +144,64 @@ class FitContext:
     def replaced(self, **changes) -> "FitContext":
         return replace(self, **changes)
 
+    @cached_property
+    def distinct(self) -> "Distinct | None":
+        """The rows' distinct (angle, direction) pairs, when there are at most half as many as rows."""
+        return distinct_pairs(self.sig)
+
+    def values(self, source: PhaseSource, psi) -> np.ndarray:
+        """``source.contrib(self.sig, psi)`` (N,) [arcsec]: for a pointwise source evaluated once per
+        distinct (angle, direction) pair and spread to the rows (the same numbers: every operation is
+        elementwise)."""
+        d = self.distinct if source.pointwise else None
+        if d is None:
+            return source.contrib(self.sig, psi)
+        return source.contrib(d.sig, psi)[d.inverse]
+
+
+@dataclass(frozen=True)
+class Distinct:
+    """Distinct (angle, direction) pairs of a measurement's rows: ``sig`` one row per pair (the
+    signals of its first row), ``inverse`` (N,) the pair of each row."""
+
+    sig: object
+    inverse: np.ndarray
+
+
+def distinct_pairs(sig, max_share: float = 0.5) -> Distinct | None:
+    """The distinct (angle, direction) pairs of ``sig``'s rows (bitwise equal values), or None when
+    there are more than ``max_share`` times as many as rows (nothing to gain)."""
+    n = sig.theta.shape[0]
+    if n == 0 or sig.theta.ndim != 1:
+        return None
+    theta = np.ascontiguousarray(sig.theta, dtype=float)
+    direction = np.ascontiguousarray(np.broadcast_to(sig.direction, theta.shape), dtype=float)
+    _, t_idx = np.unique(theta.view(np.int64), return_inverse=True)
+    d_vals, d_idx = np.unique(direction.view(np.int64), return_inverse=True)
+    key = t_idx.reshape(-1).astype(np.int64) * d_vals.shape[0] + d_idx.reshape(-1)
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    if first.shape[0] > max_share * n:
+        return None
+    return Distinct(subset(sig, first), _index(inverse.reshape(-1), first.shape[0]))
+
+
+def distinct_angles(theta: np.ndarray, max_share: float = 0.5) -> tuple[np.ndarray, np.ndarray] | None:
+    """(distinct values (U,), index of each row's value (N,)) of the angles ``theta`` (bitwise
+    equal values), or None when there are more than ``max_share`` times as many as rows."""
+    theta = np.ascontiguousarray(theta, dtype=float)
+    n = theta.shape[0]
+    if n == 0:
+        return None
+    _, first, inverse = np.unique(theta.view(np.int64), return_index=True, return_inverse=True)
+    if first.shape[0] > max_share * n:
+        return None
+    return theta[first], _index(inverse.reshape(-1), first.shape[0])
+
+
+def _index(inverse: np.ndarray, size: int) -> np.ndarray:
+    """Row -> distinct value index, as int32 when it fits (half the memory of int64)."""
+    return inverse.astype(np.int32) if size < 2**31 else inverse
+
 
 @dataclass(frozen=True)
 class PhaseFit:
@@ -195,16 +259,20 @@ def _sum_parts(parts, n: int) -> np.ndarray:
     return out
 
 
-def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None):
+def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None, values=None):
     """d contribution / d phase [arcsec/rad] per source: central differences, or forward
     differences from the contributions ``parts`` already computed at ``psi``; written into
-    ``out`` (N, m) when given (e.g. the first columns of a design)."""
+    ``out`` (N, m) when given (e.g. the first columns of a design).  ``values(source, psi)``:
+    how a contribution at ``sig`` is evaluated (default ``source.contrib(sig, psi)``;
+    :meth:`FitContext.values`)."""
+    if values is None:
+        values = lambda s, p: s.contrib(sig, p)  # noqa: E731
     cols = np.empty((sig.theta.shape[0], len(sources))) if out is None else out
     for j, (s, p) in enumerate(zip(sources, psi)):
         if parts is None:
-            cols[:, j] = (s.contrib(sig, p + h) - s.contrib(sig, p - h)) / (2 * h)
+            cols[:, j] = (values(s, p + h) - values(s, p - h)) / (2 * h)
         else:
-            cols[:, j] = (s.contrib(sig, p + h) - parts[j]) / h
+            cols[:, j] = (values(s, p + h) - parts[j]) / h
     return cols
 
 
@@ -240,7 +308,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
         parts = list(given)
         given.clear()
     else:
-        parts = [s.contrib(sig, p) for s, p in zip(sources, psi)]
+        parts = [ctx.values(s, p) for s, p in zip(sources, psi)]
     src = _sum_parts(parts, n)
     # start with the linear coefficients solved exactly
     r0 = y - base - src
@@ -255,7 +323,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     design[:, m:] = lin
     for _ in range(iters):
         if m:
-            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m])
+            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m], values=ctx.values)
         cr = Cross.build(design, resid, groups)
         A, b, _, _ = cr.weighted([gp], [gr])
         A, b = A[0], b[0]
@@ -270,7 +338,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
                 continue
             psi_new = psi + step[:m]
             beta_new = beta + step[m:]
-            parts_new = [s.contrib(sig, p) for s, p in zip(sources, psi_new)] if m else parts
+            parts_new = [ctx.values(s, p) for s, p in zip(sources, psi_new)] if m else parts
             src_new = _sum_parts(parts_new, n) if m else src
             resid_new = y - base - src_new - lin @ beta_new
             cost_new = gls_cost(resid_new, groups, gp, gr)
@@ -442,7 +510,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         psi = best.psi
     if variance is not None:
         pf = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
-        jac = _jacobian(sources, sig, pf.psi) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, pf.psi, values=ctx.values) if m else np.zeros((n, 0))
         return ModelFit(pf.psi, pf.beta, y - pf.residual, pf.residual, jac, lin, variance, pf.cost)
     gp = gr = 0.0
     var = None
@@ -451,7 +519,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         # each round starts where the last ended: its contributions there are taken over, not recomputed
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts if pf is not None else None)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, psi, values=ctx.values) if m else np.zeros((n, 0))
         cr = Cross.build(orthonormal(np.hstack([lin, jac]))[0], pf.residual, groups)
         var = reml(cr)
         done = abs(var.gp - gp) <= 0.05 * max(gp, 1e-9) and abs(var.gr - gr) <= 0.05 * max(gr, 1e-9)
@@ -461,5 +529,5 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
     else:
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, psi, values=ctx.values) if m else np.zeros((n, 0))
     return ModelFit(psi, pf.beta, y - pf.residual, pf.residual, jac, lin, var, pf.cost)

@@ -10,7 +10,7 @@ import numpy as np
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
 from wormgear_cli.diagnosis.design import orthonormal, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
-from wormgear_cli.diagnosis.phases import ModelFit
+from wormgear_cli.diagnosis.phases import ModelFit, distinct_angles
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, pass_sums
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE, MIN_RUNS, MIN_SCAN_SHARE,
@@ -149,12 +149,28 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     def width(recipe):
         return 2 if recipe[0] == "order" else 1
 
+    # the order columns are functions of the angle: made once per distinct angle and spread to the rows
+    if orders_cache is not None and "angles" in orders_cache:
+        angles = orders_cache["angles"]
+    else:
+        angles = distinct_angles(theta)
+        if orders_cache is not None:
+            orders_cache["angles"] = angles
+
     def fill(out, recipe):
         kind, what, diff = recipe
         if kind == "order":
-            np.multiply(theta, what, out=out[:, 0])
-            np.sin(out[:, 0], out=out[:, 1])
-            np.cos(out[:, 0], out=out[:, 0])
+            if angles is not None:
+                ut, where = angles
+                buf = np.empty((ut.shape[0], 2))
+                np.multiply(ut, what, out=buf[:, 0])
+                np.sin(buf[:, 0], out=buf[:, 1])
+                np.cos(buf[:, 0], out=buf[:, 0])
+                out[...] = buf[where]
+            else:
+                np.multiply(theta, what, out=out[:, 0])
+                np.sin(out[:, 0], out=out[:, 1])
+                np.cos(out[:, 0], out=out[:, 0])
         elif kind == "trend":
             np.subtract(what, np.mean(what), out=out[:, 0])
         else:
