@@ -47,8 +47,12 @@ def tolerance(basis, cols):
 
 def canonical(a, b):
     """Largest canonical correlation between the column spaces of a and b."""
-    qa = np.linalg.qr(a)[0]
-    qb = np.linalg.qr(b)[0]
+    return canonical_q(np.linalg.qr(a)[0], np.linalg.qr(b)[0])
+
+
+def canonical_q(qa, qb):
+    """:func:`canonical` from the Q factors of a and b (``np.linalg.qr(a)[0]``), when one block
+    is compared with several others."""
     return float(np.linalg.svd(qa.T @ qb, compute_uv=False)[0])
 
 

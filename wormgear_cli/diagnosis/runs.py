@@ -44,6 +44,14 @@ class Groups:
         object.__setattr__(self, "starts", starts)
         # rows already grouped by pass (the usual file): pass sums need no gathered copy
         object.__setattr__(self, "in_order", bool(np.all(order == np.arange(order.shape[0]))))
+        # each pass one block of consecutive rows, the blocks in another order (forward and reverse passes
+        # alternating): pass sums are the block sums, put in pass order (no gathered copy either)
+        blocks = None
+        if not self.in_order and self.pass_id.shape[0]:
+            first = np.flatnonzero(np.r_[True, self.pass_id[1:] != self.pass_id[:-1]])
+            if first.shape[0] == self.pass_size.shape[0]:
+                blocks = (first, self.pass_id[first])
+        object.__setattr__(self, "blocks", blocks)
         ind = np.zeros((self.runs, self.pass_size.shape[0]))
         ind[self.pass_run, np.arange(self.pass_size.shape[0])] = 1.0
         object.__setattr__(self, "run_indicator", ind)
@@ -103,7 +111,15 @@ def pass_sums(values: np.ndarray, groups: Groups) -> np.ndarray:
         return np.bincount(groups.pass_id, weights=values, minlength=groups.passes)
     if values.shape[1] == 0:
         return np.zeros((groups.passes, 0))
-    return np.add.reduceat(values if groups.in_order else values[groups.order], groups.starts, axis=0)
+    if groups.in_order:
+        return np.add.reduceat(values, groups.starts, axis=0)
+    if groups.blocks is not None:
+        # the same rows summed in the same order as in the gathered copy below
+        first, block_pass = groups.blocks
+        out = np.empty((groups.passes, values.shape[1]))
+        out[block_pass] = np.add.reduceat(values, first, axis=0)
+        return out
+    return np.add.reduceat(values[groups.order], groups.starts, axis=0)
 
 
 @dataclass(frozen=True)

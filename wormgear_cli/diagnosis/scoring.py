@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from wormgear_cli.diagnosis.candidates import Candidate, candidate_params, needs_problem, replication_problem
-from wormgear_cli.diagnosis.design import canonical, orthonormal, r2, residualise, tolerance
+from wormgear_cli.diagnosis.design import canonical_q, orthonormal, r2, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, VarFit, Wald, containment_df, f_sf, reml, wald
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, gls_cost, levenberg_marquardt
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, cell_level, pass_sums
@@ -110,7 +110,8 @@ class Step:
             else basis0
         basis0 = None
         kb = self.basis.shape[1]
-        tested_cols = []
+        width = kb
+        q_factors: dict[str, np.ndarray] = {}
         slices = {}
         nonlinear_names: list[str] = []
         for name, cand in cands.items():
@@ -160,13 +161,23 @@ class Step:
                 continue
             rms = np.sqrt(np.mean(cand.columns**2, axis=0))
             sc.scale = 1.0 / np.where(rms > 0, rms, 1.0)
-            sc.containment = containment_df(groups, self.basis, residualise(self.basis, cand.columns))
-            start = kb + sum(c.shape[1] for c in tested_cols)
-            slices[name] = slice(start, start + cand.q)
-            tested_cols.append(cand.columns * sc.scale)
+            resid_cols = residualise(self.basis, cand.columns)
+            sc.containment = containment_df(groups, self.basis, resid_cols)
+            # its signature with the model projected out, kept as a Q factor for the similarity of candidates
+            q_factors[name] = np.linalg.qr(resid_cols)[0]
+            resid_cols = None
+            slices[name] = slice(width, width + cand.q)
+            width += cand.q
             self.scores[name] = sc
         self.slices = slices
-        self.design = np.hstack([self.basis, *tested_cols]) if tested_cols else self.basis
+        if slices:
+            # [basis, each tested candidate's columns scaled to unit RMS], filled in place (no per-candidate copies)
+            self.design = np.empty((self.basis.shape[0], width))
+            self.design[:, :kb] = self.basis
+            for name, sl in slices.items():
+                np.multiply(cands[name].columns, self.scores[name].scale, out=self.design[:, sl])
+        else:
+            self.design = self.basis
         self.cross = Cross.build(self.design, state.residual, groups)
         cell_tester = None
         for name, sl in slices.items():
@@ -199,10 +210,12 @@ class Step:
         self.tested = sorted(tested, key=rank)
         # how alike the signatures of the tested candidates are, once the model is projected out
         self.similar: dict[tuple, float] = {}
-        res = {n: residualise(self.basis, cands[n].columns) for n in tested}
+        for n in tested:
+            if n not in q_factors:
+                q_factors[n] = np.linalg.qr(residualise(self.basis, cands[n].columns))[0]
         for i, a in enumerate(tested):
             for b in tested[i + 1:]:
-                self.similar[(a, b)] = self.similar[(b, a)] = canonical(res[a], res[b])
+                self.similar[(a, b)] = self.similar[(b, a)] = canonical_q(q_factors[a], q_factors[b])
 
     def stability(self, resamples: int, alpha: float, seed: int = 0) -> dict[str, float]:
         """Share of cluster-bootstrap resamples (whole runs) in which each tested candidate scores best."""
