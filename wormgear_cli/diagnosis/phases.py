@@ -207,8 +207,9 @@ def _index(inverse: np.ndarray, size: int) -> np.ndarray:
 class PhaseFit:
     """A Levenberg-Marquardt polish: phases ``psi`` [rad], linear coefficients ``beta``,
     ``residual`` (N,) [arcsec] and its GLS ``cost`` (residual' V~^-1 residual); ``parts``:
-    each source's contribution (N,) [arcsec] at ``psi`` (a list a following polish from
-    ``psi`` takes over, see :func:`levenberg_marquardt`)."""
+    each source's contribution [arcsec] at ``psi``, per row or per distinct (angle,
+    direction) pair (:func:`_evaluator`): a list a following polish of the same rows from
+    ``psi`` takes over (see :func:`levenberg_marquardt`)."""
 
     psi: np.ndarray
     beta: np.ndarray
@@ -259,21 +260,44 @@ def _sum_parts(parts, n: int) -> np.ndarray:
     return out
 
 
-def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None, values=None):
+def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None, values=None, spread=None):
     """d contribution / d phase [arcsec/rad] per source: central differences, or forward
     differences from the contributions ``parts`` already computed at ``psi``; written into
     ``out`` (N, m) when given (e.g. the first columns of a design).  ``values(source, psi)``:
-    how a contribution at ``sig`` is evaluated (default ``source.contrib(sig, psi)``;
-    :meth:`FitContext.values`)."""
+    how a contribution is evaluated (default ``source.contrib(sig, psi)``); ``spread(a)``:
+    from those values to the rows (default: they are the rows; see :func:`_evaluator`)."""
     if values is None:
         values = lambda s, p: s.contrib(sig, p)  # noqa: E731
     cols = np.empty((sig.theta.shape[0], len(sources))) if out is None else out
     for j, (s, p) in enumerate(zip(sources, psi)):
         if parts is None:
-            cols[:, j] = (values(s, p + h) - values(s, p - h)) / (2 * h)
+            col = (values(s, p + h) - values(s, p - h)) / (2 * h)
         else:
-            cols[:, j] = (values(s, p + h) - parts[j]) / h
+            col = (values(s, p + h) - parts[j]) / h
+        if spread is None:
+            cols[:, j] = col
+        else:
+            np.take(col, spread, out=cols[:, j])
     return cols
+
+
+def _evaluator(ctx: "FitContext"):
+    """(values, spread, size): how :func:`levenberg_marquardt` evaluates the sources of ``ctx``.
+
+    When every source is pointwise and the rows repeat (angle, direction) pairs,
+    contributions, their sums and finite differences are kept per distinct pair
+    (``size`` of them) and ``spread`` (the row -> pair index) takes them to the rows
+    only where a row-sized array is needed: every step is elementwise, so the numbers
+    are those of the row-sized arrays, for a fraction of the work and memory.
+    Otherwise ``values`` is :meth:`FitContext.values`, ``spread`` None and ``size`` N."""
+    d = ctx.distinct
+    if d is not None and ctx.sources and all(s.pointwise for s in ctx.sources):
+        return (lambda s, p: s.contrib(d.sig, p)), d.inverse, int(d.sig.theta.shape[0])
+    return ctx.values, None, ctx.n
+
+
+def _to_rows(a, spread):
+    return a if spread is None else np.take(a, spread)
 
 
 def gls_cost(r, groups, gp, gr):
@@ -303,13 +327,14 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     m = len(sources) if fit_phases else 0
     psi = np.array(psi, dtype=float)
     n = y.shape[0]
+    values, spread, size = _evaluator(ctx)
     if parts:
         given = parts
         parts = list(given)
         given.clear()
     else:
-        parts = [ctx.values(s, p) for s, p in zip(sources, psi)]
-    src = _sum_parts(parts, n)
+        parts = [values(s, p) for s, p in zip(sources, psi)]
+    src = _to_rows(_sum_parts(parts, size), spread)
     # start with the linear coefficients solved exactly
     r0 = y - base - src
     cr = Cross.build(lin, r0, groups)
@@ -323,7 +348,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     design[:, m:] = lin
     for _ in range(iters):
         if m:
-            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m], values=ctx.values)
+            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m], values=values, spread=spread)
         cr = Cross.build(design, resid, groups)
         A, b, _, _ = cr.weighted([gp], [gr])
         A, b = A[0], b[0]
@@ -338,8 +363,8 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
                 continue
             psi_new = psi + step[:m]
             beta_new = beta + step[m:]
-            parts_new = [ctx.values(s, p) for s, p in zip(sources, psi_new)] if m else parts
-            src_new = _sum_parts(parts_new, n) if m else src
+            parts_new = [values(s, p) for s, p in zip(sources, psi_new)] if m else parts
+            src_new = _to_rows(_sum_parts(parts_new, size), spread) if m else src
             resid_new = y - base - src_new - lin @ beta_new
             cost_new = gls_cost(resid_new, groups, gp, gr)
             if cost_new <= cost:
@@ -488,6 +513,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
     m = len(sources) if fit_phases else 0
     n = y.shape[0]
     psi = np.array(ctx.spec_psi, dtype=float)
+    ev, spread, _ = _evaluator(ctx)
     if m:
         step = max(1, n // 2000)
         idx = np.arange(0, n, step)
@@ -510,7 +536,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         psi = best.psi
     if variance is not None:
         pf = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
-        jac = _jacobian(sources, sig, pf.psi, values=ctx.values) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, pf.psi, values=ev, spread=spread) if m else np.zeros((n, 0))
         return ModelFit(pf.psi, pf.beta, y - pf.residual, pf.residual, jac, lin, variance, pf.cost)
     gp = gr = 0.0
     var = None
@@ -519,8 +545,8 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         # each round starts where the last ended: its contributions there are taken over, not recomputed
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts if pf is not None else None)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi, values=ctx.values) if m else np.zeros((n, 0))
-        cr = Cross.build(orthonormal(np.hstack([lin, jac]))[0], pf.residual, groups)
+        jac = _jacobian(sources, sig, psi, values=ev, spread=spread) if m else np.zeros((n, 0))
+        cr = Cross.build(orthonormal(np.hstack([lin, jac]), own=True)[0], pf.residual, groups)
         var = reml(cr)
         done = abs(var.gp - gp) <= 0.05 * max(gp, 1e-9) and abs(var.gr - gr) <= 0.05 * max(gr, 1e-9)
         gp, gr = var.gp, var.gr
@@ -529,5 +555,5 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
     else:
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi, values=ctx.values) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, psi, values=ev, spread=spread) if m else np.zeros((n, 0))
     return ModelFit(psi, pf.beta, y - pf.residual, pf.residual, jac, lin, var, pf.cost)

@@ -114,7 +114,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
 
     catalogue_orders = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
     r = state.residual
-    basis, _ = orthonormal(np.hstack([state.lin, state.jac]))
+    basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     part = (basis.T @ basis, basis.T @ r, pass_sums(basis, groups) if basis.shape[1] else np.zeros((groups.passes, 0)))
     theta, d = sig.theta, sig.direction
     both = len(info.directions) == 2
@@ -166,7 +166,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
                 np.multiply(ut, what, out=buf[:, 0])
                 np.sin(buf[:, 0], out=buf[:, 1])
                 np.cos(buf[:, 0], out=buf[:, 0])
-                out[...] = buf[where]
+                out[...] = np.take(buf, where, axis=0)
             else:
                 np.multiply(theta, what, out=out[:, 0])
                 np.sin(out[:, 0], out=out[:, 1])
@@ -361,7 +361,7 @@ def unowned_order_columns(items: list[dict], sig, geometry, state: ModelFit) -> 
     from wormgear_cli.models.effects import EFFECTS
 
     owned = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
-    basis, _ = orthonormal(np.hstack([state.lin, state.jac]))
+    basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     out = []
     for item in items:
         if item["kind"] != "order" or any(abs(item["order"] - o) < 1e-9 for o in owned):

@@ -86,7 +86,7 @@ class Step:
                  few_runs: bool = False):
         self.state = state
         self.groups = groups
-        basis0, _ = orthonormal(np.hstack([state.lin, state.jac]))
+        basis0, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
         blocks = _blocks(lin_names, sources, state.jac, state.lin)
         self.scores: dict[str, Score] = {}
         self.better_null = None
@@ -106,7 +106,7 @@ class Step:
                     untestable_cols.append(cand.columns)
                     blocks.append((f"{name}'s signature (untestable with {groups.runs} run"
                                    f"{'s' if groups.runs != 1 else ''})", lambda c=cand.columns: c))
-        self.basis = orthonormal(np.hstack([state.lin, state.jac, *untestable_cols]))[0] if untestable_cols \
+        self.basis = orthonormal(np.hstack([state.lin, state.jac, *untestable_cols]), own=True)[0] if untestable_cols \
             else basis0
         basis0 = None
         kb = self.basis.shape[1]
