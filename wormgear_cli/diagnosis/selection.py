@@ -190,6 +190,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     for label, cols, _ in held:
         lin_names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
         lin = np.hstack([lin, cols])
+    held = [(label, None, item) for label, _, item in held]  # the columns live on in lin only
     if held:
         state = fit_model(ctx, lin, fit_phases, extra_starts=[state.psi])
     fixed = lin.shape[1]
