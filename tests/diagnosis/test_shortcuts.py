@@ -174,3 +174,22 @@ def test_orthonormal_in_place_gives_the_same_basis():
     assert np.array_equal(x, kept)  # not given up: untouched
     own, rank_own = dg.design.orthonormal(x.copy(), own=True)
     assert rank == rank_own == 4 and np.array_equal(plain, own)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_passes_from_two_column_uniques_equal_sorting_rows(seed):
+    rng = np.random.default_rng(seed)
+    n = 500
+    run = rng.integers(-3, 12, n)
+    direction = rng.choice([1.0, -1.0], n)
+    groups = dg.make_groups(direction, run)
+    uniq, pass_id = np.unique(np.stack([run.astype(float), direction], axis=1), axis=0, return_inverse=True)
+    assert np.array_equal(groups.pass_id, pass_id.reshape(-1))
+    assert np.array_equal(groups.pass_direction, uniq[:, 1])
+    assert groups.runs == np.unique(run).shape[0]
+
+
+def test_gap_summary_with_cells_made_once_is_the_same():
+    meas = read_measurement(DEMO)
+    resid = np.random.default_rng(4).normal(size=len(meas))
+    assert dg.gap_summary(meas, resid, dg.residuals.target_run_cells(meas)) == dg.gap_summary(meas, resid)

@@ -10,7 +10,8 @@ import numpy as np
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
 from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind, aliased_effects, candidate,
                                                candidate_params)
-from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_tables, versus
+from wormgear_cli.diagnosis.residuals import (gap_summary, iso_figures, noise_floor, order_tables,
+                                              target_run_cells, versus)
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
@@ -366,6 +367,7 @@ def _report(diag: Diagnosis) -> dict:
     # measured error and the fitted model: one joint design for all four
     orders_before, orders_after, orders_data, orders_model = order_tables(
         meas, [diag.before.residual, resid_after, y, diag.before.fitted], g)
+    pair_cells = target_run_cells(meas)
     found = []
     for f in diag.found:
         item = {"name": f.name, "parameters": augmented_params(f),
@@ -410,9 +412,9 @@ def _report(diag: Diagnosis) -> dict:
         "rows": len(meas),
         "verdict": _verdict(diag, twins),
         "effects_found": found,
-        "gap_as_specified": gap_summary(meas, diag.as_specified),
-        "gap_before": gap_summary(meas, diag.before.residual),
-        "gap_after": gap_summary(meas, resid_after),
+        "gap_as_specified": gap_summary(meas, diag.as_specified, pair_cells),
+        "gap_before": gap_summary(meas, diag.before.residual, pair_cells),
+        "gap_after": gap_summary(meas, resid_after, pair_cells),
         "unexplained": diag.unexplained,
         "candidates": _status(diag, twins),
         "fit": {

@@ -47,20 +47,27 @@ def _target_pairs(meas):
     return tgt, run
 
 
-def gap_summary(meas, resid: np.ndarray) -> dict:
-    """RMS and max |residual| [arcsec] of all rows, and of the common mode (mean of
-    the directions) and differential mode (half forward - reverse) per target and run."""
+def target_run_cells(meas) -> tuple[np.ndarray, int]:
+    """(cell of each row (N,), number of cells): the (target, run) cells :func:`gap_summary` pairs
+    the directions in (they depend on the angles and runs only: make them once per measurement)."""
     tgt, run = _target_pairs(meas)
-    out = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))), "max_arcsec": float(np.max(np.abs(resid)))}
     _, run_idx = np.unique(run, return_inverse=True)
     pair = tgt.astype(np.int64) * (int(run_idx.max()) + 1) + run_idx.reshape(-1)
     uniq, inv = np.unique(pair, return_inverse=True)
-    inv = inv.reshape(-1)
+    return inv.reshape(-1), int(uniq.shape[0])
+
+
+def gap_summary(meas, resid: np.ndarray, cells: tuple[np.ndarray, int] | None = None) -> dict:
+    """RMS and max |residual| [arcsec] of all rows, and of the common mode (mean of
+    the directions) and differential mode (half forward - reverse) per target and run.
+    ``cells``: :func:`target_run_cells` of ``meas`` when already made."""
+    inv, size = cells if cells is not None else target_run_cells(meas)
+    out = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))), "max_arcsec": float(np.max(np.abs(resid)))}
     sums = {}
     for dv in (1, -1):
         sel = meas.direction == dv
-        cnt = np.bincount(inv[sel], minlength=uniq.shape[0])
-        tot = np.bincount(inv[sel], weights=resid[sel], minlength=uniq.shape[0])
+        cnt = np.bincount(inv[sel], minlength=size)
+        tot = np.bincount(inv[sel], weights=resid[sel], minlength=size)
         sums[dv] = (tot, cnt)
     ok = (sums[1][1] > 0) & (sums[-1][1] > 0)
     if np.any(ok):

@@ -61,6 +61,13 @@ class Groups:
         return int(self.pass_size.shape[0])
 
 
+def _plain_keys(run: np.ndarray, direction: np.ndarray) -> bool:
+    """Finite runs without a negative zero and directions of exactly +/-1: keys whose equality and order
+    are those of their values, so sorting pairs and sorting each column agree."""
+    return bool(np.all(np.isfinite(run)) and not np.any((run == 0) & np.signbit(run))
+                and np.all((direction == 1.0) | (direction == -1.0)))
+
+
 def make_groups(direction: np.ndarray, run: np.ndarray | None, time: np.ndarray | None = None) -> Groups:
     """Passes and runs from the ``direction``, (optional) ``run`` and (optional) ``time`` [s] columns.
 
@@ -72,8 +79,18 @@ def make_groups(direction: np.ndarray, run: np.ndarray | None, time: np.ndarray 
     n = direction.shape[0]
     if run is not None:
         run = np.asarray(run)
-        keys = np.stack([run.astype(float), direction], axis=1)
-        uniq, pass_id = np.unique(keys, axis=0, return_inverse=True)
+        run_f = run.astype(float)
+        if _plain_keys(run_f, direction):
+            # the (run, direction) pairs in the same lexicographic order as np.unique(axis=0) gives them, from
+            # two one-dimensional uniques (several times faster than sorting rows)
+            run_vals, r_idx = np.unique(run_f, return_inverse=True)
+            dir_vals, d_idx = np.unique(direction, return_inverse=True)
+            key = r_idx.reshape(-1) * dir_vals.shape[0] + d_idx.reshape(-1)
+            ukey, pass_id = np.unique(key, return_inverse=True)
+            uniq = np.stack([run_vals[ukey // dir_vals.shape[0]], dir_vals[ukey % dir_vals.shape[0]]], axis=1)
+        else:
+            keys = np.stack([run_f, direction], axis=1)
+            uniq, pass_id = np.unique(keys, axis=0, return_inverse=True)
         pass_id = pass_id.reshape(-1)
         run_vals, pass_run = np.unique(uniq[:, 0], return_inverse=True)
         pass_dir = uniq[:, 1]
