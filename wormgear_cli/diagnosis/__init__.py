@@ -179,7 +179,8 @@ __all__ = [
     "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason", "UNPHYSICAL_HINT",
     "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",
     "containment_df", "contrast_df", "data_info", "diagnose", "f_sf", "fit_model", "gap_summary", "iso_figures",
-    "jointly_fittable_orders", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table", "order_tables",
+    "jointly_fittable_orders", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
+    "order_tables",
     "phase_sources", "physical_problem", "reml", "replication_problem", "report", "unaliased_orders", "run_diagnose",
     "short_term_noise", "sources_total", "t_ppf", "time_restarts", "versus", "wald",
 ]
