@@ -28,10 +28,26 @@ def _report_json(meas, spec) -> str:
     return json.dumps(dg.report(dg.diagnose(spec, meas)), sort_keys=True, default=repr)
 
 
-def test_demo_report_is_the_same_without_any_shortcut(monkeypatch):
-    spec = load_spec(CONFIGS / "mch50.toml")
-    meas = read_measurement(DEMO)
-    # the demo repeats every (angle, direction) pair over its runs and stores passes as blocks
+def _radar_measurement(tmp_path):
+    from wormgear_cli.synth import Noise, Plan, format_csv, synthesize
+
+    spec = load_spec(CONFIGS / "radar-pedestal-2start.toml")
+    syn = synthesize(spec, Plan(kind="iso", points=40, runs=5, dwell_s=0.1),
+                     effects={"bearing_clearance": {"clearance_arcsec": 20.0}}, noise=Noise(0.3, 0.2), seed=3,
+                     random_phases=True)
+    path = tmp_path / "radar.csv"
+    path.write_text(format_csv(syn))
+    return spec, read_measurement(path)
+
+
+@pytest.mark.parametrize("case", ["demo", "radar"])
+def test_report_is_the_same_without_any_shortcut(monkeypatch, tmp_path, case):
+    # the demo (MCH50) and a two-start radar drive (whose designs come out in Fortran order) repeat every
+    # (angle, direction) pair over their runs and store passes as blocks
+    if case == "demo":
+        spec, meas = load_spec(CONFIGS / "mch50.toml"), read_measurement(DEMO)
+    else:
+        spec, meas = _radar_measurement(tmp_path)
     sig = meas.signals()
     assert phases.distinct_pairs(sig) is not None
     groups = dg.make_groups(meas.direction, meas.run)

@@ -343,9 +343,9 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     resid = r0 - lin @ beta
     cost = gls_cost(resid, groups, gp, gr)
     mu = 1e-3
-    # [Jacobian | linear columns], allocated once: the Jacobian columns are rewritten in place each iteration
-    design = np.empty((n, m + lin.shape[1]))
-    design[:, m:] = lin
+    # [Jacobian | linear columns], made once by np.hstack (whose memory layout, C or Fortran, the products
+    # downstream follow bit for bit): the Jacobian columns are rewritten in place each iteration
+    design = np.hstack([np.empty((n, m)), lin])
     for _ in range(iters):
         if m:
             _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m], values=values, spread=spread)

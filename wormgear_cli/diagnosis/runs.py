@@ -130,8 +130,8 @@ def pass_sums(values: np.ndarray, groups: Groups) -> np.ndarray:
         return np.zeros((groups.passes, 0))
     if groups.in_order:
         return np.add.reduceat(values, groups.starts, axis=0)
-    if groups.blocks is not None:
-        # the same rows summed in the same order as in the gathered copy below
+    if groups.blocks is not None and values.flags.c_contiguous:
+        # the same rows summed in the same order, the same memory layout, as in the gathered copy below
         first, block_pass = groups.blocks
         out = np.empty((groups.passes, values.shape[1]))
         out[block_pass] = np.add.reduceat(values, first, axis=0)

@@ -111,6 +111,7 @@ class Step:
         basis0 = None
         kb = self.basis.shape[1]
         width = kb
+        tested_cols = []
         q_factors: dict[str, np.ndarray] = {}
         slices = {}
         nonlinear_names: list[str] = []
@@ -168,16 +169,13 @@ class Step:
             resid_cols = None
             slices[name] = slice(width, width + cand.q)
             width += cand.q
+            tested_cols.append(cand.columns * sc.scale)
             self.scores[name] = sc
         self.slices = slices
-        if slices:
-            # [basis, each tested candidate's columns scaled to unit RMS], filled in place (no per-candidate copies)
-            self.design = np.empty((self.basis.shape[0], width))
-            self.design[:, :kb] = self.basis
-            for name, sl in slices.items():
-                np.multiply(cands[name].columns, self.scores[name].scale, out=self.design[:, sl])
-        else:
-            self.design = self.basis
+        # [basis, each tested candidate's columns scaled to unit RMS] (np.hstack: its memory layout, C or Fortran,
+        # is what the products downstream follow bit for bit); the scaled copies are freed once in it
+        self.design = np.hstack([self.basis, *tested_cols]) if tested_cols else self.basis
+        tested_cols = None
         self.cross = Cross.build(self.design, state.residual, groups)
         cell_tester = None
         for name, sl in slices.items():
