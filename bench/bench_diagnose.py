@@ -16,7 +16,10 @@ reports:
 
 With ``--before REV`` the same is run on a checkout of REV (``git worktree
 add`` in a temporary directory, removed afterwards) and the ratio
-before/after is printed: the plain alternative is the code as it was.
+before/after is printed: the plain alternative is the code as it was.  The
+two reports are compared too (a SHA-256 of the JSON document, every float
+at full precision): a speed-up must not change a single number, and the
+bench says ``reports identical`` or ``REPORTS DIFFER``.
 
 Usage: python bench/bench_diagnose.py [--rows 100000,1000000] [--repeat N] [--before REV]
 """
@@ -36,7 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 #: run in a fresh interpreter with PYTHONPATH at the tree under test: argv = csv path
 CHILD = r"""
-import json, resource, sys, time
+import hashlib, json, resource, sys, time
 from pathlib import Path
 def rss_kb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
@@ -61,7 +64,8 @@ r1 = resource.getrusage(resource.RUSAGE_SELF)
 cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 print(json.dumps({"rows": len(meas), "read_s": t_read, "wall_s": wall, "cpu_s": cpu, "base_kb": base,
                   "after_read_kb": after_read, "peak_kb": rss_kb(), "verdict": doc["verdict"],
-                  "gap_after": doc["gap_after"]["rms_arcsec"]}))
+                  "gap_after": doc["gap_after"]["rms_arcsec"],
+                  "report_sha256": hashlib.sha256(json.dumps(doc, sort_keys=True, default=repr).encode()).hexdigest()}))
 """
 
 
@@ -136,9 +140,11 @@ def main() -> None:
                 if before is not None:
                     old = measure(before, data, args.repeat)
                     print(line(args.before[:7], old))
+                    same = old["report_sha256"] == after["report_sha256"]
                     print(f"ratio before/now: wall {old['wall_s'] / after['wall_s']:.2f}x, CPU "
-                          f"{old['cpu_s'] / after['cpu_s']:.2f}x, peak RSS {old['peak_kb'] / after['peak_kb']:.2f}x"
-                          + ("" if old["verdict"] == after["verdict"] else "  (VERDICTS DIFFER)"))
+                          f"{old['cpu_s'] / after['cpu_s']:.2f}x, peak RSS {old['peak_kb'] / after['peak_kb']:.2f}x; "
+                          + ("reports identical" if same else "REPORTS DIFFER")
+                          + ("" if old["verdict"] == after["verdict"] else " (VERDICTS DIFFER)"))
                 data.unlink()
         finally:
             if before is not None:

@@ -139,26 +139,41 @@ def _solve_blocks(block, n: int, p: int, y: np.ndarray, weights: np.ndarray | No
     their units.  A column is *identifiable* when the null space of the
     design has no weight on it (its coefficient is unique).
     """
+    return _solve_blocks_each(block, n, p, [y], weights, rcond, n_fixed)[0]
+
+
+def _solve_blocks_each(block, n: int, p: int, ys, weights: np.ndarray | None, rcond: float,
+                       n_fixed: int) -> list[_Solve]:
+    """:func:`_solve_blocks` of each right-hand side in ``ys`` (each (n,)) on one design.
+
+    The same numbers as one call per right-hand side, but each block of the
+    design is built once per pass over the rows for all of them (column
+    norms, normal equations, residuals); only the robust path (an
+    ill-conditioned design) reduces [X y] for each y on its own."""
     if weights is not None and (np.any(weights < 0) or not np.all(np.isfinite(weights))):
         raise ValueError("weights must be finite and non-negative")
     sw = None if weights is None else np.sqrt(weights)
     wsum = float(n) if weights is None else float(np.sum(weights))
     starts = list(range(0, n, BLOCK_ROWS)) or [0]
 
-    def wblock(a, b):
+    def xblock(a, b):
         xb = block(a, b)
-        if sw is None:
-            return xb, y[a:b]
-        return xb * sw[a:b, None], y[a:b] * sw[a:b]
+        return xb if sw is None else xb * sw[a:b, None]
+
+    def yblock(y, a, b):
+        return y[a:b] if sw is None else y[a:b] * sw[a:b]
 
     single = n <= BLOCK_ROWS
     if single:
-        xw_all, yw_all = wblock(0, n)
+        xw_all = xblock(0, n)
+    if n_fixed >= p:
+        sq = np.ones(p)  # no column is scaled: the norms are not needed
+    elif single:
         sq = np.einsum("ij,ij->j", xw_all, xw_all)
     else:
         sq = np.zeros(p)
         for a in starts:
-            xb, _ = wblock(a, min(a + BLOCK_ROWS, n))
+            xb = xblock(a, min(a + BLOCK_ROWS, n))
             sq += np.einsum("ij,ij->j", xb, xb)
     norms = np.sqrt(sq)
     rms_norm = math.sqrt(max(wsum, 1e-300))
@@ -166,35 +181,43 @@ def _solve_blocks(block, n: int, p: int, y: np.ndarray, weights: np.ndarray | No
     safe[:n_fixed] = 1.0
     scaled = bool(np.any(safe != 1.0))
 
-    def sblock(a, b):
-        if single:
-            xb, yb = xw_all, yw_all
-        else:
-            xb, yb = wblock(a, b)
-        return (xb / safe if scaled else xb), yb
+    def sxblock(a, b):
+        xb = xw_all if single else xblock(a, b)
+        return xb / safe if scaled else xb
 
-    coef_s = cov_s = None
-    identifiable = np.ones(p, dtype=bool)
-    rank = p
+    def syblock(y, a, b):
+        return yblock(y, 0, n) if single else yblock(y, a, b)
+
+    r_count = len(ys)
+    coef_s = [None] * r_count
+    cov_s = [None] * r_count
+    identifiable = [np.ones(p, dtype=bool) for _ in range(r_count)]
+    rank = [p] * r_count
     if n >= p and p > 0:
         # fast path: normal equations, used only when the design is well
         # conditioned (cond(X) < 1e4, so cond(X^T X) < 1e8 and the solution
         # loses at most ~1e-8 relative accuracy)
         gram = np.zeros((p, p))
-        rhs = np.zeros(p)
+        rhs = [np.zeros(p) for _ in range(r_count)]
         for a in starts:
-            xs, yb = sblock(a, min(a + BLOCK_ROWS, n))
+            b = min(a + BLOCK_ROWS, n)
+            xs = sxblock(a, b)
             gram += xs.T @ xs
-            rhs += xs.T @ yb
+            for i, y in enumerate(ys):
+                rhs[i] += xs.T @ syblock(y, a, b)
         lam, vec = np.linalg.eigh(gram)
         if lam[0] > 1e-8 * lam[-1] > 0:
-            cov_s = (vec / lam) @ vec.T
-            coef_s = cov_s @ rhs
-    if coef_s is None:
+            cov = (vec / lam) @ vec.T
+            cov_s = [cov] * r_count
+            coef_s = [cov @ r for r in rhs]
+    for i, y in enumerate(ys):
+        if coef_s[i] is not None:
+            continue
         # robust path: QR of [X y] (X padded to square when n < p), reduced block by block, then SVD of R
         r_aug = None
         for a in starts:
-            xs, yq = sblock(a, min(a + BLOCK_ROWS, n))
+            b = min(a + BLOCK_ROWS, n)
+            xs, yq = sxblock(a, b), syblock(y, a, b)
             aug = np.column_stack([xs, yq])
             if n < p:
                 aug = np.vstack([aug, np.zeros((p - n, p + 1))])
@@ -206,27 +229,32 @@ def _solve_blocks(block, n: int, p: int, y: np.ndarray, weights: np.ndarray | No
         u, sv, vt = np.linalg.svd(r)
         smax = sv[0] if sv.size else 0.0
         keep = (sv > rcond * smax) & (sv > 0) if smax > 0 else np.zeros_like(sv, dtype=bool)
-        rank = int(np.count_nonzero(keep))
+        rank[i] = int(np.count_nonzero(keep))
         inv = np.zeros_like(sv)
         inv[keep] = 1.0 / sv[keep]
-        coef_s = vt.T @ (inv * (u.T @ qty))
-        cov_s = (vt.T * inv**2) @ vt
+        coef_s[i] = vt.T @ (inv * (u.T @ qty))
+        cov_s[i] = (vt.T * inv**2) @ vt
         # null-space weight of each column: a coefficient is unique only if it has none
         null = vt[~keep]
         null_weight = np.sum(null**2, axis=0) if null.size else np.zeros(p)
-        identifiable = null_weight < 1e-6
-    coef = coef_s / safe
-    cov = cov_s / np.outer(safe, safe)
-    residual = np.empty(n)
+        identifiable[i] = null_weight < 1e-6
+    coef = [c / safe for c in coef_s]
+    residual = [np.empty(n) for _ in range(r_count)]
     for a in starts:
         b = min(a + BLOCK_ROWS, n)
-        residual[a:b] = y[a:b] - block(a, b) @ coef
-    wres = residual if sw is None else residual * sw
-    rss = float(wres @ wres)
-    dof = n - rank
-    sigma = math.sqrt(rss / dof) if dof > 0 else math.nan
-    rms = math.sqrt(rss / wsum) if wsum > 0 else math.nan
-    return _Solve(coef, cov, residual, rank, identifiable, sigma, rms)
+        xb = block(a, b)
+        for i, y in enumerate(ys):
+            residual[i][a:b] = y[a:b] - xb @ coef[i]
+    out = []
+    for i in range(r_count):
+        wres = residual[i] if sw is None else residual[i] * sw
+        rss = float(wres @ wres)
+        dof = n - rank[i]
+        sigma = math.sqrt(rss / dof) if dof > 0 else math.nan
+        rms = math.sqrt(rss / wsum) if wsum > 0 else math.nan
+        out.append(_Solve(coef[i], cov_s[i] / np.outer(safe, safe), residual[i], rank[i], identifiable[i], sigma,
+                          rms))
+    return out
 
 
 def harmonic_columns(theta: np.ndarray, orders: np.ndarray) -> np.ndarray:
@@ -362,9 +390,21 @@ def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond:
     the number of rows, not rows x columns.
     Units as in :func:`fit_orders`.
     """
+    return fit_modes_each(theta, [y], direction, orders, weights, rcond, trend)[0]
+
+
+def fit_modes_each(theta, ys, direction, orders: Sequence[float], weights=None, rcond: float = RCOND,
+                   trend=None) -> list[ModeFit]:
+    """:func:`fit_modes` of each of several responses ``ys`` (a sequence of (n,) arrays, same
+    unit) at the same angles, directions, orders and weights.
+
+    The same numbers as ``[fit_modes(theta, y, direction, orders, ...) for y in ys]``, but
+    each block of the design is built once for all responses (its cos/sin
+    columns are most of the cost), so e.g. the residual before and after a
+    refit are tabulated for little more than one."""
     theta = _as_1d("theta", theta)
     n = theta.shape[0]
-    y = _as_1d("y", y, n)
+    ys = [_as_1d("y", y, n) for y in ys]
     d = _as_1d("direction", direction, n)
     ords = np.atleast_1d(np.asarray(orders, dtype=float))
     m = ords.shape[0]
@@ -372,15 +412,27 @@ def fit_modes(theta, y, direction, orders: Sequence[float], weights=None, rcond:
     tr = np.zeros((n, 0)) if trend is None else np.asarray(trend, dtype=float).reshape(n, -1)
     both = bool(np.any(d > 0) and np.any(d < 0))
 
-    def block(a, b):
-        base = np.hstack([np.ones((b - a, 1)), harmonic_columns(theta[a:b], ords), tr[a:b]])
-        return np.hstack([base, base * d[a:b, None]]) if both else base
-
     p_mode = 1 + 2 * m + tr.shape[1]
     ncols = 2 * p_mode if both else p_mode
-    sol = _solve_blocks(block, n, ncols, y, w, rcond, ncols)
+
+    def block(a, b):
+        # [1, cos/sin per order, trend] and, with both directions, the same times the direction
+        out = np.empty((b - a, ncols))
+        out[:, 0] = 1.0
+        out[:, 1:1 + 2 * m] = harmonic_columns(theta[a:b], ords)
+        out[:, 1 + 2 * m:p_mode] = tr[a:b]
+        if both:
+            np.multiply(out[:, :p_mode], d[a:b, None], out=out[:, p_mode:])
+        return out
+
+    return [_mode_fit(sol, ords, p_mode, both, ncols) for sol in _solve_blocks_each(block, n, ncols, ys, w, rcond,
+                                                                                    ncols)]
+
+
+def _mode_fit(sol: _Solve, ords: np.ndarray, p: int, both: bool, ncols: int) -> ModeFit:
+    """The :class:`ModeFit` of one solve of :func:`fit_modes_each`'s design (``p`` columns per mode)."""
+    m = ords.shape[0]
     x = np.empty((0, ncols))  # only its shape is used below
-    p = p_mode
     fits = []
     for start in (0, p):
         if start == p and not both:
@@ -524,6 +576,17 @@ def alias_groups(theta, orders: Sequence[float], tol: float = ALIAS_TOL, weights
     if ords.shape[0] == 0:
         return []
     return _groups(ords, *_correlations(theta, ords, weights), tol)
+
+
+def aliasing(theta, orders: Sequence[float], tol: float = ALIAS_TOL,
+             weights=None) -> tuple[list[tuple[float, ...]], list[float]]:
+    """(:func:`alias_groups`, :func:`folded_orders`) of the same samples and orders, from one
+    pass over the sampled angles (each alone makes the same pass)."""
+    ords = np.atleast_1d(np.asarray(orders, dtype=float))
+    if ords.shape[0] == 0:
+        return [], []
+    c_minus, c_plus, c_zero = _correlations(theta, ords, weights)
+    return _groups(ords, c_minus, c_plus, c_zero, tol), _folded(ords, c_plus, tol)
 
 
 def folded_orders(theta, orders: Sequence[float], tol: float = ALIAS_TOL, weights=None) -> list[float]:

@@ -481,6 +481,7 @@ class _Body:
     def __init__(self, body: str, first_line: int, delim: str, ncols: int, name: str):
         self.body, self.first_line, self.delim, self.ncols, self.name = body, first_line, delim, ncols, name
         self._rows = None  # (rows, line numbers) of the slow path
+        self.blank_rows: list[int] = []  # line numbers of rows whose every cell is empty (",,,"), left out
 
     def slow(self):
         if self._rows is None:
@@ -499,6 +500,8 @@ class _Body:
                                     f"({exc})") from None
                 line_no = self.first_line - 1 + reader.line_num
                 if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
+                    if len(row) > 1 and all(not c.strip() for c in row):
+                        self.blank_rows.append(line_no)  # delimiters and nothing else: said in the notes
                     continue
                 if len(row) != self.ncols:
                     raise DataError(f"{self.name}:{line_no}: expected {self.ncols} cells as in the header, got "
@@ -618,6 +621,12 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
     # units
     notes: list[str] = []
     warnings: list[str] = []
+    if data.blank_rows:
+        k = len(data.blank_rows)
+        first = ", ".join(str(line) for line in data.blank_rows[:3])
+        more = f" and {k - 3} more" if k > 3 else ""
+        notes.append(f"{k} row{'s' if k != 1 else ''} with every cell empty left out (line{'s' if k != 1 else ''} "
+                     f"{first}{more})")
     angle_unit = options.angle_unit or hunit.get("angle_deg") or "deg"
     error_unit = options.error_unit or hunit.get("error_arcsec") or "arcsec"
     for canon, chosen, opt in (("angle_deg", angle_unit, "--angle-unit"), ("error_arcsec", error_unit, "--error-unit")):

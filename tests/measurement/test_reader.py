@@ -59,6 +59,27 @@ def test_bom_crlf_spaces_and_blank_lines(tmp_path):
     assert m.error_arcsec == pytest.approx([1.0, 2.0])
 
 
+def test_rows_with_every_cell_empty_are_counted_in_a_note(tmp_path):
+    # lines 3, 5 and 7 are rows of empty cells (spreadsheet exports write them); line 6 is a blank line
+    text = "angle_deg,error_arcsec,direction\n0,1,1\n,,\n10,2,1\n , ,\n\n,,\n20,3,-1\n"
+    m = read_measurement(write(tmp_path, text))
+    assert m.error_arcsec == pytest.approx([1.0, 2.0, 3.0])
+    assert m.rows == (("0", "1", "1"), ("10", "2", "1"), ("20", "3", "-1"))
+    assert [n for n in m.notes if "every cell empty" in n] == ["3 rows with every cell empty left out (lines 3, 5, 7)"]
+
+
+def test_many_empty_rows_note_names_the_first_three(tmp_path):
+    text = "angle_deg,error_arcsec\n0,1\n" + ",\n" * 5 + "10,2\n"
+    m = read_measurement(write(tmp_path, text))
+    assert len(m) == 2
+    assert "5 rows with every cell empty left out (lines 3, 4, 5 and 2 more)" in m.notes
+
+
+def test_blank_lines_alone_give_no_empty_row_note(tmp_path):
+    m = read_measurement(write(tmp_path, "angle_deg,error_arcsec\n0,1\n\n10,2\n"))
+    assert not any("every cell empty" in n for n in m.notes)
+
+
 def test_error_column_optional_when_not_required(tmp_path):
     m = read_measurement(write(tmp_path, "angle_deg,direction\n0,1\n5,-1\n"), require_error=False)
     assert np.all(np.isnan(m.error))

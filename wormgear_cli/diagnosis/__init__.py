@@ -141,7 +141,8 @@ from wormgear_cli.diagnosis.mixed import (
 )
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, PhaseSource, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.report import DiagnoseResult, report, run_diagnose
-from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, short_term_noise, versus
+from wormgear_cli.diagnosis.residuals import (gap_summary, iso_figures, noise_floor, order_table, order_tables,
+                                              short_term_noise, versus)
 from wormgear_cli.diagnosis.runs import (
     Cells,
     DataInfo,
@@ -179,6 +180,7 @@ __all__ = [
     "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",
     "containment_df", "contrast_df", "data_info", "diagnose", "f_sf", "fit_model", "gap_summary", "iso_figures",
     "jointly_fittable_orders", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
+    "order_tables",
     "phase_sources", "physical_problem", "reml", "replication_problem", "report", "unaliased_orders", "run_diagnose",
     "short_term_noise", "sources_total", "t_ppf", "time_restarts", "versus", "wald",
 ]

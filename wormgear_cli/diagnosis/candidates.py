@@ -184,14 +184,14 @@ UNPHYSICAL_HINT = {
 
 def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     """Per periodic candidate: the orders it cannot be told from at these angles, as (order, label)."""
-    from wormgear_cli.harmonics import alias_groups, folded_orders, physical_orders
+    from wormgear_cli.harmonics import aliasing, physical_orders
 
     labels = {o: lab for o, lab in physical_orders(geometry, 3)}
     for s in sources:
         labels.setdefault(s.order, s.name)
     orders = sorted({*labels, *(c.order for c in cands.values() if c is not None and c.order is not None)})
-    groups = alias_groups(theta, orders)
-    folded = set(folded_orders(theta, orders))
+    groups, folded = aliasing(theta, orders)
+    folded = set(folded)
     out = {}
     for name, c in cands.items():
         if c is None or c.order is None:
@@ -215,11 +215,12 @@ def unaliased_orders(theta, orders) -> tuple[list, dict]:
     :func:`jointly_fittable_orders`.  (Not the same test as
     :func:`wormgear_cli.harmonics.resolvable_orders`, which judges the
     conditioning of the whole design for ``measure``.)"""
-    from wormgear_cli.harmonics import alias_groups, folded_orders
+    from wormgear_cli.harmonics import aliasing
 
     orders = [float(o) for o in orders]
     aliased = {}
-    for grp in alias_groups(theta, orders):
+    groups, folded = aliasing(theta, orders)
+    for grp in groups:
         members = [o for o in grp if o != 0.0]
         if 0.0 in grp:
             for o in members:
@@ -227,7 +228,7 @@ def unaliased_orders(theta, orders) -> tuple[list, dict]:
         else:
             for o in members[1:]:
                 aliased[o] = f"order {members[0]:g}"
-    for o in folded_orders(theta, orders):
+    for o in folded:
         aliased.setdefault(o, "its own mirror (one phase component)")
     return [o for o in orders if o not in aliased], aliased
 

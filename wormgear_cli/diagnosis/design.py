@@ -7,16 +7,27 @@ import math
 import numpy as np
 
 
-def orthonormal(x: np.ndarray, rtol: float = 1e-7):
-    """An orthonormal basis (scaled to unit RMS) of the column space of ``x`` and its rank."""
+def orthonormal(x: np.ndarray, rtol: float = 1e-7, own: bool = False):
+    """An orthonormal basis (scaled to unit RMS) of the column space of ``x`` and its rank.
+
+    ``own``: ``x`` is a temporary the caller gives up (e.g. a fresh ``np.hstack``): its
+    columns are scaled in place instead of in a copy (the same numbers, one N x k array
+    less at the peak of long measurements)."""
     if x.shape[1] == 0:
         return x, 0
+    n = x.shape[0]
     norms = np.sqrt(np.sum(x * x, axis=0))
     ok = norms > 0
-    xs = x[:, ok] / norms[ok]
+    if np.all(ok):
+        xs = np.divide(x, norms, out=x if own and x.flags.writeable else None)
+    else:
+        xs = x[:, ok] / norms[ok]
+    x = None
     u, sv, _ = np.linalg.svd(xs, full_matrices=False)
+    xs = None
     keep = sv > rtol * sv[0] if sv.size else np.zeros(0, bool)
-    basis = u[:, keep] * math.sqrt(x.shape[0])
+    # (a copy in the column order the selection gives, whose layout the products downstream follow)
+    basis = u[:, keep] * math.sqrt(n)
     return basis, int(np.count_nonzero(keep))
 
 
@@ -47,8 +58,12 @@ def tolerance(basis, cols):
 
 def canonical(a, b):
     """Largest canonical correlation between the column spaces of a and b."""
-    qa = np.linalg.qr(a)[0]
-    qb = np.linalg.qr(b)[0]
+    return canonical_q(np.linalg.qr(a)[0], np.linalg.qr(b)[0])
+
+
+def canonical_q(qa, qb):
+    """:func:`canonical` from the Q factors of a and b (``np.linalg.qr(a)[0]``), when one block
+    is compared with several others."""
     return float(np.linalg.svd(qa.T @ qb, compute_uv=False)[0])
 
 

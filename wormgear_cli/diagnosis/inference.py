@@ -78,7 +78,7 @@ def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups
     if not accepted:
         return []
     lin = state.lin
-    nuis, _ = orthonormal(np.hstack([lin[:, :fixed], state.jac]))
+    nuis, _ = orthonormal(np.hstack([lin[:, :fixed], state.jac]), own=True)
     kb = nuis.shape[1]
     eff_cols = lin[:, fixed:]
     rms = np.sqrt(np.mean(eff_cols**2, axis=0))

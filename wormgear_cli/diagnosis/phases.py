@@ -8,7 +8,8 @@ metric and REML variance components, alternated (:func:`fit_model`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from typing import Callable
 
 import numpy as np
@@ -27,7 +28,11 @@ class PhaseSource:
     ``effect:NAME``; ``key``: TOML path of its phase key; ``order``
     [cycles/output rev]; ``amplitude`` [arcsec] (first harmonic, as
     specified); ``phase`` [rad] as specified; ``contrib(signals, psi)`` ->
-    its whole contribution [arcsec] (common part and lost-motion part)."""
+    its whole contribution [arcsec] (common part and lost-motion part).
+    ``pointwise``: the contribution at a row depends on that row's angle
+    and direction only (a source of :func:`simulation.periodic_sources`), so
+    it may be evaluated once per distinct (angle, direction) pair
+    (:meth:`FitContext.values`)."""
 
     name: str
     key: str
@@ -35,6 +40,7 @@ class PhaseSource:
     amplitude: float
     phase: float
     contrib: Callable
+    pointwise: bool = False
 
 
 def _source_contrib(src):
@@ -65,7 +71,7 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     out = []
     for src in periodic_sources(spec):
         out.append(PhaseSource(src.name, src.phase_path, float(src.order), float(src.amplitude) / ARCSEC,
-                               float(src.phase), _source_contrib(src)))
+                               float(src.phase), _source_contrib(src), pointwise=True))
     for name, params in spec.effects.items():
         eff = EFFECTS[name]
         if eff.phase is None or eff.order is None:
@@ -138,16 +144,78 @@ class FitContext:
     def replaced(self, **changes) -> "FitContext":
         return replace(self, **changes)
 
+    @cached_property
+    def distinct(self) -> "Distinct | None":
+        """The rows' distinct (angle, direction) pairs, when there are at most half as many as rows."""
+        return distinct_pairs(self.sig)
+
+    def values(self, source: PhaseSource, psi) -> np.ndarray:
+        """``source.contrib(self.sig, psi)`` (N,) [arcsec]: for a pointwise source evaluated once per
+        distinct (angle, direction) pair and spread to the rows (the same numbers: every operation is
+        elementwise)."""
+        d = self.distinct if source.pointwise else None
+        if d is None:
+            return source.contrib(self.sig, psi)
+        return source.contrib(d.sig, psi)[d.inverse]
+
+
+@dataclass(frozen=True)
+class Distinct:
+    """Distinct (angle, direction) pairs of a measurement's rows: ``sig`` one row per pair (the
+    signals of its first row), ``inverse`` (N,) the pair of each row."""
+
+    sig: object
+    inverse: np.ndarray
+
+
+def distinct_pairs(sig, max_share: float = 0.5) -> Distinct | None:
+    """The distinct (angle, direction) pairs of ``sig``'s rows (bitwise equal values), or None when
+    there are more than ``max_share`` times as many as rows (nothing to gain)."""
+    n = sig.theta.shape[0]
+    if n == 0 or sig.theta.ndim != 1:
+        return None
+    theta = np.ascontiguousarray(sig.theta, dtype=float)
+    direction = np.ascontiguousarray(np.broadcast_to(sig.direction, theta.shape), dtype=float)
+    _, t_idx = np.unique(theta.view(np.int64), return_inverse=True)
+    d_vals, d_idx = np.unique(direction.view(np.int64), return_inverse=True)
+    key = t_idx.reshape(-1).astype(np.int64) * d_vals.shape[0] + d_idx.reshape(-1)
+    _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    if first.shape[0] > max_share * n:
+        return None
+    return Distinct(subset(sig, first), _index(inverse.reshape(-1), first.shape[0]))
+
+
+def distinct_angles(theta: np.ndarray, max_share: float = 0.5) -> tuple[np.ndarray, np.ndarray] | None:
+    """(distinct values (U,), index of each row's value (N,)) of the angles ``theta`` (bitwise
+    equal values), or None when there are more than ``max_share`` times as many as rows."""
+    theta = np.ascontiguousarray(theta, dtype=float)
+    n = theta.shape[0]
+    if n == 0:
+        return None
+    _, first, inverse = np.unique(theta.view(np.int64), return_index=True, return_inverse=True)
+    if first.shape[0] > max_share * n:
+        return None
+    return theta[first], _index(inverse.reshape(-1), first.shape[0])
+
+
+def _index(inverse: np.ndarray, size: int) -> np.ndarray:
+    """Row -> distinct value index, as int32 when it fits (half the memory of int64)."""
+    return inverse.astype(np.int32) if size < 2**31 else inverse
+
 
 @dataclass(frozen=True)
 class PhaseFit:
     """A Levenberg-Marquardt polish: phases ``psi`` [rad], linear coefficients ``beta``,
-    ``residual`` (N,) [arcsec] and its GLS ``cost`` (residual' V~^-1 residual)."""
+    ``residual`` (N,) [arcsec] and its GLS ``cost`` (residual' V~^-1 residual); ``parts``:
+    each source's contribution [arcsec] at ``psi``, per row or per distinct (angle,
+    direction) pair (:func:`_evaluator`): a list a following polish of the same rows from
+    ``psi`` takes over (see :func:`levenberg_marquardt`)."""
 
     psi: np.ndarray
     beta: np.ndarray
     residual: np.ndarray
     cost: float
+    parts: list = field(default_factory=list)
 
 
 @dataclass
@@ -181,16 +249,55 @@ def sources_total(sources, sig, psi):
     return out
 
 
-def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None):
+def _sum_parts(parts, n: int) -> np.ndarray:
+    """Sum of the (N,) arrays ``parts``, added in list order: the same numbers as
+    ``np.sum(parts, axis=0)`` without its (len(parts), N) stacked copy."""
+    if not parts:
+        return np.zeros(n)
+    out = parts[0].copy()
+    for p in parts[1:]:
+        out += p
+    return out
+
+
+def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None, values=None, spread=None):
     """d contribution / d phase [arcsec/rad] per source: central differences, or forward
-    differences from the contributions ``parts`` already computed at ``psi``."""
-    cols = np.empty((sig.theta.shape[0], len(sources)))
+    differences from the contributions ``parts`` already computed at ``psi``; written into
+    ``out`` (N, m) when given (e.g. the first columns of a design).  ``values(source, psi)``:
+    how a contribution is evaluated (default ``source.contrib(sig, psi)``); ``spread(a)``:
+    from those values to the rows (default: they are the rows; see :func:`_evaluator`)."""
+    if values is None:
+        values = lambda s, p: s.contrib(sig, p)  # noqa: E731
+    cols = np.empty((sig.theta.shape[0], len(sources))) if out is None else out
     for j, (s, p) in enumerate(zip(sources, psi)):
         if parts is None:
-            cols[:, j] = (s.contrib(sig, p + h) - s.contrib(sig, p - h)) / (2 * h)
+            col = (values(s, p + h) - values(s, p - h)) / (2 * h)
         else:
-            cols[:, j] = (s.contrib(sig, p + h) - parts[j]) / h
+            col = (values(s, p + h) - parts[j]) / h
+        if spread is None:
+            cols[:, j] = col
+        else:
+            np.take(col, spread, out=cols[:, j])
     return cols
+
+
+def _evaluator(ctx: "FitContext"):
+    """(values, spread, size): how :func:`levenberg_marquardt` evaluates the sources of ``ctx``.
+
+    When every source is pointwise and the rows repeat (angle, direction) pairs,
+    contributions, their sums and finite differences are kept per distinct pair
+    (``size`` of them) and ``spread`` (the row -> pair index) takes them to the rows
+    only where a row-sized array is needed: every step is elementwise, so the numbers
+    are those of the row-sized arrays, for a fraction of the work and memory.
+    Otherwise ``values`` is :meth:`FitContext.values`, ``spread`` None and ``size`` N."""
+    d = ctx.distinct
+    if d is not None and ctx.sources and all(s.pointwise for s in ctx.sources):
+        return (lambda s, p: s.contrib(d.sig, p)), d.inverse, int(d.sig.theta.shape[0])
+    return ctx.values, None, ctx.n
+
+
+def _to_rows(a, spread):
+    return a if spread is None else np.take(a, spread)
 
 
 def gls_cost(r, groups, gp, gr):
@@ -199,9 +306,14 @@ def gls_cost(r, groups, gp, gr):
     return float(cr.weighted([gp], [gr])[2][0])
 
 
-def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iters=40) -> PhaseFit:
+def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iters=40, parts=None) -> PhaseFit:
     """Levenberg-Marquardt on the phases and the linear coefficients in the GLS metric
     (variance ratios ``gp``, ``gr`` held).
+
+    ``parts``: the sources' contributions at ``psi`` on ``ctx``'s rows when
+    already known (the ``parts`` of a previous polish on the same rows ending
+    at ``psi``): a list the fit takes over and empties, so the caller's copy
+    holds no N-sized arrays while the fit runs.
 
     Not :func:`scipy.optimize.least_squares`, measured: on the 19 white-metric
     polishes of the 1e5-row bench case (2000-row subsamples, the bulk of the
@@ -214,8 +326,15 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     y, sig, groups, base, sources = ctx.y, ctx.sig, ctx.groups, ctx.base, ctx.sources
     m = len(sources) if fit_phases else 0
     psi = np.array(psi, dtype=float)
-    parts = [s.contrib(sig, p) for s, p in zip(sources, psi)]
-    src = np.sum(parts, axis=0) if parts else np.zeros(y.shape[0])
+    n = y.shape[0]
+    values, spread, size = _evaluator(ctx)
+    if parts:
+        given = parts
+        parts = list(given)
+        given.clear()
+    else:
+        parts = [values(s, p) for s, p in zip(sources, psi)]
+    src = _to_rows(_sum_parts(parts, size), spread)
     # start with the linear coefficients solved exactly
     r0 = y - base - src
     cr = Cross.build(lin, r0, groups)
@@ -224,9 +343,12 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
     resid = r0 - lin @ beta
     cost = gls_cost(resid, groups, gp, gr)
     mu = 1e-3
+    # [Jacobian | linear columns], made once by np.hstack (whose memory layout, C or Fortran, the products
+    # downstream follow bit for bit): the Jacobian columns are rewritten in place each iteration
+    design = np.hstack([np.empty((n, m)), lin])
     for _ in range(iters):
-        jac = _jacobian(sources, sig, psi, h=1e-6, parts=parts) if m else np.zeros((y.shape[0], 0))
-        design = np.hstack([jac, lin])
+        if m:
+            _jacobian(sources, sig, psi, h=1e-6, parts=parts, out=design[:, :m], values=values, spread=spread)
         cr = Cross.build(design, resid, groups)
         A, b, _, _ = cr.weighted([gp], [gr])
         A, b = A[0], b[0]
@@ -241,8 +363,8 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
                 continue
             psi_new = psi + step[:m]
             beta_new = beta + step[m:]
-            parts_new = [s.contrib(sig, p) for s, p in zip(sources, psi_new)] if m else parts
-            src_new = np.sum(parts_new, axis=0) if m else src
+            parts_new = [values(s, p) for s, p in zip(sources, psi_new)] if m else parts
+            src_new = _to_rows(_sum_parts(parts_new, size), spread) if m else src
             resid_new = y - base - src_new - lin @ beta_new
             cost_new = gls_cost(resid_new, groups, gp, gr)
             if cost_new <= cost:
@@ -254,7 +376,7 @@ def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iter
             mu *= 8.0
         if not improved or rel < 1e-10:
             break
-    return PhaseFit(psi, beta, resid, cost)
+    return PhaseFit(psi, beta, resid, cost, parts)
 
 
 def _harmonic_starts(ctx: FitContext):
@@ -391,6 +513,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
     m = len(sources) if fit_phases else 0
     n = y.shape[0]
     psi = np.array(ctx.spec_psi, dtype=float)
+    ev, spread, _ = _evaluator(ctx)
     if m:
         step = max(1, n // 2000)
         idx = np.arange(0, n, step)
@@ -407,27 +530,30 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
                 continue
             seen.add(key)
             pf = levenberg_marquardt(sub, init, lin[idx], 0.0, 0.0, True, 25)
+            pf.parts.clear()
             if best is None or pf.cost < best.cost - 1e-9 * abs(pf.cost):
                 best = pf
         psi = best.psi
     if variance is not None:
         pf = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
-        jac = _jacobian(sources, sig, pf.psi) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, pf.psi, values=ev, spread=spread) if m else np.zeros((n, 0))
         return ModelFit(pf.psi, pf.beta, y - pf.residual, pf.residual, jac, lin, variance, pf.cost)
     gp = gr = 0.0
     var = None
+    pf = None
     for _ in range(3):
-        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0)
+        # each round starts where the last ended: its contributions there are taken over, not recomputed
+        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts if pf is not None else None)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
-        cr = Cross.build(orthonormal(np.hstack([lin, jac]))[0], pf.residual, groups)
+        jac = _jacobian(sources, sig, psi, values=ev, spread=spread) if m else np.zeros((n, 0))
+        cr = Cross.build(orthonormal(np.hstack([lin, jac]), own=True)[0], pf.residual, groups)
         var = reml(cr)
         done = abs(var.gp - gp) <= 0.05 * max(gp, 1e-9) and abs(var.gr - gr) <= 0.05 * max(gr, 1e-9)
         gp, gr = var.gp, var.gr
         if done:
             break
     else:
-        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0)
+        pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts)
         psi = pf.psi
-        jac = _jacobian(sources, sig, psi) if m else np.zeros((n, 0))
+        jac = _jacobian(sources, sig, psi, values=ev, spread=spread) if m else np.zeros((n, 0))
     return ModelFit(psi, pf.beta, y - pf.residual, pf.residual, jac, lin, var, pf.cost)

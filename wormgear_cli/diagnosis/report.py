@@ -10,7 +10,8 @@ import numpy as np
 from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
 from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind, aliased_effects, candidate,
                                                candidate_params)
-from wormgear_cli.diagnosis.residuals import gap_summary, iso_figures, noise_floor, order_table, versus
+from wormgear_cli.diagnosis.residuals import (gap_summary, iso_figures, noise_floor, order_tables,
+                                              target_run_cells, versus)
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
@@ -255,7 +256,7 @@ def _data_verdict(findings) -> list[str]:
     return out
 
 
-def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None) -> dict | None:
+def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> dict | None:
     """Whether the spec's predicted error is far from the data (a spec of another drive, or a unit mix-up).
 
     Compared on the measurement itself, not on a fitted effect: the
@@ -272,7 +273,9 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None) -> dict | None:
     Returns None, or {"items": [...], "gap_after_arcsec", "repeat_arcsec",
     "scale": data/spec size ratio (geometric mean over the items), "units":
     (column unit, unit read) when every item's ratio is within
-    UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}."""
+    UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}.
+    ``tables``: the :func:`order_table` of the measured error and of the
+    fitted model before the effects, when already made (else made here)."""
     from wormgear_cli.analysis import geometry as drive_geometry
     from wormgear_cli.measurement import ERROR_UNITS
     from wormgear_cli.units import RAD_PER_UNIT
@@ -284,8 +287,9 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None) -> dict | None:
     y = meas.error / ARCSEC
     gap_after = float(np.sqrt(np.mean((y - diag.augmented_fitted) ** 2)))
     g = drive_geometry(diag.spec)
-    data_t = {r["order"]: r for r in order_table(meas, y, g)}
-    model_t = {r["order"]: r for r in order_table(meas, diag.before.fitted, g)}
+    data_rows, model_rows = tables if tables is not None else order_tables(meas, [y, diag.before.fitted], g)
+    data_t = {r["order"]: r for r in data_rows}
+    model_t = {r["order"]: r for r in model_rows}
     items = []
 
     def out_of_line(spec_v, data_v):
@@ -359,6 +363,11 @@ def _report(diag: Diagnosis) -> dict:
     y = meas.error / ARCSEC
     resid_after = y - diag.augmented_fitted
     twins = folded_twins(diag)
+    # the order tables of the residual before and after, and (for the plausibility check) of the
+    # measured error and the fitted model: one joint design for all four
+    orders_before, orders_after, orders_data, orders_model = order_tables(
+        meas, [diag.before.residual, resid_after, y, diag.before.fitted], g)
+    pair_cells = target_run_cells(meas)
     found = []
     for f in diag.found:
         item = {"name": f.name, "parameters": augmented_params(f),
@@ -403,9 +412,9 @@ def _report(diag: Diagnosis) -> dict:
         "rows": len(meas),
         "verdict": _verdict(diag, twins),
         "effects_found": found,
-        "gap_as_specified": gap_summary(meas, diag.as_specified),
-        "gap_before": gap_summary(meas, diag.before.residual),
-        "gap_after": gap_summary(meas, resid_after),
+        "gap_as_specified": gap_summary(meas, diag.as_specified, pair_cells),
+        "gap_before": gap_summary(meas, diag.before.residual, pair_cells),
+        "gap_after": gap_summary(meas, resid_after, pair_cells),
         "unexplained": diag.unexplained,
         "candidates": _status(diag, twins),
         "fit": {
@@ -420,7 +429,7 @@ def _report(diag: Diagnosis) -> dict:
         "noise": {"before": noise_floor(meas, diag.before.residual, diag.before.var, diag.groups),
                   "after": noise_floor(meas, resid_after, diag.after.var, diag.groups),
                   "floor_arcsec": diag.noise_floor if math.isfinite(diag.noise_floor) else None},
-        "orders": {"before": order_table(meas, diag.before.residual, g), "after": order_table(meas, resid_after, g)},
+        "orders": {"before": orders_before, "after": orders_after},
         "residual_vs": {"before": versus(meas, diag.before.residual, info), "after": versus(meas, resid_after, info)},
         "iso230": {"measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
                    "simulated_after": iso_figures(meas, diag.augmented_fitted)},
@@ -439,7 +448,7 @@ def _report(diag: Diagnosis) -> dict:
                                 "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
                                 "replication untestable"},
     }
-    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"])
+    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"], (orders_data, orders_model))
     doc["plausibility"] = None
     if mismatch is not None:
         doc["plausibility"] = {

@@ -47,20 +47,27 @@ def _target_pairs(meas):
     return tgt, run
 
 
-def gap_summary(meas, resid: np.ndarray) -> dict:
-    """RMS and max |residual| [arcsec] of all rows, and of the common mode (mean of
-    the directions) and differential mode (half forward - reverse) per target and run."""
+def target_run_cells(meas) -> tuple[np.ndarray, int]:
+    """(cell of each row (N,), number of cells): the (target, run) cells :func:`gap_summary` pairs
+    the directions in (they depend on the angles and runs only: make them once per measurement)."""
     tgt, run = _target_pairs(meas)
-    out = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))), "max_arcsec": float(np.max(np.abs(resid)))}
     _, run_idx = np.unique(run, return_inverse=True)
     pair = tgt.astype(np.int64) * (int(run_idx.max()) + 1) + run_idx.reshape(-1)
     uniq, inv = np.unique(pair, return_inverse=True)
-    inv = inv.reshape(-1)
+    return inv.reshape(-1), int(uniq.shape[0])
+
+
+def gap_summary(meas, resid: np.ndarray, cells: tuple[np.ndarray, int] | None = None) -> dict:
+    """RMS and max |residual| [arcsec] of all rows, and of the common mode (mean of
+    the directions) and differential mode (half forward - reverse) per target and run.
+    ``cells``: :func:`target_run_cells` of ``meas`` when already made."""
+    inv, size = cells if cells is not None else target_run_cells(meas)
+    out = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))), "max_arcsec": float(np.max(np.abs(resid)))}
     sums = {}
     for dv in (1, -1):
         sel = meas.direction == dv
-        cnt = np.bincount(inv[sel], minlength=uniq.shape[0])
-        tot = np.bincount(inv[sel], weights=resid[sel], minlength=uniq.shape[0])
+        cnt = np.bincount(inv[sel], minlength=size)
+        tot = np.bincount(inv[sel], weights=resid[sel], minlength=size)
         sums[dv] = (tot, cnt)
     ok = (sums[1][1] > 0) & (sums[-1][1] > 0)
     if np.any(ok):
@@ -82,7 +89,17 @@ def order_table(meas, resid, geometry) -> list[dict]:
     mode, joint least squares at the exact orders the targets resolve; standard
     errors assume white noise).  Orders the targets cannot resolve are listed
     with what they are aliased with."""
-    from wormgear_cli.harmonics import fit_modes, physical_orders
+    return order_tables(meas, [resid], geometry)[0]
+
+
+def order_tables(meas, resids, geometry) -> list[list[dict]]:
+    """:func:`order_table` of each residual in ``resids`` (each (N,) [arcsec]) of one measurement.
+
+    Which orders are fitted depends on the angles only, and the joint fit's
+    design is built once for all residuals
+    (:func:`wormgear_cli.harmonics.fit_modes_each`): the same tables as one
+    call per residual, for little more than the cost of one."""
+    from wormgear_cli.harmonics import fit_modes_each, physical_orders
 
     phys = physical_orders(geometry, 3)
     bases = (1.0, float(geometry.gear_ratio), float(geometry.output_teeth), float(geometry.worm_order))
@@ -92,10 +109,14 @@ def order_table(meas, resid, geometry) -> list[dict]:
 
     priority = sorted((o for o, _ in phys), key=lambda o: (harmonic(o), o))
     keep, aliased = jointly_fittable_orders(meas.angle, [o for o, _ in phys], priority)
-    fit = None
+    fits = [None] * len(resids)
     if keep:
         with np.errstate(invalid="ignore", divide="ignore"):
-            fit = fit_modes(meas.angle, resid, meas.direction, keep)
+            fits = fit_modes_each(meas.angle, resids, meas.direction, keep)
+    return [_order_rows(fit, phys, keep, aliased) for fit in fits]
+
+
+def _order_rows(fit, phys, keep, aliased) -> list[dict]:
     out = []
     if fit is not None:
         row = {"order": 0.0, "label": "constant (common: offset; differential: half the mean reversal change)",

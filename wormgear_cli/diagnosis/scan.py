@@ -10,7 +10,7 @@ import numpy as np
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
 from wormgear_cli.diagnosis.design import orthonormal, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
-from wormgear_cli.diagnosis.phases import ModelFit
+from wormgear_cli.diagnosis.phases import ModelFit, distinct_angles
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, pass_sums
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE, MIN_RUNS, MIN_SCAN_SHARE,
@@ -114,7 +114,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
 
     catalogue_orders = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
     r = state.residual
-    basis, _ = orthonormal(np.hstack([state.lin, state.jac]))
+    basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     part = (basis.T @ basis, basis.T @ r, pass_sums(basis, groups) if basis.shape[1] else np.zeros((groups.passes, 0)))
     theta, d = sig.theta, sig.direction
     both = len(info.directions) == 2
@@ -149,12 +149,28 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     def width(recipe):
         return 2 if recipe[0] == "order" else 1
 
+    # the order columns are functions of the angle: made once per distinct angle and spread to the rows
+    if orders_cache is not None and "angles" in orders_cache:
+        angles = orders_cache["angles"]
+    else:
+        angles = distinct_angles(theta)
+        if orders_cache is not None:
+            orders_cache["angles"] = angles
+
     def fill(out, recipe):
         kind, what, diff = recipe
         if kind == "order":
-            np.multiply(theta, what, out=out[:, 0])
-            np.sin(out[:, 0], out=out[:, 1])
-            np.cos(out[:, 0], out=out[:, 0])
+            if angles is not None:
+                ut, where = angles
+                buf = np.empty((ut.shape[0], 2))
+                np.multiply(ut, what, out=buf[:, 0])
+                np.sin(buf[:, 0], out=buf[:, 1])
+                np.cos(buf[:, 0], out=buf[:, 0])
+                out[...] = np.take(buf, where, axis=0)
+            else:
+                np.multiply(theta, what, out=out[:, 0])
+                np.sin(out[:, 0], out=out[:, 1])
+                np.cos(out[:, 0], out=out[:, 0])
         elif kind == "trend":
             np.subtract(what, np.mean(what), out=out[:, 0])
         else:
@@ -177,6 +193,9 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     chunk_cache = orders_cache.setdefault("chunks", {}) if orders_cache is not None else {}
     n_rows = r.shape[0]
     cell_tester = CellTester(cells, basis, r) if cells.replicated else None
+    # a cell holds one direction: with directions of exactly +/-1 the cell means of an order's differential
+    # columns are those of its common columns times the cell's direction (the same numbers, half the work)
+    cell_dir = cells.means(d) if cell_tester is not None and bool(np.all(np.abs(d) == 1.0)) else None
 
     def flush():
         if not chunk:
@@ -206,6 +225,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
         rr = big.T @ r - cb.T @ btr / n_rows
         ps = ps_big - sb @ cb / n_rows
         j = 0
+        common_means = {}
         for kind, what, mode, recipe in chunk:
             q = width(recipe)
             sl = slice(j, j + q)
@@ -232,7 +252,15 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
                 v = res_rot[:, 0]
                 partial_dirs[(what, mode)] = v / max(float(np.linalg.norm(v)), 1e-300)
             # the cell-means test now (its C x q means are not kept for every test)
-            cell_test = cell_tester.test(means=cells.means(big[:, sl])) if kind == "order" and cell_tester else None
+            cell_test = None
+            if kind == "order" and cell_tester:
+                if recipe[2] and cell_dir is not None and what in common_means:
+                    mc = common_means[what] * cell_dir[:, None]
+                else:
+                    mc = cells.means(big[:, sl])
+                    if not recipe[2]:
+                        common_means[what] = mc
+                cell_test = cell_tester.test(means=mc)
             results.append((kind, what, mode, cross, kb + np.arange(k2), rot if k2 == q else None,
                             res_rot if kind != "order" else None, cell_test))
         chunk.clear()
@@ -333,7 +361,7 @@ def unowned_order_columns(items: list[dict], sig, geometry, state: ModelFit) -> 
     from wormgear_cli.models.effects import EFFECTS
 
     owned = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
-    basis, _ = orthonormal(np.hstack([state.lin, state.jac]))
+    basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     out = []
     for item in items:
         if item["kind"] != "order" or any(abs(item["order"] - o) < 1e-9 for o in owned):

@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from wormgear_cli.diagnosis.candidates import Candidate, candidate_params, needs_problem, replication_problem
-from wormgear_cli.diagnosis.design import canonical, orthonormal, r2, residualise, tolerance
+from wormgear_cli.diagnosis.design import canonical_q, orthonormal, r2, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, VarFit, Wald, containment_df, f_sf, reml, wald
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, gls_cost, levenberg_marquardt
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, cell_level, pass_sums
@@ -65,15 +65,16 @@ class Score:
 
 
 def _blocks(lin_names, sources, jac, lin):
-    """Named parts of the current model, for saying what absorbs a candidate."""
-    out = [(name, lin[:, sl]) for name, sl in lin_names]
+    """Named parts of the current model, for saying what absorbs a candidate: (label, columns()),
+    the columns taken only when asked for (a source's Jacobian columns are gathered copies)."""
+    out = [(name, lambda sl=sl: lin[:, sl]) for name, sl in lin_names]
     orders = {}
     for j, s in enumerate(sources):
         orders.setdefault(s.order, []).append(j)
     for order, idx in orders.items():
         names = ", ".join(sources[j].name for j in idx)
         out.append((f"the fitted phase{'s' if len(idx) > 1 else ''} of the spec's order-{order:g} "
-                    f"source{'s' if len(idx) > 1 else ''} ({names})", jac[:, idx]))
+                    f"source{'s' if len(idx) > 1 else ''} ({names})", lambda idx=idx: jac[:, idx]))
     return out
 
 
@@ -85,8 +86,7 @@ class Step:
                  few_runs: bool = False):
         self.state = state
         self.groups = groups
-        nuis = np.hstack([state.lin, state.jac])
-        basis0, _ = orthonormal(nuis)
+        basis0, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
         blocks = _blocks(lin_names, sources, state.jac, state.lin)
         self.scores: dict[str, Score] = {}
         self.better_null = None
@@ -105,10 +105,14 @@ class Step:
                                               aliases=alias_notes.get(name, []))
                     untestable_cols.append(cand.columns)
                     blocks.append((f"{name}'s signature (untestable with {groups.runs} run"
-                                   f"{'s' if groups.runs != 1 else ''})", cand.columns))
-        self.basis = orthonormal(np.hstack([nuis, *untestable_cols]))[0] if untestable_cols else basis0
+                                   f"{'s' if groups.runs != 1 else ''})", lambda c=cand.columns: c))
+        self.basis = orthonormal(np.hstack([state.lin, state.jac, *untestable_cols]), own=True)[0] if untestable_cols \
+            else basis0
+        basis0 = None
         kb = self.basis.shape[1]
+        width = kb
         tested_cols = []
+        q_factors: dict[str, np.ndarray] = {}
         slices = {}
         nonlinear_names: list[str] = []
         for name, cand in cands.items():
@@ -142,7 +146,7 @@ class Step:
             if why is None:
                 sc.tolerance = tolerance(self.basis, cand.columns)
                 if sc.tolerance < MIN_TOLERANCE:
-                    sc.absorbed_by = [label for label, blk in blocks if r2(blk, cand.columns) > 0.5] or \
+                    sc.absorbed_by = [label for label, blk in blocks if r2(blk(), cand.columns) > 0.5] or \
                         [label for label, _ in blocks]
                     why = "absorbed by " + " and ".join(sc.absorbed_by)
                     if any("fitted phase" in a for a in sc.absorbed_by):
@@ -158,13 +162,20 @@ class Step:
                 continue
             rms = np.sqrt(np.mean(cand.columns**2, axis=0))
             sc.scale = 1.0 / np.where(rms > 0, rms, 1.0)
-            sc.containment = containment_df(groups, self.basis, residualise(self.basis, cand.columns))
-            start = kb + sum(c.shape[1] for c in tested_cols)
-            slices[name] = slice(start, start + cand.q)
+            resid_cols = residualise(self.basis, cand.columns)
+            sc.containment = containment_df(groups, self.basis, resid_cols)
+            # its signature with the model projected out, kept as a Q factor for the similarity of candidates
+            q_factors[name] = np.linalg.qr(resid_cols)[0]
+            resid_cols = None
+            slices[name] = slice(width, width + cand.q)
+            width += cand.q
             tested_cols.append(cand.columns * sc.scale)
             self.scores[name] = sc
         self.slices = slices
+        # [basis, each tested candidate's columns scaled to unit RMS] (np.hstack: its memory layout, C or Fortran,
+        # is what the products downstream follow bit for bit); the scaled copies are freed once in it
         self.design = np.hstack([self.basis, *tested_cols]) if tested_cols else self.basis
+        tested_cols = None
         self.cross = Cross.build(self.design, state.residual, groups)
         cell_tester = None
         for name, sl in slices.items():
@@ -197,10 +208,12 @@ class Step:
         self.tested = sorted(tested, key=rank)
         # how alike the signatures of the tested candidates are, once the model is projected out
         self.similar: dict[tuple, float] = {}
-        res = {n: residualise(self.basis, cands[n].columns) for n in tested}
+        for n in tested:
+            if n not in q_factors:
+                q_factors[n] = np.linalg.qr(residualise(self.basis, cands[n].columns))[0]
         for i, a in enumerate(tested):
             for b in tested[i + 1:]:
-                self.similar[(a, b)] = self.similar[(b, a)] = canonical(res[a], res[b])
+                self.similar[(a, b)] = self.similar[(b, a)] = canonical_q(q_factors[a], q_factors[b])
 
     def stability(self, resamples: int, alpha: float, seed: int = 0) -> dict[str, float]:
         """Share of cluster-bootstrap resamples (whole runs) in which each tested candidate scores best."""
@@ -288,7 +301,7 @@ def same_order_test(ctx: FitContext, state: ModelFit, lin, cand: Candidate, cell
     k1 = lin1.shape[1] + len(ctx.sources)
     cost0 = gls_cost(state.residual, ctx.groups, gp, gr)
     # the refit may have found phases the null fit missed: the null must get the same chance
-    null = levenberg_marquardt(ctx, alt.psi, lin, gp, gr, True)
+    null = levenberg_marquardt(ctx, alt.psi, lin, gp, gr, True, parts=alt.parts)
     better = None
     if null.cost < cost0 * (1.0 - 1e-6):
         better = null.psi

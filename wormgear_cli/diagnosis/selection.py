@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 from typing import Callable
 
@@ -89,7 +89,11 @@ class Stop:
 
 @dataclass
 class Diagnosis:
-    """Everything ``wormgear diagnose`` reports (angles in arcsec)."""
+    """Everything ``wormgear diagnose`` reports (angles in arcsec).
+
+    ``before``: the fit of the spec (phases, offset, held structure) before any
+    effect; once the model has moved on its ``jac`` and ``lin`` are dropped
+    (shape (N, 0)), only its phases, coefficients, residual and noise are kept."""
 
     spec: object
     meas: object
@@ -113,6 +117,15 @@ class Diagnosis:
     few_runs: bool = False
     noise_floor: float = math.nan
     likely: dict | None = None
+
+
+def _reported_only(fit: ModelFit) -> ModelFit:
+    """``fit`` without its (N, m) Jacobian and (N, l) linear columns, once the model has moved on from it
+    (the fit before the effects: the report needs its phases, coefficients, residual and noise only)."""
+    if fit.jac.shape[1] == 0 and fit.lin.shape[1] == 0:
+        return fit
+    n = fit.residual.shape[0]
+    return replace(fit, jac=np.empty((n, 0)), lin=np.empty((n, 0)))
 
 
 def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effects: int = 4,
@@ -190,8 +203,11 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     for label, cols, _ in held:
         lin_names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
         lin = np.hstack([lin, cols])
+    cols = None
+    held = [(label, None, item) for label, _, item in held]  # the columns live on in lin only
     if held:
         state = fit_model(ctx, lin, fit_phases, extra_starts=[state.psi])
+        before = _reported_only(before)
     fixed = lin.shape[1]
     cands = {name: candidate(name, sig, g) for name in EFFECTS if name not in spec.effects}
     alias_notes = order_aliases(sig.theta, cands, sources, g)
@@ -218,6 +234,8 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
             if not accepted:
                 before = state
                 rss_before = float(before.residual @ before.residual)
+            elif before is not state:
+                before = _reported_only(before)
             continue
         for name, sc in step.scores.items():
             final_scores[name] = sc
@@ -292,6 +310,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
         lin = new_lin
         lin_names.append((best, slice(start, start + cand.q)))
         state = new_state
+        before = _reported_only(before)
         accepted.append(Accepted(best, cand, sc, frac, len(steps),
                                  (prev_rss - new_rss) / rss_before if rss_before else 0.0, tuple(near), stab_note))
     after = state
