@@ -294,6 +294,7 @@ def test_plot_written(runner, tmp_path):
     result = invoke(runner, hand_csv(tmp_path), "-f", "json", "--plot", png)
     assert result.exit_code == 0, result.stderr
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert result.stderr.endswith(f"wrote {png}\n")  # every file written is announced, --plot too
 
 
 def test_plot_bad_suffix_and_missing_matplotlib(runner, tmp_path, monkeypatch):

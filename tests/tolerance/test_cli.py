@@ -248,6 +248,7 @@ def test_plot(runner, tmp_path):
     r = _run(runner, MCH50, "-n", 500, "--plot", out, "--format", "json")
     assert r.exit_code == 0, r.output
     assert out.read_bytes()[:4] == b"\x89PNG"
+    assert r.stderr == f"wrote {out}\n"  # every file written is announced, --plot too
 
 
 def test_table_fits_80_columns(runner):

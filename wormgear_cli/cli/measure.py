@@ -13,6 +13,7 @@ from wormgear_cli.cli.common import (
     FormatOption,
     OutputOption,
     UnitOption,
+    announce_written,
     csv_text,
     emit,
     fmt_angle,
@@ -95,6 +96,7 @@ def measure(
         from wormgear_cli.plots.measure import deviation_chart
 
         deviation_chart(result.figures, result.measurement, unit, plot, title=Path(data).name)
+        announce_written(plot)
     if fmt == "json":
         emit(_json(doc), output, inputs)
     elif fmt == "csv":

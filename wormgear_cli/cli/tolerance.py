@@ -135,6 +135,7 @@ def tolerance(
         from wormgear_cli.plots.tolerance import draw
 
         draw(doc, summary.plot_values, engine.limits(s), plot, LABELS)
+        announce_written(plot)
     if fmt == "json":
         emit(json_text(doc), output, inputs)
     elif fmt == "table":
