@@ -71,6 +71,16 @@ def _signal_name(signum: int) -> str:
         return f"signal {signum}"
 
 
+def _usage_error_exit(exc) -> "typer.Exit":
+    """A command-line mistake (unknown option, bad choice, missing argument) as the project's one
+    ``error:`` line with where to look, exit 2 -- not click's usage block of three lines."""
+    ctx = getattr(exc, "ctx", None)
+    where = ctx.command_path if ctx is not None else "wormgear"
+    message = " ".join(exc.format_message().split()).rstrip(".")
+    _say(f"error: {message}; see '{where} --help'")
+    return typer.Exit(2)
+
+
 class WormgearGroup(TyperGroup):
     """Runs a command; a user mistake becomes messages + exit code, never a traceback.
 
@@ -79,7 +89,19 @@ class WormgearGroup(TyperGroup):
     SIGTERM; a stdout closed by its reader ends quietly with 0).  A stopped run leaves no output file.
     """
 
+    def make_context(self, info_name, args, parent=None, **extra):
+        from typer._click.exceptions import NoArgsIsHelpError, UsageError
+
+        try:
+            return super().make_context(info_name, args, parent=parent, **extra)
+        except NoArgsIsHelpError:
+            raise
+        except UsageError as exc:  # an option of the program itself (wormgear --bogus)
+            raise _usage_error_exit(exc) from None
+
     def invoke(self, ctx):
+        from typer._click.exceptions import NoArgsIsHelpError, UsageError
+
         from wormgear_cli.io import BROKEN_PIPE_EXIT, StdoutClosed, flush_stdout, output_transaction
 
         restore = _install_stop_handlers()
@@ -100,6 +122,10 @@ class WormgearGroup(TyperGroup):
             for line in exc.problems:
                 _say(f"error: {line}")
             raise typer.Exit(exc.exit_code) from None
+        except NoArgsIsHelpError:
+            raise
+        except UsageError as exc:
+            raise _usage_error_exit(exc) from None
         except StdoutClosed:
             raise typer.Exit(BROKEN_PIPE_EXIT) from None
         except KeyboardInterrupt:

@@ -134,7 +134,8 @@ def _tables(r: dict, unit: str) -> list:
 
 @app.command()
 def check(
-    drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False)],
+    drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False,
+                                                metavar="DRIVE.toml...")],
     format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = "text",
     output: OutputOption = None,
 ):
@@ -176,7 +177,8 @@ def check(
 
 @app.command()
 def new(
-    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False)],
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
+                                           metavar="NEW.toml")],
     name: Annotated[Optional[str], typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
     """Write a complete, commented drive template to start from.

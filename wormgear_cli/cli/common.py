@@ -68,7 +68,8 @@ def _check_output(value: Optional[Path]) -> Optional[Path]:
 OutputOption = Annotated[Optional[Path], typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
                                                       callback=_check_output)]
-DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False)]
+DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False,
+                                                               metavar="DRIVE.toml")]
 
 
 # --- writing ---------------------------------------------------------------------------------

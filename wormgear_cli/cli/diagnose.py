@@ -38,7 +38,7 @@ def diagnose(
     drive: DriveArgument,
     data: Annotated[Path, typer.Argument(
         help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
-        "time_s).", show_default=False)],
+        "time_s).", show_default=False, metavar="DATA.csv")],
     output: OutputOption = None,
     write_spec: Annotated[Optional[Path], typer.Option(
         "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "

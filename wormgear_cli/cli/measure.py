@@ -30,7 +30,7 @@ TARGET_COLUMNS = ("target_deg", "n_forward", "n_reverse", "mean_forward", "s_for
 
 DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, error_arcsec; optional direction, "
                                               "run, load_Nm, temperature_C, time_s; other headers via --map).",
-                                              show_default=False)]
+                                              show_default=False, metavar="DATA.csv")]
 
 
 @app.command()
