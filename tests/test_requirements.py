@@ -42,3 +42,16 @@ def test_an_invalid_spec_is_returned_not_raised(tmp_path):
     assert len(c.problems) == 1 and "gear_pair.modul_mm: unknown key" in c.problems[0]
     assert c.to_dict() == {"file": str(path), "valid": False, "passed": False, "problems": list(c.problems),
                            "requirements": []}
+
+
+def test_check_with_an_invalid_file_exits_2_and_writes_no_output(runner, tmp_path):
+    # exit 2 is bad input: like any error, it leaves no -o file (the valid file's verdict is not written)
+    from wormgear_cli.cli import app
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("foo = 1\n")
+    out = tmp_path / "out.txt"
+    r = runner.invoke(app, ["check", str(MCH50), str(bad), "-o", str(out)])
+    assert r.exit_code == 2
+    assert not out.exists() and "wrote" not in r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml"]

@@ -155,3 +155,18 @@ def test_every_output_option_naming_a_directory_is_one_error_line(tmp_path, runn
     assert r.exit_code == 2
     assert len(r.stderr.splitlines()) == 1 and r.stderr.startswith("error: ") and "Usage" not in r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["d", "d.png"]
+
+
+def test_a_plot_path_in_a_missing_folder_is_refused_before_any_work(tmp_path, runner, monkeypatch):
+    # the sampling must not start: --plot is checked up front like -o
+    from wormgear_cli.tolerance import engine
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the samples were drawn before --plot was checked")
+
+    monkeypatch.setattr(engine, "run", no_work)
+    plot = tmp_path / "missing" / "p.png"
+    r = runner.invoke(app, ["tolerance", str(MCH50), "-n", "1000", "--plot", str(plot)])
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: {plot}") and len(r.stderr.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

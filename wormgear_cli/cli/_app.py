@@ -114,10 +114,11 @@ class WormgearGroup(TyperGroup):
                     result = super().invoke(ctx)
                     flush_stdout()
                     return result
-                except typer.Exit:
+                except typer.Exit as stop:
                     flush_stdout()
-                    tx.commit()
-                    raise
+                    if stop.exit_code in (0, 1):  # done, or a check that ran and failed: its report stands
+                        tx.commit()
+                    raise  # exit 2 (bad input): no output file, as for an error raised
         except WormgearError as exc:
             for line in exc.problems:
                 _say(f"error: {line}")

@@ -43,9 +43,13 @@ def pyplot():
 
 
 def check_plot_path(path: Path) -> None:
-    """Refuse a plot file name whose suffix matplotlib cannot write."""
+    """Refuse, before any work, a plot file name whose suffix matplotlib cannot write, or that names
+    a directory or a file in a missing folder (:func:`wormgear_cli.io.check_output_path`)."""
     if Path(path).suffix.lower() not in PLOT_SUFFIXES:
         raise UsageError(f"{path}: --plot expects a file ending in {', '.join(PLOT_SUFFIXES)}")
+    from wormgear_cli.io import check_output_path
+
+    check_output_path(path, "--plot")
 
 
 def figure_bytes(fig, fmt: str) -> bytes:
