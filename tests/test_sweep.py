@@ -251,3 +251,15 @@ def test_involute_drives_are_swept_with_the_involute_stage(config):
         b = analyze(other).angles
         for key in ("gear_transmission_error", "total_backlash"):
             assert snapped[key][k] == pytest.approx(b[key], rel=1e-9), (key, z1, z2)
+
+
+def test_the_sweep_table_names_the_involute_stage(runner):
+    from wormgear_cli.cli import app
+
+    from tests.conftest import CONFIGS
+
+    r = runner.invoke(app, ["sweep", str(CONFIGS / "rotary-table-precision.toml"), "--i", "2:6:3", "--l-mm",
+                            "200:300:3"], env={"COLUMNS": "200"})
+    assert r.exit_code == 0, r.output
+    assert "gear TE (involute stage)" in r.stdout and "Delta phi_cc" not in r.stdout
+    assert "the paper's findings on this grid, with the involute stage" in r.stdout

@@ -171,7 +171,9 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
     cols = subsample(sw.l_values.size, TABLE_COLS)
     hold = "normal forces held" if sw.hold == "force" else "output torque held"
     snap = f", snapped to whole teeth at m = {sw.module:g} mm (min {sw.min_teeth} teeth)" if sw.module else ""
-    g = _heat_table(sw, data, "gear_transmission_error", f"{sw.spec.drive.name}: gear TE (paper's Delta phi_cc)",
+    involute = sw.spec.gear_pair.kinematics == "involute"
+    stage = "involute stage" if involute else "paper's Delta phi_cc"
+    g = _heat_table(sw, data, "gear_transmission_error", f"{sw.spec.drive.name}: gear TE ({stage})",
                     unit, rows, cols)
     shown = []
     if rows.size < sw.i_values.size:
@@ -203,7 +205,8 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
                   for c in ("gear_transmission_error", "total_transmission_error", "total_backlash")]
         summary.add_row(*cells)
     out.append(summary)
-    f = Table("the paper's findings on this grid" + (" (continuous model)" if sw.module else ""),
+    f = Table("the paper's findings on this grid" + (" (continuous model)" if sw.module else "")
+              + (", with the involute stage" if involute else ""),
               [Column("check"), Column("finding")])
     for item in findings(sw):
         f.add_row({True: "holds", False: "FAILS", None: "n/a"}[item["holds"]], item["statement"])
