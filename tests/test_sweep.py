@@ -264,3 +264,32 @@ def test_the_sweep_table_names_the_involute_stage(runner):
     text = " ".join(r.stdout.split())  # titles wrap at the table's width
     assert "gear TE (involute stage)" in text and "Delta phi_cc" not in text
     assert "the paper's findings on this grid, with the involute stage" in text
+
+
+@pytest.mark.parametrize("config,module", [("radar-pedestal-2start.toml", 4.0), ("mch50.toml", 2.5)])
+def test_torque_hold_equals_analyze_at_the_torque_scaled_loads(config, module):
+    """With the output torque held, a snapped design is analyze of that design at the loads the torque
+    gives: spur normal force x R2_spec / R2 and worm normal force x i_spec / i (the worm stage is not
+    linear in its force, so it is evaluated there, not interpolated)."""
+    from wormgear_cli.analysis import analyze
+    from wormgear_cli.spec import load_spec, with_values
+    from wormgear_cli.sweep import RatioDistanceSweep
+
+    from tests.conftest import CONFIGS
+
+    spec = load_spec(CONFIGS / config)
+    gp, loads = spec.gear_pair, spec.loads
+    i0, r2_0 = gp.output_gear.teeth / gp.pinion.teeth, gp.module * gp.output_gear.teeth / 2
+    data = RatioDistanceSweep(spec, [2.0, 4.0, 6.0], [200.0, 300.0], hold="torque", module=module,
+                              min_teeth=12).collect()
+    assert data["z1"].size >= 4
+    for k in range(data["z1"].size):
+        z1, z2 = int(data["z1"][k]), int(data["z2"][k])
+        r2 = module * z1 / 2
+        other = with_values(spec, {
+            "gear_pair.module_mm": module, "gear_pair.output_gear.teeth": z1, "gear_pair.pinion.teeth": z2,
+            "loads.gear_normal_force_N": loads.gear_normal_force * r2_0 / r2,
+            "loads.worm_normal_force_N": loads.worm_normal_force * i0 / (z1 / z2)})
+        a = analyze(other).angles
+        for key in ("gear_transmission_error", "total_transmission_error", "total_backlash"):
+            assert data[key][k] == pytest.approx(a[key], rel=1e-9), (key, z1, z2)

@@ -239,6 +239,45 @@ class Analysis:
         }
 
 
+# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
+# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
+class WormStage(NamedTuple):
+    """The worm stage at the wheel shaft [rad], and its parts on the wheel's pitch circle [mm]
+    (arrays when the deflection is one): ``transmission_error`` Delta phi_wc, ``backlash``
+    Delta phi_wh; ``te_halfwidth`` h, ``backlash_halfwidth`` h_j; ``backlash_deformation``,
+    ``backlash_profile``, ``backlash_thickness`` (the central backlash's parts)."""
+
+    transmission_error: object
+    backlash: object
+    te_halfwidth: float
+    backlash_halfwidth: float
+    backlash_deformation: object
+    backlash_profile: float
+    backlash_thickness: float
+
+
+def worm_stage(spec, deflection) -> WormStage:
+    """The paper's worm stage of ``spec`` at tooth deflection ``deflection`` [mm] (delta2; scalar
+    or array): its TE and backlash at the wheel shaft with their parts (paper's Delta phi_wc and
+    Delta phi_wh equations; :mod:`wormgear_cli.models.worm`).  The one definition that ``analyze``
+    and the torque-held ``sweep`` use."""
+    wp, asm = spec.worm_pair, spec.assembly
+    lam, a2 = wp.lead_angle, wp.transverse_pressure_angle
+    m2, z3 = wp.module, wp.wheel.teeth
+    h_te = worm.worm_te_halfwidth(wp.lead_error, asm.worm_eccentricity, asm.worm_bearing_clearance,
+                                  wp.wheel.radial_composite_error, asm.wheel_eccentricity,
+                                  asm.wheel_bearing_clearance, lam, a2)
+    wte = worm.worm_te(deflection, h_te, m2, z3)
+    j_def, j_prof, j_thk = worm.worm_backlash_central(deflection, wp.worm.profile_error, wp.wheel.profile_error,
+                                                      wp.worm.thickness_deviation, wp.wheel.thickness_deviation, lam)
+    h_j = worm.worm_backlash_halfwidth(wp.worm.profile_error, wp.wheel.profile_error, wp.worm.thickness_deviation,
+                                       wp.wheel.thickness_deviation, sum(e * e for e in asm.worm_pair_errors),
+                                       wp.lead_error, asm.worm_centre_distance_error,
+                                       wp.wheel.radial_composite_error, lam, a2)
+    wbl = worm.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
+    return WormStage(wte, wbl, h_te, h_j, j_def, j_prof, j_thk)
+
+
 def analyze(spec) -> Analysis:
     """The paper's two-stage model for one drive.
 
@@ -273,19 +312,10 @@ def analyze(spec) -> Analysis:
     te_max = te_kin_part + te_def_part
 
     # --- worm stage -------------------------------------------------------------
-    lam, a2 = wp.lead_angle, wp.transverse_pressure_angle
     m2, z3 = wp.module, wp.wheel.teeth
-    h_te = worm.worm_te_halfwidth(wp.lead_error, asm.worm_eccentricity, asm.worm_bearing_clearance,
-                                  wp.wheel.radial_composite_error, asm.wheel_eccentricity,
-                                  asm.wheel_bearing_clearance, lam, a2)
-    wte = worm.worm_te(defl.worm, h_te, m2, z3)
-    j_def, j_prof, j_thk = worm.worm_backlash_central(defl.worm, wp.worm.profile_error, wp.wheel.profile_error,
-                                                      wp.worm.thickness_deviation, wp.wheel.thickness_deviation, lam)
-    h_j = worm.worm_backlash_halfwidth(wp.worm.profile_error, wp.wheel.profile_error, wp.worm.thickness_deviation,
-                                       wp.wheel.thickness_deviation, sum(e * e for e in asm.worm_pair_errors),
-                                       wp.lead_error, asm.worm_centre_distance_error,
-                                       wp.wheel.radial_composite_error, lam, a2)
-    wbl = worm.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
+    ws = worm_stage(spec, defl.worm)
+    wte, wbl, h_te, h_j = ws.transmission_error, ws.backlash, ws.te_halfwidth, ws.backlash_halfwidth
+    j_def, j_prof, j_thk = ws.backlash_deformation, ws.backlash_profile, ws.backlash_thickness
 
     def arc(x):
         return float(gear.pitch_arc_to_angle(x, m2, z3))

@@ -203,8 +203,8 @@ class _Reference:
     r2: float
     gear_force: float
     worm_force: float
-    worm_te: tuple  # (value at worm force 0, value at the spec's worm force) [rad]
-    worm_backlash: tuple
+    worm_te: float  # at the spec's worm force [rad]
+    worm_backlash: float
 
 
 class RatioDistanceSweep:
@@ -220,7 +220,6 @@ class RatioDistanceSweep:
                  min_teeth: Optional[int] = None):
         from wormgear_cli.analysis import analyze, gear_eccentricity
         from wormgear_cli.models import gear
-        from wormgear_cli.spec import with_values
 
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
@@ -251,13 +250,7 @@ class RatioDistanceSweep:
         base = analyze(spec)
         z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
         fw = spec.loads.worm_normal_force
-        if hold == "torque" and fw > 0.0:
-            unloaded = analyze(with_values(spec, {"loads.worm_normal_force_N": 0.0}))
-            w_te = (unloaded.angles["worm_transmission_error"], base.angles["worm_transmission_error"])
-            w_bl = (unloaded.angles["worm_backlash"], base.angles["worm_backlash"])
-        else:
-            w_te = (base.angles["worm_transmission_error"],) * 2
-            w_bl = (base.angles["worm_backlash"],) * 2
+        w_te, w_bl = base.angles["worm_transmission_error"], base.angles["worm_backlash"]
         self.reference = _Reference(i=z1 / z2, l=gp.module * (z1 + z2) / 2.0, r2=gp.module * z1 / 2.0,
                                     gear_force=spec.loads.gear_normal_force, worm_force=fw,
                                     worm_te=w_te, worm_backlash=w_bl)
@@ -379,8 +372,18 @@ class RatioDistanceSweep:
             te, phi = gear.gear_te_max_fast(r1, r2, self.eccentricity, self.alpha, d1, peak=peak)
             bl = gear.gear_backlash_max(m, z1, self.eccentricity, self.alpha, d1)
         ref = self.reference
-        w_te = ref.worm_te[0] + (ref.worm_te[1] - ref.worm_te[0]) * worm_scale
-        w_bl = ref.worm_backlash[0] + (ref.worm_backlash[1] - ref.worm_backlash[0]) * worm_scale
+        if self.hold == "torque" and ref.worm_force > 0.0:
+            # the worm-mesh force follows the intermediate-shaft torque: the worm stage at that force, by the
+            # same equations as analyze (the deflection is not linear in the force: ISO 6336-1's low-load
+            # stiffness), once per distinct ratio
+            from wormgear_cli.analysis import deflections, worm_stage
+
+            scales, where = np.unique(np.asarray(worm_scale, dtype=float), return_inverse=True)
+            ws = worm_stage(self.spec, deflections(self.spec, worm_force=ref.worm_force * scales).worm)
+            w_te = np.broadcast_to(ws.transmission_error, scales.shape)[where].reshape(np.shape(worm_scale))
+            w_bl = np.broadcast_to(ws.backlash, scales.shape)[where].reshape(np.shape(worm_scale))
+        else:
+            w_te, w_bl = ref.worm_te, ref.worm_backlash
         return {
             "gear_transmission_error": te,
             "total_transmission_error": te + w_te / i,
