@@ -30,9 +30,18 @@ def test_a_directory_is_named_as_one(runner, tmp_path):
     assert r.stderr == f"error: {tmp_path}: is a directory, expected a samples CSV of wormgear tolerance --format csv\n"
 
 
-def test_an_endless_file_stops_at_the_line_bound(runner):
+def test_an_endless_device_or_a_pipe_is_refused_at_once(runner):
+    # not a regular file: it could not be read twice (header, then samples), and /dev/zero never ends
     r = _summarize(runner, "/dev/zero")
-    assert r.exit_code == 2 and r.stderr.startswith("error: /dev/zero: line 1: binary") and len(r.stderr.splitlines()) == 1
+    assert r.exit_code == 2 and len(r.stderr.splitlines()) == 1
+    assert r.stderr.startswith("error: /dev/zero: not a regular file, expected a samples CSV")
+
+
+def test_a_first_line_without_an_end_stops_at_the_line_bound(runner, tmp_path):
+    path = tmp_path / "zeros.csv"
+    path.write_bytes(b"\0" * 200_000)
+    r = _summarize(runner, path)
+    assert r.exit_code == 2 and r.stderr.startswith(f"error: {path}: line 1: binary") and len(r.stderr.splitlines()) == 1
 
 
 def test_zeros_after_valid_rows(runner, samples_csv):

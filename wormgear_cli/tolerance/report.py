@@ -77,6 +77,9 @@ def read_header(path: Path) -> SamplesHeader:
         raise DataError(f"{name}: is a directory, {expected}")
     if not Path(path).exists():
         raise DataError(f"{name}: file not found, {expected}")
+    if not Path(path).is_file():  # a pipe (/dev/stdin) cannot be read twice (header, then the samples)
+        raise DataError(f"{name}: not a regular file, {expected}; write the samples to a file first "
+                        "(--format csv -o FILE)")
     with open(path, "rb") as fh:
         raw = fh.readline(MAX_LINE_BYTES + 1)  # bounded: /dev/zero or a binary file has no end of line
     if len(raw) > MAX_LINE_BYTES or b"\x00" in raw:
@@ -95,8 +98,9 @@ def read_header(path: Path) -> SamplesHeader:
             k = len(names)
             if cols[-k:] == tuple(names if unit is None else (f"{n}_{unit}" for n in names)):
                 return SamplesHeader(cols[1:-k], key, unit)
-    raise DataError(f"{name}: line 1: expected the metric columns, each named with its unit, to end the header "
-                    f"({', '.join(n + '_arcsec' for n in METRIC_SETS['all'])}, or the paper, budget or iso part)")
+    raise DataError(f"{name}: line 1: expected the metric columns, all in one unit, to end the header "
+                    f"({', '.join(n + '_arcsec' for n in METRIC_SETS['all'])}, or the paper, budget or iso part; "
+                    f"the unit suffix one of {', '.join('_' + u for u in ANGLE_UNITS)})")
 
 
 def read_samples(path: Path, s: Setup) -> Iterator[Block]:
@@ -156,7 +160,7 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
                 row, col = np.argwhere(~finite)[0]
                 what = ("sample", *s.columns, *s.metrics)[col] if col < width else f"column {col + 1}"
                 raise DataError(f"{name}: line {line_no + 1 + int(row)}: {what}: expected a finite number, got "
-                                f"{data[row, col]!r}")
+                                f"{float(data[row, col])!r}")
             if data.shape[1] != width:
                 raise DataError(f"{name}: line {line_no + 1}: expected {width} values per row, got {data.shape[1]}")
             sample = data[:, 0]
