@@ -40,7 +40,7 @@ def test_table_is_deterministic_and_fits_80_columns(runner):
     (["--grade", "12"], "error: --grade: grade 12 outside ISO 1328-1:2013's range, expected an integer in [1, 11]\n"),
     (["--module-mm", "0.3"], "error: --module-mm: module 0.3 outside ISO 1328-1:2013's scope [0.5, 70] mm (its "
                              "formulas are not extrapolated)\n"),
-    (["--face-width-mm", "-1"], "error: --face-width-mm: expected a number > 0, got -1\n"),
+    (["--face-width-mm", "-1"], "error: --face-width-mm: expected a finite number > 0, got -1\n"),
 ])
 def test_bad_input_exits_2_naming_the_option_and_range(runner, args, message):
     full = list(ARGS)

@@ -86,6 +86,8 @@ def test_no_progress_bar_under_no_color(monkeypatch):
     assert common.Progress(10**6, 100.0, "x").bar is None
     monkeypatch.delenv("NO_COLOR")
     assert common.Progress(10**6, 100.0, "x").bar is not None
+    monkeypatch.setenv("NO_COLOR", "")  # no-color.org: an empty value does not count
+    assert common.Progress(10**6, 100.0, "x").bar is not None
 
 
 # --- one meaning of -o, one announcement ------------------------------------------------------

@@ -133,8 +133,8 @@ def stderr_is_terminal() -> bool:
 
 
 def no_color() -> bool:
-    """NO_COLOR set (https://no-color.org): no colour and no other styles either."""
-    return "NO_COLOR" in os.environ
+    """NO_COLOR set to a non-empty value (https://no-color.org): no colour and no other styles either."""
+    return bool(os.environ.get("NO_COLOR"))
 
 
 def terminal_console(stderr: bool = False, width: Optional[int] = None):

@@ -38,7 +38,7 @@ def grade(
     from wormgear_cli.errors import UsageError
     from wormgear_cli.models.iso1328 import PART2_GRADES, GradeError, flank_tolerances, radial_composite
 
-    problems = [f"{opt}: expected a number > 0, got {v:g}" for opt, v in
+    problems = [f"{opt}: expected a finite number > 0, got {v:g}" for opt, v in
                 (("--module-mm", module_mm), ("--diameter-mm", diameter_mm), ("--face-width-mm", face_width_mm))
                 if not v > 0 or v != v or v == float("inf")]
     if problems:

@@ -152,7 +152,9 @@ def _tables(doc: dict, ntargets: int) -> list:
 
     iso = doc["iso230_2"]
     out = [Text(doc["verdict"])]
-    st = table(f"ISO 230-2 figures [{unit}] (n/a: see notes)")
+    fig_keys = ("A", "A_forward", "A_reverse", "E", "E_forward", "E_reverse", "R", "R_forward", "R_reverse", "M", "B",
+                "B_signed", "B_mean")
+    st = table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if any(iso[k] is None for k in fig_keys) else ""))
     st.add_column("figure", overflow="fold")
     for col in ("bidirectional", "forward", "reverse"):
         num(st, col)
