@@ -620,6 +620,8 @@ def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> 
             # the nearest key of this table, else the nearest full path (a misplaced key)
             hint = (did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
                     or did_you_mean(path, [f.path for f in FIELDS], cutoff=0.75))
+            if not hint and not prefix:  # nothing close: say what the top level holds
+                hint = f" (a drive file holds the tables {', '.join('[' + k + ']' for k in sorted(known))})"
             what = "table" if isinstance(value, dict) else "key"
             problems.append(f"{source}: {path}: unknown {what}{hint}")
             continue
