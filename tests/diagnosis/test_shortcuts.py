@@ -55,7 +55,7 @@ def test_report_is_the_same_without_any_shortcut(monkeypatch, tmp_path, case):
     fast = _report_json(meas, spec)
 
     monkeypatch.setattr(phases, "distinct_pairs", lambda sig, max_share=0.5: None)
-    monkeypatch.setattr(scan, "distinct_angles", lambda theta, max_share=0.5: None)
+    monkeypatch.setattr(scan, "distinct_pairs", lambda sig, max_share=0.5: None)
     post_init = runs.Groups.__post_init__
 
     def no_blocks(self):
