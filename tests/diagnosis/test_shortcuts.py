@@ -209,3 +209,29 @@ def test_gap_summary_with_cells_made_once_is_the_same():
     meas = read_measurement(DEMO)
     resid = np.random.default_rng(4).normal(size=len(meas))
     assert dg.gap_summary(meas, resid, dg.residuals.target_run_cells(meas)) == dg.gap_summary(meas, resid)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_mode_fits_from_a_table_of_distinct_angles_equal_the_row_by_row_columns(monkeypatch, seed):
+    # repeated runs visit each angle several times: the cos/sin columns are made once per distinct angle
+    rng = np.random.default_rng(seed)
+    targets = np.sort(rng.uniform(0, 2 * np.pi, 300))
+    theta = np.tile(targets, 6)
+    d = np.repeat([1.0, -1.0] * 3, targets.shape[0])
+    ys = [rng.normal(size=theta.shape[0]) + 2.0 * np.cos(5 * theta + 0.3) * d, rng.normal(size=theta.shape[0])]
+    assert harmonics._harmonic_table(theta, np.array([1.0, 5.0])) is not None
+    fast = harmonics.fit_modes_each(theta, ys, d, [1.0, 5.0, 12.0, 37.5])
+    monkeypatch.setattr(harmonics, "_harmonic_table", lambda theta, orders: None)
+    plain = harmonics.fit_modes_each(theta, ys, d, [1.0, 5.0, 12.0, 37.5])
+    for a_fit, b_fit in zip(fast, plain):
+        for mode in ("common", "differential"):
+            a, b = getattr(a_fit, mode), getattr(b_fit, mode)
+            for field in ("amplitude", "phase", "amplitude_stderr", "cos", "sin"):
+                assert np.array_equal(getattr(a, field), getattr(b, field))
+        assert np.array_equal(a_fit.residual, b_fit.residual) and a_fit.sigma == b_fit.sigma
+
+
+def test_no_table_when_every_angle_is_distinct():
+    theta = np.linspace(0.0, 6.0, 1000)
+    assert harmonics._harmonic_table(theta, np.array([1.0, 2.0])) is None
+    assert harmonics._harmonic_table(np.tile(theta, 2), np.array([1.0, 2.0])) is not None
