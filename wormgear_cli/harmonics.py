@@ -278,7 +278,8 @@ def _harmonic_table(theta: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, 
     _, first, inverse = np.unique(t.view(np.int64), return_index=True, return_inverse=True)
     if first.shape[0] > min(n // 2, BLOCK_ROWS):
         return None
-    return inverse.reshape(-1).astype(np.int32), harmonic_columns(t[first], orders)
+    # np.intp: np.take converts any other index type on every call
+    return np.ascontiguousarray(inverse.reshape(-1), dtype=np.intp), harmonic_columns(t[first], orders)
 
 
 def _order_values(a, b, cov_ab, ident, sigma):
