@@ -85,6 +85,32 @@ def test_pointwise_source_values_per_distinct_pair_equal_the_rows(mch50_spec):
             assert np.array_equal(ctx.values(s, psi), s.contrib(sig, psi))
 
 
+@pytest.mark.parametrize("drive", ["mch50", "radar-pedestal-2start", "rotary-table-precision"])
+def test_source_curves_per_distinct_angle_equal_the_rows(drive):
+    # forward and reverse passes over the same targets: the pairs repeat their angles, and the sources'
+    # curves (and lost motion) are evaluated once per angle
+    from wormgear_cli.analysis import geometry
+    from wormgear_cli.models.effects import Signals
+
+    spec = load_spec(CONFIGS / f"{drive}.toml")
+    rng = np.random.default_rng(12)
+    targets = np.radians(rng.uniform(-30, 390, 40))
+    theta = np.tile(np.concatenate([targets, targets[::-1]]), 3)
+    d = np.tile(np.repeat([1.0, -1.0], 40), 3)
+    sig = Signals.make(theta, d)
+    sources, _ = dg.phase_sources(spec, geometry(spec), sig)
+    n = theta.shape[0]
+    groups = dg.make_groups(d, np.repeat(np.arange(3), 80))
+    ctx = dg.FitContext(np.zeros(n), sig, groups, np.zeros(n), tuple(sources), tuple(s.phase for s in sources))
+    assert ctx.distinct is not None and ctx.distinct.angles is not None
+    assert ctx.distinct.sig.theta.shape[0] == 80 and ctx.distinct.angles[0].shape[0] == 40
+    assert sources
+    for s in sources:
+        for psi in (0.0, 1.234, -2.5):
+            assert np.array_equal(phases.pair_values(s, ctx.distinct, psi), s.contrib(ctx.distinct.sig, psi))
+            assert np.array_equal(ctx.values(s, psi), s.contrib(sig, psi))
+
+
 def test_distinct_pairs_only_when_rows_repeat():
     from wormgear_cli.models.effects import Signals
 
