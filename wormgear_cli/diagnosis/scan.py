@@ -197,14 +197,15 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
             return
         key = tuple((c[0], c[1], c[2]) for c in chunk)
         total = sum(width(c[3]) for c in chunk)
-        big = np.empty((n_rows, total))
         if pairs is not None:
-            # every column but the trends at the distinct pairs, spread to the rows at once; the trends per row
+            # every column but the trends at the distinct pairs, spread to the rows at once (a new C-order
+            # array: np.take into a given ``out`` copies it first, to leave it untouched on a bad index);
+            # the trends per row
             p_theta, p_dir, where = pairs
             at_pairs = np.zeros((p_theta.shape[0], total))
             _make_columns(at_pairs, chunk, lambda out, recipe: None if recipe[0] == "trend" else
                           fill(out, recipe, p_theta, p_dir), p_dir)
-            np.take(at_pairs, where, axis=0, out=big)
+            big = np.take(at_pairs, where, axis=0)
             at_pairs = None
             j = 0
             for c in chunk:
@@ -212,6 +213,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
                     fill(big[:, j:j + 1], c[3])
                 j += width(c[3])
         else:
+            big = np.empty((n_rows, total))
             _make_columns(big, chunk, fill, d)
         if key not in chunk_cache:
             chunk_cache[key] = (big.T @ big, pass_sums(big, groups), np.einsum("ij,ij->j", big, big))
