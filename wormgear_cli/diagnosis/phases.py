@@ -457,8 +457,18 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     if not sources:
         return [psi]
     q, _ = np.linalg.qr(lin)
-    sig2 = Signals(sig.theta[:, None], sig.direction[:, None], sig.load[:, None], sig.temperature[:, None],
-                   sig.time[:, None])
+    # pointwise sources on rows that repeat (angle, direction) pairs: evaluated at the pairs and spread
+    d = ctx.distinct if all(s.pointwise for s in sources) else None
+    at = sig if d is None else d.sig
+    sig2 = Signals(at.theta[:, None], at.direction[:, None], at.load[:, None], at.temperature[:, None],
+                   at.time[:, None])
+
+    def on_grid(k):
+        values = np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (at.theta.shape[0], grid))
+        return values if d is None else values[d.inverse]
+
+    def value(k, p):
+        return sources[k].contrib(sig, p) if d is None else ctx.values(sources[k], p)
     phases = np.linspace(0.0, 2.0 * np.pi, grid, endpoint=False)
     by_order: dict = {}
     for k, s in enumerate(sources):
@@ -466,7 +476,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     blocks = []
     for members in by_order.values():
         blocks += [members] if len(members) <= 3 else [[k] for k in members]
-    contrib = [s.contrib(sig, p) for s, p in zip(sources, psi)]
+    contrib = [value(k, p) for k, p in enumerate(psi)]
     total = np.sum(contrib, axis=0)
 
     def project(a):
@@ -475,7 +485,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     def grid_cost(members):
         m = len(members)
         rest = y - base - (total - sum(contrib[k] for k in members))
-        cols = [np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (y.shape[0], grid)) for k in members]
+        cols = [on_grid(k) for k in members]
         z = project(np.hstack([*cols, rest[:, None]]))
         gram = z.T @ z
         cost = np.full((grid,) * m, gram[-1, -1])
@@ -497,7 +507,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
         nonlocal total
         for a, k in enumerate(members):
             psi[k] = phases[idx[a]]
-            new = sources[k].contrib(sig, psi[k])
+            new = value(k, psi[k])
             total = total - contrib[k] + new
             contrib[k] = new
 
