@@ -266,6 +266,22 @@ def harmonic_columns(theta: np.ndarray, orders: np.ndarray) -> np.ndarray:
     return cols
 
 
+def _harmonic_table(theta: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """(index (n,) of each row's angle, :func:`harmonic_columns` at the distinct angles (U x 2m)) when
+    the rows repeat their angles (repeated runs: U <= n / 2, bitwise equal values) and the table is
+    no larger than one block of rows; else None.  The table's rows are the rows' columns, bit for
+    bit (the same elementwise operations on the same values)."""
+    n = theta.shape[0]
+    if n < 2 or orders.shape[0] == 0:
+        return None
+    t = np.ascontiguousarray(theta, dtype=float)
+    _, first, inverse = np.unique(t.view(np.int64), return_index=True, return_inverse=True)
+    if first.shape[0] > min(n // 2, BLOCK_ROWS):
+        return None
+    # np.intp: np.take converts any other index type on every call
+    return np.ascontiguousarray(inverse.reshape(-1), dtype=np.intp), harmonic_columns(t[first], orders)
+
+
 def _order_values(a, b, cov_ab, ident, sigma):
     """Amplitude, phase and their standard errors from (a, b) and their covariance."""
     amp = np.hypot(a, b)
@@ -415,11 +431,16 @@ def fit_modes_each(theta, ys, direction, orders: Sequence[float], weights=None, 
     p_mode = 1 + 2 * m + tr.shape[1]
     ncols = 2 * p_mode if both else p_mode
 
+    table = _harmonic_table(theta, ords)
+
     def block(a, b):
         # [1, cos/sin per order, trend] and, with both directions, the same times the direction
         out = np.empty((b - a, ncols))
         out[:, 0] = 1.0
-        out[:, 1:1 + 2 * m] = harmonic_columns(theta[a:b], ords)
+        if table is None:
+            out[:, 1:1 + 2 * m] = harmonic_columns(theta[a:b], ords)
+        else:
+            out[:, 1:1 + 2 * m] = np.take(table[1], table[0][a:b], axis=0)
         out[:, 1 + 2 * m:p_mode] = tr[a:b]
         if both:
             np.multiply(out[:, :p_mode], d[a:b, None], out=out[:, p_mode:])

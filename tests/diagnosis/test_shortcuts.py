@@ -55,7 +55,7 @@ def test_report_is_the_same_without_any_shortcut(monkeypatch, tmp_path, case):
     fast = _report_json(meas, spec)
 
     monkeypatch.setattr(phases, "distinct_pairs", lambda sig, max_share=0.5: None)
-    monkeypatch.setattr(scan, "distinct_angles", lambda theta, max_share=0.5: None)
+    monkeypatch.setattr(scan, "distinct_pairs", lambda sig, max_share=0.5: None)
     post_init = runs.Groups.__post_init__
 
     def no_blocks(self):
@@ -82,6 +82,32 @@ def test_pointwise_source_values_per_distinct_pair_equal_the_rows(mch50_spec):
     for s in sources:
         assert s.pointwise
         for psi in (0.0, 1.234, -2.5):
+            assert np.array_equal(ctx.values(s, psi), s.contrib(sig, psi))
+
+
+@pytest.mark.parametrize("drive", ["mch50", "radar-pedestal-2start", "rotary-table-precision"])
+def test_source_curves_per_distinct_angle_equal_the_rows(drive):
+    # forward and reverse passes over the same targets: the pairs repeat their angles, and the sources'
+    # curves (and lost motion) are evaluated once per angle
+    from wormgear_cli.analysis import geometry
+    from wormgear_cli.models.effects import Signals
+
+    spec = load_spec(CONFIGS / f"{drive}.toml")
+    rng = np.random.default_rng(12)
+    targets = np.radians(rng.uniform(-30, 390, 40))
+    theta = np.tile(np.concatenate([targets, targets[::-1]]), 3)
+    d = np.tile(np.repeat([1.0, -1.0], 40), 3)
+    sig = Signals.make(theta, d)
+    sources, _ = dg.phase_sources(spec, geometry(spec), sig)
+    n = theta.shape[0]
+    groups = dg.make_groups(d, np.repeat(np.arange(3), 80))
+    ctx = dg.FitContext(np.zeros(n), sig, groups, np.zeros(n), tuple(sources), tuple(s.phase for s in sources))
+    assert ctx.distinct is not None and ctx.distinct.angles is not None
+    assert ctx.distinct.sig.theta.shape[0] == 80 and ctx.distinct.angles[0].shape[0] == 40
+    assert sources
+    for s in sources:
+        for psi in (0.0, 1.234, -2.5):
+            assert np.array_equal(phases.pair_values(s, ctx.distinct, psi), s.contrib(ctx.distinct.sig, psi))
             assert np.array_equal(ctx.values(s, psi), s.contrib(sig, psi))
 
 
@@ -209,3 +235,29 @@ def test_gap_summary_with_cells_made_once_is_the_same():
     meas = read_measurement(DEMO)
     resid = np.random.default_rng(4).normal(size=len(meas))
     assert dg.gap_summary(meas, resid, dg.residuals.target_run_cells(meas)) == dg.gap_summary(meas, resid)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_mode_fits_from_a_table_of_distinct_angles_equal_the_row_by_row_columns(monkeypatch, seed):
+    # repeated runs visit each angle several times: the cos/sin columns are made once per distinct angle
+    rng = np.random.default_rng(seed)
+    targets = np.sort(rng.uniform(0, 2 * np.pi, 300))
+    theta = np.tile(targets, 6)
+    d = np.repeat([1.0, -1.0] * 3, targets.shape[0])
+    ys = [rng.normal(size=theta.shape[0]) + 2.0 * np.cos(5 * theta + 0.3) * d, rng.normal(size=theta.shape[0])]
+    assert harmonics._harmonic_table(theta, np.array([1.0, 5.0])) is not None
+    fast = harmonics.fit_modes_each(theta, ys, d, [1.0, 5.0, 12.0, 37.5])
+    monkeypatch.setattr(harmonics, "_harmonic_table", lambda theta, orders: None)
+    plain = harmonics.fit_modes_each(theta, ys, d, [1.0, 5.0, 12.0, 37.5])
+    for a_fit, b_fit in zip(fast, plain):
+        for mode in ("common", "differential"):
+            a, b = getattr(a_fit, mode), getattr(b_fit, mode)
+            for field in ("amplitude", "phase", "amplitude_stderr", "cos", "sin"):
+                assert np.array_equal(getattr(a, field), getattr(b, field))
+        assert np.array_equal(a_fit.residual, b_fit.residual) and a_fit.sigma == b_fit.sigma
+
+
+def test_no_table_when_every_angle_is_distinct():
+    theta = np.linspace(0.0, 6.0, 1000)
+    assert harmonics._harmonic_table(theta, np.array([1.0, 2.0])) is None
+    assert harmonics._harmonic_table(np.tile(theta, 2), np.array([1.0, 2.0])) is not None

@@ -49,7 +49,27 @@ def _source_contrib(src):
         if src.lost_motion is not None:
             out = out - sig.direction * src.lost_motion(sig.theta, psi) / 2.0
         return out / ARCSEC
+
+    def at_pairs(d: "Distinct", psi):
+        # contrib(d.sig, psi) with the curves (functions of the angle only) evaluated once per distinct angle
+        angle, index = d.angles
+        out = np.take(src.curve(angle, psi), index)
+        if src.lost_motion is not None:
+            out = out - d.sig.direction * np.take(src.lost_motion(angle, psi), index) / 2.0
+        return out / ARCSEC
+
+    contrib.at_pairs = at_pairs
     return contrib
+
+
+def pair_values(source: "PhaseSource", d: "Distinct", psi) -> np.ndarray:
+    """``source.contrib(d.sig, psi)`` at the distinct pairs ``d`` (the same numbers: every operation is
+    elementwise); a simulation source's curves are evaluated once per distinct angle when the pairs
+    repeat their angles (forward and reverse passes at the same targets)."""
+    at_pairs = getattr(source.contrib, "at_pairs", None)
+    if at_pairs is not None and d.angles is not None:
+        return at_pairs(d, psi)
+    return source.contrib(d.sig, psi)
 
 
 def effect_contrib(eff, params, g):
@@ -156,16 +176,18 @@ class FitContext:
         d = self.distinct if source.pointwise else None
         if d is None:
             return source.contrib(self.sig, psi)
-        return source.contrib(d.sig, psi)[d.inverse]
+        return pair_values(source, d, psi)[d.inverse]
 
 
 @dataclass(frozen=True)
 class Distinct:
     """Distinct (angle, direction) pairs of a measurement's rows: ``sig`` one row per pair (the
-    signals of its first row), ``inverse`` (N,) the pair of each row."""
+    signals of its first row), ``inverse`` (N,) the pair of each row; ``angles``: (distinct angles
+    (U,), the angle of each pair (P,)) when the pairs repeat their angles (U <= 3/4 P), else None."""
 
     sig: object
     inverse: np.ndarray
+    angles: tuple | None = None
 
 
 def distinct_pairs(sig, max_share: float = 0.5) -> Distinct | None:
@@ -176,13 +198,17 @@ def distinct_pairs(sig, max_share: float = 0.5) -> Distinct | None:
         return None
     theta = np.ascontiguousarray(sig.theta, dtype=float)
     direction = np.ascontiguousarray(np.broadcast_to(sig.direction, theta.shape), dtype=float)
-    _, t_idx = np.unique(theta.view(np.int64), return_inverse=True)
+    _, t_first, t_idx = np.unique(theta.view(np.int64), return_index=True, return_inverse=True)
+    t_idx = t_idx.reshape(-1)
     d_vals, d_idx = np.unique(direction.view(np.int64), return_inverse=True)
-    key = t_idx.reshape(-1).astype(np.int64) * d_vals.shape[0] + d_idx.reshape(-1)
+    key = t_idx.astype(np.int64) * d_vals.shape[0] + d_idx.reshape(-1)
     _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     if first.shape[0] > max_share * n:
         return None
-    return Distinct(subset(sig, first), _index(inverse.reshape(-1), first.shape[0]))
+    angles = None
+    if t_first.shape[0] <= 0.75 * first.shape[0]:
+        angles = (theta[t_first], _index(t_idx[first], t_first.shape[0]))
+    return Distinct(subset(sig, first), _index(inverse.reshape(-1), first.shape[0]), angles)
 
 
 def distinct_angles(theta: np.ndarray, max_share: float = 0.5) -> tuple[np.ndarray, np.ndarray] | None:
@@ -199,8 +225,9 @@ def distinct_angles(theta: np.ndarray, max_share: float = 0.5) -> tuple[np.ndarr
 
 
 def _index(inverse: np.ndarray, size: int) -> np.ndarray:
-    """Row -> distinct value index, as int32 when it fits (half the memory of int64)."""
-    return inverse.astype(np.int32) if size < 2**31 else inverse
+    """Row -> distinct value index (``size`` values), as np.intp: np.take and fancy indexing convert
+    any other index type on every call (an int32 index made each take of 1e5 rows ten times slower)."""
+    return np.ascontiguousarray(inverse, dtype=np.intp)
 
 
 @dataclass(frozen=True)
@@ -292,7 +319,7 @@ def _evaluator(ctx: "FitContext"):
     Otherwise ``values`` is :meth:`FitContext.values`, ``spread`` None and ``size`` N."""
     d = ctx.distinct
     if d is not None and ctx.sources and all(s.pointwise for s in ctx.sources):
-        return (lambda s, p: s.contrib(d.sig, p)), d.inverse, int(d.sig.theta.shape[0])
+        return (lambda s, p: pair_values(s, d, p)), d.inverse, int(d.sig.theta.shape[0])
     return ctx.values, None, ctx.n
 
 
@@ -430,8 +457,18 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     if not sources:
         return [psi]
     q, _ = np.linalg.qr(lin)
-    sig2 = Signals(sig.theta[:, None], sig.direction[:, None], sig.load[:, None], sig.temperature[:, None],
-                   sig.time[:, None])
+    # pointwise sources on rows that repeat (angle, direction) pairs: evaluated at the pairs and spread
+    d = ctx.distinct if all(s.pointwise for s in sources) else None
+    at = sig if d is None else d.sig
+    sig2 = Signals(at.theta[:, None], at.direction[:, None], at.load[:, None], at.temperature[:, None],
+                   at.time[:, None])
+
+    def on_grid(k):
+        values = np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (at.theta.shape[0], grid))
+        return values if d is None else values[d.inverse]
+
+    def value(k, p):
+        return sources[k].contrib(sig, p) if d is None else ctx.values(sources[k], p)
     phases = np.linspace(0.0, 2.0 * np.pi, grid, endpoint=False)
     by_order: dict = {}
     for k, s in enumerate(sources):
@@ -439,7 +476,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     blocks = []
     for members in by_order.values():
         blocks += [members] if len(members) <= 3 else [[k] for k in members]
-    contrib = [s.contrib(sig, p) for s, p in zip(sources, psi)]
+    contrib = [value(k, p) for k, p in enumerate(psi)]
     total = np.sum(contrib, axis=0)
 
     def project(a):
@@ -448,7 +485,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     def grid_cost(members):
         m = len(members)
         rest = y - base - (total - sum(contrib[k] for k in members))
-        cols = [np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (y.shape[0], grid)) for k in members]
+        cols = [on_grid(k) for k in members]
         z = project(np.hstack([*cols, rest[:, None]]))
         gram = z.T @ z
         cost = np.full((grid,) * m, gram[-1, -1])
@@ -470,7 +507,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
         nonlocal total
         for a, k in enumerate(members):
             psi[k] = phases[idx[a]]
-            new = sources[k].contrib(sig, psi[k])
+            new = value(k, psi[k])
             total = total - contrib[k] + new
             contrib[k] = new
 

@@ -10,7 +10,7 @@ import numpy as np
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
 from wormgear_cli.diagnosis.design import orthonormal, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
-from wormgear_cli.diagnosis.phases import ModelFit, distinct_angles
+from wormgear_cli.diagnosis.phases import ModelFit, distinct_pairs
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, pass_sums
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE, MIN_RUNS, MIN_SCAN_SHARE,
@@ -149,28 +149,23 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     def width(recipe):
         return 2 if recipe[0] == "order" else 1
 
-    # the order columns are functions of the angle: made once per distinct angle and spread to the rows
-    if orders_cache is not None and "angles" in orders_cache:
-        angles = orders_cache["angles"]
+    # the order columns (and the reversal column) are functions of the angle and the direction: a chunk's
+    # columns are made once per distinct (angle, direction) pair and spread to the rows by one np.take
+    if orders_cache is not None and "pairs" in orders_cache:
+        pairs = orders_cache["pairs"]
     else:
-        angles = distinct_angles(theta)
+        found = distinct_pairs(sig)
+        pairs = None if found is None else (found.sig.theta, found.sig.direction, found.inverse)
         if orders_cache is not None:
-            orders_cache["angles"] = angles
+            orders_cache["pairs"] = pairs
 
-    def fill(out, recipe):
+    def fill(out, recipe, theta=theta, d=d):
+        # out: (rows, width) columns of the recipe at angles theta, directions d (rows or distinct pairs)
         kind, what, diff = recipe
         if kind == "order":
-            if angles is not None:
-                ut, where = angles
-                buf = np.empty((ut.shape[0], 2))
-                np.multiply(ut, what, out=buf[:, 0])
-                np.sin(buf[:, 0], out=buf[:, 1])
-                np.cos(buf[:, 0], out=buf[:, 0])
-                out[...] = np.take(buf, where, axis=0)
-            else:
-                np.multiply(theta, what, out=out[:, 0])
-                np.sin(out[:, 0], out=out[:, 1])
-                np.cos(out[:, 0], out=out[:, 0])
+            np.multiply(theta, what, out=out[:, 0])
+            np.sin(out[:, 0], out=out[:, 1])
+            np.cos(out[:, 0], out=out[:, 0])
         elif kind == "trend":
             np.subtract(what, np.mean(what), out=out[:, 0])
         else:
@@ -202,21 +197,24 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
             return
         key = tuple((c[0], c[1], c[2]) for c in chunk)
         total = sum(width(c[3]) for c in chunk)
-        big = np.empty((n_rows, total))
-        j = 0
-        made = {}
-        for c in chunk:
-            w = width(c[3])
-            recipe = c[3]
-            if recipe[0] == "order" and recipe[2] and (recipe[1], False) in made:
-                # the differential columns of an order are its common ones times the direction
-                j0 = made[(recipe[1], False)]
-                np.multiply(big[:, j0:j0 + w], d[:, None], out=big[:, j:j + w])
-            else:
-                fill(big[:, j:j + w], recipe)
-            if recipe[0] == "order":
-                made[(recipe[1], recipe[2])] = j
-            j += w
+        if pairs is not None:
+            # every column but the trends at the distinct pairs, spread to the rows at once (a new C-order
+            # array: np.take into a given ``out`` copies it first, to leave it untouched on a bad index);
+            # the trends per row
+            p_theta, p_dir, where = pairs
+            at_pairs = np.zeros((p_theta.shape[0], total))
+            _make_columns(at_pairs, chunk, lambda out, recipe: None if recipe[0] == "trend" else
+                          fill(out, recipe, p_theta, p_dir), p_dir)
+            big = np.take(at_pairs, where, axis=0)
+            at_pairs = None
+            j = 0
+            for c in chunk:
+                if c[3][0] == "trend":
+                    fill(big[:, j:j + 1], c[3])
+                j += width(c[3])
+        else:
+            big = np.empty((n_rows, total))
+            _make_columns(big, chunk, fill, d)
         if key not in chunk_cache:
             chunk_cache[key] = (big.T @ big, pass_sums(big, groups), np.einsum("ij,ij->j", big, big))
         bb, ps_big, norms = chunk_cache[key]
@@ -348,6 +346,25 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
         merged.append(item)
     merged.sort(key=lambda it: it["p_adjusted"])
     return merged
+
+
+def _make_columns(big: np.ndarray, chunk: list, fill, d: np.ndarray) -> None:
+    """Write a chunk's test columns into ``big`` side by side (``fill(out, recipe)`` makes one recipe's
+    columns; the differential columns of an order made in the same chunk are its common ones times the
+    direction ``d``)."""
+    j = 0
+    made = {}
+    for c in chunk:
+        recipe = c[3]
+        w = 2 if recipe[0] == "order" else 1
+        if recipe[0] == "order" and recipe[2] and (recipe[1], False) in made:
+            j0 = made[(recipe[1], False)]
+            np.multiply(big[:, j0:j0 + w], d[:, None], out=big[:, j:j + w])
+        else:
+            fill(big[:, j:j + w], recipe)
+        if recipe[0] == "order":
+            made[(recipe[1], recipe[2])] = j
+        j += w
 
 
 def unowned_order_columns(items: list[dict], sig, geometry, state: ModelFit) -> list[tuple[str, np.ndarray, dict]]:
