@@ -364,7 +364,7 @@ def _resolve_header(header: list[str], options: ReadOptions, name: str, line: in
         hint = suggest_map(header, index)
         fix = f"; try {' '.join(hint)}" if hint else "; name the columns with --map CANONICAL=HEADER"
         raise DataError(f"{name}:{line}: missing required column{'s' if len(missing) > 1 else ''} "
-                        f"{', '.join(missing)} (header has: {', '.join(header) or 'nothing'}){fix}")
+                        f"{', '.join(missing)} (header has: {', '.join(_clipped(h) for h in header) or 'nothing'}){fix}")
     return index, hunit
 
 
@@ -440,7 +440,7 @@ def _column(name: str, col: str, cells: list[str], line_numbers: list[int], deci
         for k, cell in enumerate(cells):
             if "_" in cell or not cell.isascii():
                 raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
-                                f"{cell.strip()!r}")
+                                f"{_shown(cell)}")
     try:
         return np.asarray(cells, dtype=float)
     except ValueError:
@@ -450,8 +450,19 @@ def _column(name: str, col: str, cells: list[str], line_numbers: list[int], deci
                 arr[k] = float(cell)
             except ValueError:
                 raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
-                                f"{cell.strip()!r}") from None
+                                f"{_shown(cell)}") from None
         return arr
+
+
+def _clipped(text: str, most: int = 40) -> str:
+    """``text`` cut to ``most`` characters for a message, saying how long it was (a cell may be megabytes)."""
+    return text if len(text) <= most else f"{text[:most]}... ({len(text)} characters)"
+
+
+def _shown(cell: str, most: int = 40) -> str:
+    """A cell quoted for a message, cut like :func:`_clipped`."""
+    cell = cell.strip()
+    return repr(cell) if len(cell) <= most else f"{cell[:most]!r}... ({len(cell)} characters)"
 
 
 def _check_values(name: str, col: str, label: str, arr: np.ndarray, scale: float, line_of, cell_of) -> None:
@@ -459,7 +470,7 @@ def _check_values(name: str, col: str, label: str, arr: np.ndarray, scale: float
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
         k = int(bad[0])
-        raise DataError(f"{name}:{line_of(k)}: column {label}: expected a finite number, got {cell_of(k)!r}")
+        raise DataError(f"{name}:{line_of(k)}: column {label}: expected a finite number, got {_shown(str(cell_of(k)))}")
     lo, hi = RANGES[col]
     conv = arr * scale if scale != 1.0 else arr
     bad = np.flatnonzero((conv < lo) | (conv > hi))
@@ -550,6 +561,17 @@ class _Body:
 def parse_measurement(text: str, name: str = "<data>", require_error: bool = True,
                       options: ReadOptions | None = None) -> Measurement:
     """Parse measurement text (see :func:`read_measurement`)."""
+    # the csv module refuses a cell over 128 KiB with its own exception (a traceback, not a DataError);
+    # a cell is at most as long as the text, so it is parsed and then judged like any other cell
+    limit = csv.field_size_limit()
+    csv.field_size_limit(max(limit, len(text) + 1))
+    try:
+        return _parse_measurement(text, name, require_error, options)
+    finally:
+        csv.field_size_limit(limit)
+
+
+def _parse_measurement(text: str, name: str, require_error: bool, options: ReadOptions | None) -> Measurement:
     options = options or ReadOptions()
     if text.startswith("\ufeff"):
         text = text[1:]

@@ -84,3 +84,30 @@ def test_binary_after_a_text_start_and_bad_utf8(tmp_path):
     with pytest.raises(DataError) as info:
         read_measurement(path)
     assert info.value.problems == [f"{path}: not UTF-8 text (byte 30), expected a CSV file"]
+
+
+@pytest.mark.parametrize("cell,delim,expected", [
+    ("1" * 140_000, ",", "column error_arcsec: expected a finite number, got '{}'... (140000 characters)"
+     .format("1" * 40)),
+    ("x" * 140_000, ";", "column error_arcsec: expected a number, got '{}'... (140000 characters)".format("x" * 40)),
+])
+def test_a_cell_over_the_csv_modules_limit_is_one_clipped_error_line(tmp_path, cell, delim, expected):
+    # the csv module's own field limit (128 KiB) must not surface as a traceback; the message is cut
+    path = tmp_path / "long.csv"
+    rows = ["angle_deg,error_arcsec", "0,1", f"15,{cell}", "30,2"]
+    path.write_text("\n".join(r.replace(",", delim) for r in rows) + "\n")
+    with pytest.raises(DataError) as err:
+        read_measurement(path)
+    assert err.value.problems == [f"{path}:3: {expected}"]
+    import csv
+
+    assert csv.field_size_limit() == 131072  # the process-wide limit is restored
+
+
+def test_a_header_cell_over_the_limit_is_clipped_in_the_message(tmp_path):
+    path = tmp_path / "long.csv"
+    path.write_text("angle_deg,error_arcsec" + "y" * 140_000 + "\n0,1\n")
+    with pytest.raises(DataError) as err:
+        read_measurement(path)
+    (line,) = err.value.problems
+    assert "error_arcsec" + "y" * 28 + "... (140012 characters)" in line and len(line) < 300
