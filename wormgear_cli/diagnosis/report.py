@@ -85,6 +85,10 @@ def _status(diag: Diagnosis, twins: dict) -> list[dict]:
                              reason=f"significant, but fitting it makes the RMS gap larger "
                                     f"({stop.rms_before_arcsec:.3g} -> {stop.rms_with_arcsec:.3g} arcsec): its "
                                     "estimate follows structure that is not its signature (see unexplained)")
+            elif _not_reached(diag, name, sc):
+                entry.update(status="not_reached", reason=_not_reached_reason(diag, sc),
+                             remedy=("rerun with a larger --max-effects" if stop.reason is StopReason.MAX_EFFECTS
+                                     else f"settle {_stopper(stop)} first (see its reason), then rerun"))
             elif diag.likely is not None and diag.likely["name"] == name:
                 entry.update(status="likely",
                              reason=f"short of the level, but it would remove {100 * diag.likely['gain']:.0f} % of "
@@ -98,6 +102,33 @@ def _status(diag: Diagnosis, twins: dict) -> list[dict]:
                 entry["aliased_with"] = [{"order": o, "label": lab} for o, lab in sc.aliases]
         out.append(entry)
     return out
+
+
+def _stopper(stop) -> str:
+    """The candidate (or rivals) the selection stopped at, for messages."""
+    if stop.reason is StopReason.AMBIGUOUS:
+        return " / ".join(stop.candidates)
+    return getattr(stop, "candidate", None) or "the selection's stop"
+
+
+def _not_reached(diag: Diagnosis, name: str, sc) -> bool:
+    """Significant (adjusted p < alpha) but not taken, because the selection stopped before it: at a
+    candidate it could not accept (unphysical, unstable, ambiguous, worsening the fit) or at
+    --max-effects.  Such a candidate is not "not significant"."""
+    stop = diag.stop
+    if stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.NOTHING_LEFT, StopReason.NONE_OBSERVABLE):
+        return False
+    if getattr(stop, "candidate", None) == name or name in (getattr(stop, "candidates", None) or ()):
+        return False
+    p = sc.p_adj
+    return p is not None and math.isfinite(p) and p < diag.alpha and not sc.same_order
+
+
+def _not_reached_reason(diag: Diagnosis, sc) -> str:
+    stop = diag.stop
+    why = ("--max-effects was reached" if stop.reason is StopReason.MAX_EFFECTS
+           else f"the selection stopped at {_stopper(stop)} ({stop.reason.value})")
+    return f"significant (adjusted p = {sc.p_adj:.2g}) but not taken: {why}"
 
 
 def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
@@ -196,7 +227,9 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
                      + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
                      "--keep-phases" + (f"; {FOLD_REMEDY}" if also else "") + ")")
     untestable = [n for n, sc in diag.candidates.items() if sc.status is ScoreStatus.UNTESTABLE]
-    if not diag.found:
+    if not diag.found and diag.stop.reason is StopReason.MAX_EFFECTS:
+        parts.append("no effect named (--max-effects reached)")
+    elif not diag.found:
         text = "no missing effect found"
         if untestable:
             text += " that these data can test"
@@ -215,11 +248,20 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
         parts.append(text)
     elif diag.stop.reason is StopReason.WORSENS:
         parts.append(f"{diag.stop.candidate} was rejected: fitting it makes the RMS gap larger")
+    waiting = [(n, sc) for n, sc in diag.candidates.items()
+               if n not in {f.name for f in diag.found} and sc.status not in (ScoreStatus.UNOBSERVABLE,
+                                                                             ScoreStatus.UNTESTABLE)
+               and _not_reached(diag, n, sc)]
+    if waiting:
+        why = ("--max-effects reached" if diag.stop.reason is StopReason.MAX_EFFECTS
+               else f"the selection stopped at {_stopper(diag.stop)}")
+        parts.append("significant but not taken (" + why + "): "
+                     + ", ".join(f"{n} (adjusted p = {sc.p_adj:.2g})" for n, sc in waiting))
     if untestable:
         runs = diag.groups.runs
         parts.append(f"untestable with {runs} run{'s' if runs != 1 else ''}: {', '.join(untestable)} "
                      f"({REPLICATION_REMEDY})")
-    if diag.likely is not None:
+    if diag.likely is not None and diag.likely["name"] not in {n for n, _ in waiting}:
         parts.append(f"likely {'further ' if diag.found else ''}effect: {diag.likely['name']} (adjusted p = "
                      f"{diag.likely['p_adjusted']:.2g}, short of the level; see unexplained)")
     others = [u for u in diag.unexplained if u["kind"] != "likely_effect"]
