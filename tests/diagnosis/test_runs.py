@@ -93,3 +93,38 @@ def test_sessions_joined_without_a_run_column_keep_the_white_noise_floor(seed):
     floor_time = diagnose(spec, parse_measurement(no_run, "<no run>"), resamples=0).noise_floor
     assert floor_time == pytest.approx(floor_run, rel=1e-9)
     assert floor_time == pytest.approx(0.3, rel=0.25)
+
+
+def test_the_run_structure_line_says_runs_were_inferred_from_time(runner):
+    # field case: no run column, time_s restarts -> the report's structure says the runs were inferred
+    import json
+
+    from wormgear_cli.cli import app
+
+    docs = []
+    for kind in ("no-run", "with-run"):
+        r = runner.invoke(app, ["diagnose", str(FIELD / "telescope-mount.toml"), str(FIELD / f"time-restarts-{kind}.csv"),
+                                "--format", "json", "--resamples", "0"])
+        assert r.exit_code == 0, r.output
+        docs.append(json.loads(r.stdout))
+    structures = [_find_structure(d) for d in docs]
+    assert structures[0] == "no run column: runs inferred where time_s goes backwards; one pass per run and direction"
+    assert structures[1] == "run column: one pass per run and direction"
+
+
+def _find_structure(doc):
+    found = []
+
+    def walk(x):
+        if isinstance(x, dict):
+            if "structure" in x and "passes" in x:
+                found.append(x["structure"])
+            for v in x.values():
+                walk(v)
+        elif isinstance(x, list):
+            for v in x:
+                walk(v)
+
+    walk(doc)
+    assert found and len(set(found)) == 1  # (before and after the effects: one structure)
+    return found[0]
