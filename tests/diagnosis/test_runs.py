@@ -108,7 +108,7 @@ def test_the_run_structure_line_says_runs_were_inferred_from_time(runner):
         assert r.exit_code == 0, r.output
         docs.append(json.loads(r.stdout))
     structures = [_find_structure(d) for d in docs]
-    assert structures[0].startswith("no run column: runs inferred where time_s goes backwards; one pass per run "
+    assert structures[0].startswith("no run column: runs inferred where time_s goes backwards, one pass per run "
                                     "and direction")
     assert structures[1].startswith("run column: one pass per run and direction")
 

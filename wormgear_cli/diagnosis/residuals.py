@@ -188,9 +188,7 @@ def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
     return {"repeat_std_arcsec": math.sqrt(num / den) if den > 0 else None, "white_arcsec": var.s_white,
             "pass_arcsec": var.s_pass if between else None, "run_arcsec": var.s_run if between else None,
             "total_arcsec": math.sqrt(var.sigma2 * (1.0 + var.gp + var.gr)), "passes": groups.passes,
-            "runs": groups.runs,
-            "structure": ("no run column: runs inferred where time_s goes backwards; one pass per run and direction"
-                          if "run" in getattr(meas, "derived", ()) else groups.describe)}
+            "runs": groups.runs, "structure": groups.describe}
 
 
 def iso_figures(meas, error_arcsec) -> dict:

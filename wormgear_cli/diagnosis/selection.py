@@ -168,6 +168,9 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     g = drive_geometry(spec)
     groups = make_groups(meas.direction, meas.run if "run" in meas.present else None,
                          meas.time if "time_s" in meas.present else None)
+    if "run" in getattr(meas, "derived", ()):  # the reader numbered the runs where time_s goes backwards
+        groups = replace(groups, describe="no run column: runs inferred where time_s goes backwards, one pass per "
+                                          "run and direction")
     few_runs = groups.runs < MIN_RUNS
     if few_runs:
         # one or two runs: scatter between runs and passes cannot be estimated (a variance from one run is
