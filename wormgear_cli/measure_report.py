@@ -154,8 +154,13 @@ def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list
     out = []
     n = len(m)
     for note in m.notes:
-        out.append(Finding("reader", note, False, "passes inferred from time restarts"
-                           if note.startswith("no run column: time_s goes backwards") else None))
+        if note.startswith("no run column: time_s goes backwards"):
+            verdict = "passes inferred from time restarts"
+        elif "with every cell empty left out" in note:  # said in the verdict line, not only in a note
+            verdict = note.split(" (", 1)[0]
+        else:
+            verdict = None
+        out.append(Finding("reader", note, False, verdict))
     for w in m.warnings:
         out.append(Finding("units", w, True, "check the units (see warnings)"))
     mixed = False

@@ -48,3 +48,15 @@ def test_max_effects_zero_names_nothing_and_lists_what_it_did_not_take(runner):
     assert tb["status"] == "not_reached" and "--max-effects was reached" in tb["reason"]
     assert tb["remedy"] == "rerun with a larger --max-effects"
     assert "short of the level" not in doc["verdict"]
+
+
+def test_rows_with_every_cell_empty_are_said_in_both_verdict_lines(runner, tmp_path):
+    # the reader's note reaches the verdict of diagnose (text and JSON) and of measure, not only a note
+    lines = WARM.read_text().splitlines()
+    path = tmp_path / "blank.csv"
+    path.write_text("\n".join(lines[:201] + [",,,,,", ",,,,,"] + lines[201:]) + "\n")
+    doc = _run(runner, path)
+    assert "; 2 rows with every cell empty left out" in doc["verdict"]
+    r = runner.invoke(app, ["measure", str(path), "--format", "json"])
+    assert r.exit_code == 0, r.output
+    assert "2 rows with every cell empty left out" in json.loads(r.stdout)["verdict"]
