@@ -273,8 +273,8 @@ def _split_unit(cell: str) -> tuple[str, str | None]:
 
 def _recognise(cell: str) -> tuple[str | None, str | None]:
     """(canonical column, unit) of a header cell recognised without a map, else (None, None)."""
-    if cell in CANONICAL:
-        return cell, None
+    if cell in CANONICAL:  # angle_deg and error_arcsec state their unit too (checked against the options)
+        return cell, {"angle_deg": "deg", "error_arcsec": "arcsec"}.get(cell)
     base, unit = _split_unit(cell)
     canon = _BASES.get(base)
     if canon is None or unit is None or unit not in _UNITS:
@@ -653,7 +653,11 @@ def _parse_measurement(text: str, name: str, require_error: bool, options: ReadO
     error_unit = options.error_unit or hunit.get("error_arcsec") or "arcsec"
     for canon, chosen, opt in (("angle_deg", angle_unit, "--angle-unit"), ("error_arcsec", error_unit, "--error-unit")):
         stated = hunit.get(canon)
-        if canon in index and stated is not None and stated != chosen:
+        if canon in index and stated is not None and stated != chosen and header[index[canon]] == canon:
+            # the canonical name is the name the tool asks for, so an explicit option is a deliberate choice:
+            # said, not warned about
+            notes.append(f"column {canon!r} read in {chosen} ({opt} {chosen}), not in the {stated} its name says")
+        elif canon in index and stated is not None and stated != chosen:
             warnings.append(f"column {header[index[canon]]!r} says {stated} but is read as {chosen} ({opt} "
                             f"{chosen}); if the header is right, use {opt} {stated}")
         elif canon in index and stated is not None and header[index[canon]] != canon and not (

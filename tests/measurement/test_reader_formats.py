@@ -179,3 +179,17 @@ def test_time_restarts_make_passes_constructed(tmp_path):
         f"{10 * i},{i % 3},{t},7\n" for i, t in enumerate(times)))
     m = read_measurement(path)
     assert m.derived == frozenset() and set(m.run.tolist()) == {7}
+
+
+def test_an_option_reading_a_canonical_column_in_another_unit_is_noted(tmp_path):
+    # the header's canonical name states a unit too: reading it in another is said (a note), not silent
+    from wormgear_cli.measurement import ReadOptions, read_measurement
+
+    path = tmp_path / "d.csv"
+    path.write_text("angle_deg,error_arcsec\n0,1\n90,2\n180,3\n270,4\n")
+    m = read_measurement(path, options=ReadOptions(error_unit="urad"))
+    assert "column 'error_arcsec' read in urad (--error-unit urad), not in the arcsec its name says" in m.notes
+    assert m.error[1] == pytest.approx(2e-6, rel=1e-12)  # read as the option says
+    m = read_measurement(path, options=ReadOptions(angle_unit="rad"))
+    assert "column 'angle_deg' read in rad (--angle-unit rad), not in the deg its name says" in m.notes
+    assert not any("read in" in n for n in read_measurement(path).notes)
