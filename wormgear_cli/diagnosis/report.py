@@ -354,7 +354,8 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> 
         spec_b, data_b = -2.0 * m0["differential_arcsec"], -2.0 * d0["differential_arcsec"]
         if out_of_line(spec_b, data_b) or (spec_b * data_b < 0 and min(abs(spec_b), abs(data_b))
                                            >= MISMATCH_NOISE * noise):
-            items.append({"what": "mean reversal (reverse - forward; ISO 230-2 B_mean has the other sign)", "spec_arcsec": spec_b, "data_arcsec": data_b})
+            items.append({"what": "mean reversal (reverse - forward; ISO 230-2 B_mean has the other sign)",
+                          "spec_arcsec": spec_b, "data_arcsec": data_b})
     if not items:
         return None
     ratios = [abs(it["data_arcsec"]) / abs(it["spec_arcsec"]) for it in items
