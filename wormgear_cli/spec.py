@@ -322,14 +322,21 @@ def _class_name(section: str) -> str:
 
 _SECTION_CLASSES: dict[str, type] = {sec: type(_class_name(sec), (Section,), {"__slots__": ()}) for sec in SECTIONS}
 _SECTION_SET = frozenset(SECTIONS)
+
+
+def _section_tables() -> tuple[dict[str, tuple], dict[str, tuple]]:
+    fields: dict[str, list] = {sec: [] for sec in SECTIONS}
+    children: dict[str, list] = {sec: [] for sec in SECTIONS}
+    for f in FIELDS:
+        fields[f.section].append(f)
+    for sec in SECTIONS:
+        if "." in sec and sec.rsplit(".", 1)[0] in children:
+            children[sec.rsplit(".", 1)[0]].append(sec)
+    return {k: tuple(v) for k, v in fields.items()}, {k: tuple(v) for k, v in children.items()}
+
+
 #: section -> its fields, and its direct sub-sections; sections deepest first (built once)
-_FIELDS_OF: dict[str, list] = {sec: [] for sec in SECTIONS}
-_SUBSECTIONS_OF: dict[str, list] = {sec: [] for sec in SECTIONS}
-for _f in FIELDS:
-    _FIELDS_OF[_f.section].append(_f)
-for _s in SECTIONS:
-    if "." in _s:
-        _SUBSECTIONS_OF.get(_s.rsplit(".", 1)[0], []).append(_s)
+_FIELDS_OF, _SUBSECTIONS_OF = _section_tables()
 _SECTIONS_DEEPEST_FIRST = tuple(sorted(SECTIONS, key=lambda s: -s.count(".")))
 
 

@@ -360,7 +360,7 @@ class RatioDistanceSweep:
             r1, r2 = m * z2 / 2.0, m * z1 / 2.0
         d1, worm_scale = self._deflections(z1, z2, m, r2, i)
         gp = self.spec.gear_pair
-        if gp.kinematics == "involute":  # the same stage as analyze's (models.gear.involute_stage)
+        if not self._paper:  # involute: the same stage as analyze's (models.gear.involute_stage)
             inv = gear.involute_stage(r2, self.alpha, self.eccentricity,
                                       self.spec.assembly.gear_centre_distance_error, d1,
                                       gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
