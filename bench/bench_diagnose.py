@@ -57,8 +57,8 @@ def current_kb():
         return next(int(l.split()[1]) for l in f if l.startswith("VmRSS:"))
 import numpy, scipy.special, scipy.linalg
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.measurement import read_measurement
-from wormgear_cli.spec import load_spec
+from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.spec.loader import load_spec
 base = current_kb()
 spec = load_spec(Path(sys.argv[2]) / "configs" / "mch50.toml")
 t0 = time.perf_counter()
@@ -86,8 +86,8 @@ def make_csv(rows: int, path: Path) -> None:
 
 
 def _make_csv(rows: int, path: Path) -> None:
-    from wormgear_cli.spec import load_spec
-    from wormgear_cli.synth import Noise, Plan, Programme, format_csv, synthesize
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.analysis.synth import Noise, Plan, Programme, format_csv, synthesize
 
     spec = load_spec(ROOT / "configs" / "mch50.toml")
     syn = synthesize(spec, Plan(kind="dense", points=rows // 10, runs=5, dwell_s=0.1),

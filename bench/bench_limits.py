@@ -33,8 +33,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from wormgear_cli.io import MAX_INPUT_BYTES  # noqa: E402
-from wormgear_cli.tomlguard import MAX_SPEC_BYTES  # noqa: E402
+from wormgear_cli.files import MAX_INPUT_BYTES  # noqa: E402
+from wormgear_cli.spec.toml import MAX_SPEC_BYTES  # noqa: E402
 
 DRIVE = ROOT / "configs" / "mch50.toml"
 DATA = ROOT / "configs" / "mch50-warm.csv"

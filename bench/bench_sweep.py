@@ -28,8 +28,8 @@ DRIVE = ROOT / "configs" / "mch50.toml"
 _FAST = r"""
 import json, resource, sys, time
 import numpy as np
-from wormgear_cli.spec import load_spec
-from wormgear_cli.sweep import RatioDistanceSweep
+from wormgear_cli.spec.loader import load_spec
+from wormgear_cli.analysis.sweep import RatioDistanceSweep
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 n = int(sys.argv[1])
 spec = load_spec(sys.argv[2])
@@ -95,8 +95,8 @@ def main() -> None:
 
     import numpy as np
 
-    from wormgear_cli.spec import load_spec
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     spec = load_spec(DRIVE)
     rng = np.random.default_rng(0)

@@ -38,8 +38,8 @@ def command(*args):
 
 def plain_loop(spec, draw, n: int) -> float:
     """Seconds for n samples, one scalar call of each of analyze's model functions per sample."""
-    from wormgear_cli.analysis import deflections
-    from wormgear_cli.models import gear, worm
+    from wormgear_cli.analysis.accuracy import deflections
+    from wormgear_cli.physics import spur as gear, worm
 
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2, m, a = gp.output_gear.teeth, gp.pinion.teeth, gp.module, gp.pressure_angle
@@ -96,7 +96,7 @@ def timed(fn):
 def main() -> None:
     import scipy.stats  # noqa: F401  (imported once, outside the timings)
 
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, sampling
     from wormgear_cli.tolerance.quantities import varied_quantities
 

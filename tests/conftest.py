@@ -34,6 +34,6 @@ def mch50_path() -> Path:
 
 @pytest.fixture
 def mch50_spec():
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     return load_spec(MCH50)

@@ -89,7 +89,7 @@ def test_analyze_metrics_need_no_unit_and_match_the_csv(runner):
     result = runner.invoke(app, ["analyze", str(MCH50), "--format", "csv", "--unit", "urad"])
     assert result.exit_code == 0
     row = next(csv.DictReader(io.StringIO(result.stdout)))
-    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
 
     assert set(r.metrics) == set(METRIC_COLUMNS) | set(INFO_COLUMNS)
     for c in METRIC_COLUMNS:
@@ -341,8 +341,8 @@ def _modules_after(code: str) -> set:
     return set(json.loads(out.stderr.strip().splitlines()[-1]))
 
 
-HEAVY = ("numpy", "scipy", "wormgear_cli.api", "wormgear_cli.angles", "wormgear_cli.analysis",
-         "wormgear_cli.simulation", "wormgear_cli.models", "wormgear_cli.diagnosis", "wormgear_cli.spec")
+HEAVY = ("numpy", "scipy", "wormgear_cli.api", "wormgear_cli.angles", "wormgear_cli.analysis.accuracy",
+         "wormgear_cli.analysis.simulate", "wormgear_cli.physics", "wormgear_cli.diagnosis", "wormgear_cli.spec.loader")
 
 
 def test_import_wormgear_cli_is_light():
@@ -357,14 +357,14 @@ def test_api_names_load_the_api_on_first_use():
     assert not [m for m in mods if m.split(".")[0] == "scipy"]
     mods = _modules_after("import wormgear_cli.api")
     assert not [m for m in mods if m.split(".")[0] == "scipy"]
-    assert "wormgear_cli.analysis" not in mods
+    assert "wormgear_cli.analysis.accuracy" not in mods
 
 
 def test_analyze_command_never_loads_the_api_or_scipy():
     code = ("import runpy, sys\nsys.argv = ['wormgear', 'analyze', 'configs/mch50.toml', '--format', 'json']\n"
             "try:\n    runpy.run_module('wormgear_cli', run_name='__main__')\nexcept SystemExit:\n    pass")
     mods = _modules_after(code)
-    assert "wormgear_cli.analysis" in mods  # the probe did run the command
+    assert "wormgear_cli.analysis.accuracy" in mods  # the probe did run the command
     assert "wormgear_cli.api" not in mods and "wormgear_cli.angles" not in mods
     assert not [m for m in mods if m.split(".")[0] == "scipy"]
 
@@ -372,9 +372,10 @@ def test_analyze_command_never_loads_the_api_or_scipy():
 def test_package_names_do_not_shadow_submodules():
     import wormgear_cli
 
-    from wormgear_cli import sweep, tolerance  # the core modules, as the CLI imports them
+    from wormgear_cli import tolerance  # the core modules, as the CLI imports them
+    from wormgear_cli.analysis import sweep
 
-    assert sweep.__name__ == "wormgear_cli.sweep" and tolerance.__name__ == "wormgear_cli.tolerance"
+    assert sweep.__name__ == "wormgear_cli.analysis.sweep" and tolerance.__name__ == "wormgear_cli.tolerance"
     assert wormgear_cli.analyze is wg.analyze and wormgear_cli.Angle is Angle
     with pytest.raises(AttributeError):
         wormgear_cli.no_such_name  # noqa: B018

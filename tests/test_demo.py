@@ -18,7 +18,7 @@ import shlex
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
 from tests.conftest import CONFIGS, MCH50, ROOT
 

@@ -19,8 +19,8 @@ from typer.main import get_command
 
 from wormgear_cli import _docgen
 from wormgear_cli.cli import app
-from wormgear_cli.models.effects import EFFECTS
-from wormgear_cli.spec import FIELDS
+from wormgear_cli.physics.effects import EFFECTS
+from wormgear_cli.spec.loader import FIELDS
 
 from tests.conftest import ROOT
 

@@ -1,4 +1,4 @@
-"""Tests of the text formats shared by every command (:mod:`wormgear_cli.formats`)."""
+"""Tests of the text formats shared by every command (:mod:`wormgear_cli.output.formats`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wormgear_cli.formats import csv_text, fmt_number, json_text
+from wormgear_cli.output.formats import csv_text, fmt_number, json_text
 
 
 # --- the vectorised '%.12g' CSV formatter of the sweep ----------------------------------------
@@ -15,7 +15,7 @@ from wormgear_cli.formats import csv_text, fmt_number, json_text
 @settings(max_examples=300, deadline=None)
 @given(st.lists(st.floats(allow_nan=True, allow_infinity=True), min_size=1, max_size=40))
 def test_fast_formatter_equals_percent_g(values):
-    from wormgear_cli.formats import format_g
+    from wormgear_cli.output.formats import format_g
 
     fields = format_g(np.array(values))
     got = [bytes(f[f != 0]).decode() for f in fields]
@@ -23,7 +23,7 @@ def test_fast_formatter_equals_percent_g(values):
 
 
 def test_fast_formatter_on_hard_cases():
-    from wormgear_cli.formats import csv_block
+    from wormgear_cli.output.formats import csv_block
 
     values = [0.0, -0.0, 8.0, 202.5, 100.0, 1e-5, 0.0001, 99999999999.95, 999999999999.5, 1e12, 123456789012.5,
               2.5e-300, -7.0, 1 / 3]

@@ -25,9 +25,9 @@ import re
 
 import pytest
 
-from wormgear_cli.analysis import analyze
+from wormgear_cli.analysis.accuracy import analyze
 from wormgear_cli.cli import app
-from wormgear_cli.spec import with_values
+from wormgear_cli.spec.loader import with_values
 
 from tests.conftest import ROOT
 

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from wormgear_cli.analysis import analyze
-from wormgear_cli.requirements import check_file
-from wormgear_cli.spec import load_spec
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.analysis.requirements import check_file
+from wormgear_cli.spec.loader import load_spec
 from wormgear_cli.units import to_unit
 
 from tests.conftest import MCH50

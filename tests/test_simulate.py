@@ -1,4 +1,4 @@
-"""Tests of the simulation core (:mod:`wormgear_cli.simulation`): error sources, phases, lost motion."""
+"""Tests of the simulation core (:mod:`wormgear_cli.analysis.simulate`): error sources, phases, lost motion."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wormgear_cli.analysis import analyze
-from wormgear_cli.models.effects import Signals
-from wormgear_cli.simulation import aligned_phases, components, compliance, max_reversal, simulate
-from wormgear_cli.spec import load_spec, with_values
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.physics.effects import Signals
+from wormgear_cli.analysis.simulate import aligned_phases, components, compliance, max_reversal, simulate
+from wormgear_cli.spec.loader import load_spec, with_values
 
 from wormgear_cli.units import RAD_PER_UNIT
 from tests.conftest import MCH50

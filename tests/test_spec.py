@@ -11,8 +11,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from wormgear_cli.errors import SpecError
-from wormgear_cli.spec import FIELDS, load_spec, loads_spec, raw_copy, spec_from_dict, with_values
-from wormgear_cli.template import template
+from wormgear_cli.spec.loader import FIELDS, load_spec, loads_spec, raw_copy, spec_from_dict, with_values
+from wormgear_cli.spec.template import template
 
 from tests.conftest import MCH50
 

@@ -1,4 +1,4 @@
-"""Tests of the sweep core (:mod:`wormgear_cli.sweep`): the fast maximiser, the findings, the blocks."""
+"""Tests of the sweep core (:mod:`wormgear_cli.analysis.sweep`): the fast maximiser, the findings, the blocks."""
 
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ def reference_max(r1, r2, de, alpha, d1):
     load=st.one_of(st.just(0.0), st.floats(1e-6, 5.0)),
 )
 def test_fast_maximum_matches_reference(l, i, ecc_ratio_exp, alpha_deg, load):
-    from wormgear_cli.models.gear import gear_te_max_fast
+    from wormgear_cli.physics.spur import gear_te_max_fast
 
     r1, r2 = l / (1 + i), l * i / (1 + i)
     de, alpha = l * 10.0 ** ecc_ratio_exp, math.radians(alpha_deg)
@@ -54,7 +54,7 @@ def test_fast_maximum_matches_reference(l, i, ecc_ratio_exp, alpha_deg, load):
 
 
 def test_fast_maximum_without_eccentricity_is_the_load_term():
-    from wormgear_cli.models.gear import gear_te_max_fast
+    from wormgear_cli.physics.spur import gear_te_max_fast
 
     value, _ = gear_te_max_fast(22.5, 180.0, 0.0, math.radians(20), 0.002)
     assert value == pytest.approx(0.002 * math.sin(math.radians(20)) / 180.0, rel=1e-15)
@@ -62,7 +62,7 @@ def test_fast_maximum_without_eccentricity_is_the_load_term():
 
 def test_big_grid_sample_matches_reference(mch50_spec):
     """A 1000 x 1000 grid: a random sample of its points against the reference maximiser."""
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     sw = RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 1000), np.linspace(100, 300, 1000))
     data = sw.collect()
@@ -78,8 +78,8 @@ def test_big_grid_sample_matches_reference(mch50_spec):
 
 @pytest.mark.parametrize("hold", ["force", "torque"])
 def test_spec_point_reproduces_analyze(mch50_spec, hold):
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     gp = mch50_spec.gear_pair
     i0 = gp.output_gear.teeth / gp.pinion.teeth
@@ -91,9 +91,9 @@ def test_spec_point_reproduces_analyze(mch50_spec, hold):
 
 
 def test_module_snapping_reproduces_analyze_with_those_teeth(mch50_spec):
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.spec import with_values
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.spec.loader import with_values
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     m = 2.0
     sw = RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 5), np.linspace(60, 300, 7), module=m)
@@ -112,7 +112,7 @@ def test_torque_hold_scales_the_gear_force_with_the_output_radius(mch50_spec):
     """At constant output torque F_N R2 = const, so delta1 carries (R2_spec / R2)^0.75 on top of the
     stiffness change that the force-held sweep already shows: below a line load of 100 N/mm (here
     12.5..34 N/mm) ISO 6336-1 scales c' with (F_t K_A / b / 100)^0.25, so delta ~ F^0.75."""
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     i, l = np.linspace(2, 10, 5), np.linspace(100, 300, 5)
     f = RatioDistanceSweep(mch50_spec, i, l, hold="force").collect()
@@ -124,8 +124,8 @@ def test_torque_hold_scales_the_gear_force_with_the_output_radius(mch50_spec):
 
 @pytest.fixture(scope="module")
 def mch50_grid():
-    from wormgear_cli.spec import load_spec
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     from tests.conftest import MCH50
 
@@ -159,7 +159,7 @@ def test_finding_ratio_matters_only_below_6(mch50_grid):
 
 
 def test_gear_te_decreases_monotonically_with_l(mch50_spec):
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     for hold in ("force", "torque"):
         i, l = np.linspace(1.5, 12, 8), np.linspace(40, 600, 60)
@@ -168,7 +168,7 @@ def test_gear_te_decreases_monotonically_with_l(mch50_spec):
 
 
 def test_findings_report(mch50_spec):
-    from wormgear_cli.sweep import RatioDistanceSweep, findings
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep, findings
 
     out = {f["id"]: f for f in findings(RatioDistanceSweep(mch50_spec, np.linspace(2, 10, 9),
                                                             np.linspace(100, 300, 11)))}
@@ -182,7 +182,7 @@ def test_findings_report(mch50_spec):
 
 
 def test_fall_pct_is_safe_on_zero():
-    from wormgear_cli.sweep import _fall_pct
+    from wormgear_cli.analysis.sweep import _fall_pct
 
     assert math.isnan(_fall_pct(0.0, 0.0))
     assert _fall_pct(4.0, 3.0) == pytest.approx(25.0)
@@ -191,7 +191,7 @@ def test_fall_pct_is_safe_on_zero():
 def test_long_l_axis_is_computed_in_blocks_with_the_same_values(mch50_spec, monkeypatch):
     """An l axis longer than a block gets its kinematic peak block by block (bounded memory);
     the values equal the precomputed path and do not depend on where a shard starts."""
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
 
     i, l = np.linspace(2, 10, 3), np.linspace(100, 300, 150)
     whole = core.RatioDistanceSweep(mch50_spec, i, l).collect()
@@ -206,7 +206,7 @@ def test_long_l_axis_is_computed_in_blocks_with_the_same_values(mch50_spec, monk
 
 
 def test_undercut_min_teeth_is_safe_for_any_angle():
-    from wormgear_cli.sweep import MAX_MIN_TEETH, undercut_min_teeth
+    from wormgear_cli.analysis.sweep import MAX_MIN_TEETH, undercut_min_teeth
 
     # textbook values for a standard rack: 17 at 20 deg, 32 at 14.5 deg
     assert undercut_min_teeth(math.radians(20)) == 17 and undercut_min_teeth(math.radians(14.5)) == 32
@@ -224,9 +224,9 @@ def test_involute_drives_are_swept_with_the_involute_stage(config):
     """A drive with ``gear_pair.kinematics = "involute"`` is swept by the stage analyze uses for it:
     at the spec's own point and at snapped designs the sweep equals analyze (the paper's
     Delta phi_cc would give other numbers)."""
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.spec import load_spec, with_values
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.spec.loader import load_spec, with_values
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     from tests.conftest import CONFIGS
 
@@ -271,9 +271,9 @@ def test_torque_hold_equals_analyze_at_the_torque_scaled_loads(config, module):
     """With the output torque held, a snapped design is analyze of that design at the loads the torque
     gives: spur normal force x R2_spec / R2 and worm normal force x i_spec / i (the worm stage is not
     linear in its force, so it is evaluated there, not interpolated)."""
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.spec import load_spec, with_values
-    from wormgear_cli.sweep import RatioDistanceSweep
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.spec.loader import load_spec, with_values
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
 
     from tests.conftest import CONFIGS
 

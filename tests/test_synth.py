@@ -1,4 +1,4 @@
-"""Tests of the synthesis core (:mod:`wormgear_cli.synth`): plans, programmes, noise, effects."""
+"""Tests of the synthesis core (:mod:`wormgear_cli.analysis.synth`): plans, programmes, noise, effects."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from wormgear_cli.errors import UsageError
-from wormgear_cli.spec import load_spec
-from wormgear_cli.synth import (
+from wormgear_cli.spec.loader import load_spec
+from wormgear_cli.analysis.synth import (
     COLUMNS,
     Noise,
     Plan,
@@ -174,7 +174,7 @@ def test_parse_effect():
 
 def test_effect_key_given_twice_is_refused():
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.synth import parse_effect
+    from wormgear_cli.analysis.synth import parse_effect
 
     with pytest.raises(UsageError, match=r"bearing_clearance.clearance_arcsec is given twice"):
         parse_effect("bearing_clearance:clearance_arcsec=1,clearance_arcsec=2")

@@ -1,4 +1,4 @@
-"""Tests of the ``wormgear new`` template (:mod:`wormgear_cli.template`)."""
+"""Tests of the ``wormgear new`` template (:mod:`wormgear_cli.spec.template`)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ import tomllib
 import pytest
 
 from tests.conftest import MCH50
-from wormgear_cli.spec import FIELDS, load_spec, loads_spec
-from wormgear_cli.template import template
+from wormgear_cli.spec.loader import FIELDS, load_spec, loads_spec
+from wormgear_cli.spec.template import template
 
 #: a commented TOML line that holds a key or a table header: "# key = value" or "# [table]"
 COMMENTED_TOML = re.compile(r"^# (?:[A-Za-z_][\w.]* = \S.*|\[[\w.]+\])$")

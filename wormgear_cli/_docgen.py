@@ -7,9 +7,9 @@ when a committed page differs):
 * ``docs/reference/cli.md``: the ``--help`` text of ``wormgear`` and of every
   command, rendered by click at a fixed width of 78 columns (what
   ``COLUMNS=80 wormgear CMD --help`` prints), without colour;
-* ``docs/reference/spec.md``: every key of :data:`wormgear_cli.spec.FIELDS`;
+* ``docs/reference/spec.md``: every key of :data:`wormgear_cli.spec.loader.FIELDS`;
 * ``docs/reference/effects.md``: every entry of
-  :data:`wormgear_cli.models.effects.EFFECTS`.
+  :data:`wormgear_cli.physics.effects.EFFECTS`.
 
 Output is deterministic: commands and effects are sorted by name, spec keys
 keep the schema's order (the order of the template ``wormgear new`` writes).
@@ -142,7 +142,7 @@ def _unit(unit: str) -> str:
 
 def render_spec() -> str:
     """The drive-spec key reference page (Markdown), one table per TOML section."""
-    from wormgear_cli.spec import FIELDS
+    from wormgear_cli.spec.loader import FIELDS
 
     sections: dict[str, list] = {}
     for f in FIELDS:
@@ -150,7 +150,7 @@ def render_spec() -> str:
     out = [
         "# Drive spec keys",
         "",
-        GENERATED_NOTE.format(source="`wormgear_cli.spec.FIELDS`"),
+        GENERATED_NOTE.format(source="`wormgear_cli.spec.loader.FIELDS`"),
         "",
         "Every key of a drive spec, section by section, in the order `wormgear new` writes them. "
         "*unit* is the unit the key's value is in (it is also the key's suffix); *range* the values "
@@ -176,13 +176,13 @@ def render_spec() -> str:
 
 def render_effects() -> str:
     """The effect catalogue reference page (Markdown), one section per effect, sorted by name."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     names = sorted(EFFECTS)
     out = [
         "# Effect catalogue",
         "",
-        GENERATED_NOTE.format(source="`wormgear_cli.models.effects.EFFECTS`"),
+        GENERATED_NOTE.format(source="`wormgear_cli.physics.effects.EFFECTS`"),
         "",
         "Physical effects the paper's model lacks. A drive spec switches one on with an "
         "`[effects.NAME]` table holding its keys (in the units below); `simulate` and `synth` "

@@ -11,7 +11,7 @@ the same report function, so the API and the CLI cannot disagree; the test
 Functions: :func:`load_spec`, :func:`analyze`, :func:`simulate`,
 :func:`read_measurement`, :func:`measure`, :func:`diagnose`,
 :func:`sweep`, :func:`tolerance`.  Wherever a function takes ``spec`` it
-accepts a loaded :class:`~wormgear_cli.spec.Spec` or a path to a TOML file.
+accepts a loaded :class:`~wormgear_cli.spec.loader.Spec` or a path to a TOML file.
 Bad input raises the CLI's errors (:class:`~wormgear_cli.errors.SpecError`,
 :class:`~wormgear_cli.errors.DataError`,
 :class:`~wormgear_cli.errors.UsageError`, all
@@ -47,14 +47,14 @@ PathLike = Union[str, "os.PathLike[str]"]
 
 def _analyze_report(spec, core, unit) -> dict:
     """The JSON document of ``wormgear analyze`` (stages, totals, budget, values used)."""
-    from wormgear_cli.reports.analyze import document
+    from wormgear_cli.output.analyze import document
 
     return document(spec, core, unit)
 
 
 def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate`` (dense scan)."""
-    from wormgear_cli.reports.simulate import dense
+    from wormgear_cli.workflows.simulate import dense
 
     r = dense(spec, points, revs, unit, "json", temperature_c, load_nm, phases, effects)
     return r.text, r.curves
@@ -62,7 +62,7 @@ def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, e
 
 def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate --at``."""
-    from wormgear_cli.reports.simulate import at_rows
+    from wormgear_cli.workflows.simulate import at_rows
 
     r = at_rows(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
     return r.text, r.curves
@@ -70,7 +70,7 @@ def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects)
 
 def _sweep_report(sw, data, unit) -> dict:
     """The JSON document of ``wormgear sweep --i/--l-mm`` (whole grid, no shard)."""
-    from wormgear_cli.reports.sweep import ratio_distance_json
+    from wormgear_cli.output.sweep import ratio_distance_json
 
     return ratio_distance_json(sw, data, unit, None, 0, sw.size)
 
@@ -78,7 +78,7 @@ def _sweep_report(sw, data, unit) -> dict:
 def _plain(doc) -> dict:
     """The document exactly as the CLI writes it, parsed back: NaN -> None, numpy scalars ->
     Python numbers, tuples -> lists (the CLI's ``json_text``)."""
-    from wormgear_cli.formats import json_text
+    from wormgear_cli.output.formats import json_text
 
     return json.loads(json_text(doc))
 
@@ -88,7 +88,7 @@ def _angle(x, unit: str = "rad") -> Optional[Angle]:
 
 
 def _spec(spec):
-    from wormgear_cli.spec import Spec
+    from wormgear_cli.spec.loader import Spec
 
     return spec if isinstance(spec, Spec) else load_spec(spec)
 
@@ -129,7 +129,7 @@ def load_spec(source: Union[PathLike, str]):
     >>> spec.drive.name, spec.gear_pair.output_gear.teeth
     ('MCH50 rotary table', 144)
     """
-    from wormgear_cli import spec as core
+    from wormgear_cli.spec import loader as core
 
     if isinstance(source, str) and "\n" in source:
         return core.loads_spec(source)
@@ -170,7 +170,7 @@ class Analysis:
     metrics : dict
         The flat columns of ``analyze --format csv`` and ``sweep --param``:
         angle columns as :class:`Angle`, the others as float or None.
-    core : wormgear_cli.analysis.Analysis
+    core : wormgear_cli.analysis.accuracy.Analysis
         The core result (angles [rad]).
     """
 
@@ -212,7 +212,7 @@ def analyze(spec) -> Analysis:
     >>> r.backlash > r.transmission_error
     True
     """
-    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze as run
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS, analyze as run
 
     spec = _spec(spec)
     core = run(spec)
@@ -247,7 +247,7 @@ def analyze(spec) -> Analysis:
 def _effects(spec, effects: Optional[dict]):
     """The effects to simulate: None (the spec's) or the spec's merged with ``effects``
     (name -> {catalogue key: value}), as ``--effect NAME:key=value`` does."""
-    from wormgear_cli.reports.simulate import effect_params
+    from wormgear_cli.workflows.simulate import effect_params
 
     return effect_params(spec, {name: dict(values or {}) for name, values in (effects or {}).items()})
 
@@ -357,7 +357,7 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
     from wormgear_cli.errors import UsageError
 
     spec = _spec(spec)
-    from wormgear_cli.reports.simulate import PHASE_CHOICES
+    from wormgear_cli.workflows.simulate import PHASE_CHOICES
 
     _choice("phases", phases, PHASE_CHOICES)
     if at is None:
@@ -376,9 +376,9 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
     # checks that both give the same curve
     import numpy as np
 
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.reports.simulate import phase_map as phase_map_of
-    from wormgear_cli.simulation import simulate as run
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.workflows.simulate import phase_map as phase_map_of
+    from wormgear_cli.analysis.simulate import simulate as run
 
     phase_map = phase_map_of(spec, phases)
     angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
@@ -422,7 +422,7 @@ class Measurement:
 
 
 def _read_options(column_map, error_unit, angle_unit):
-    from wormgear_cli.measurement import ReadOptions
+    from wormgear_cli.measurement.reader import ReadOptions
 
     pairs = tuple((str(k), str(v)) for k, v in (column_map or {}).items())
     return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit)
@@ -457,7 +457,7 @@ def read_measurement(path: PathLike, *, column_map: Optional[dict] = None, error
     >>> len(m), round(float(m.temperature_C.max()), 1)
     (720, 44.2)
     """
-    from wormgear_cli import measurement as core
+    from wormgear_cli.measurement import reader as core
 
     options = _read_options(column_map, error_unit, angle_unit)
     m = core.read_measurement(path, require_error=require_error, options=options)
@@ -508,7 +508,7 @@ class MeasureResult:
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear measure --format json --unit UNIT``."""
-        from wormgear_cli.measure_report import report
+        from wormgear_cli.workflows.measure import report
 
         return _plain(report(self.core, unit))
 
@@ -543,7 +543,7 @@ def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmo
     (177.8, 154.9)
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.measure_report import measure as run, report
+    from wormgear_cli.workflows.measure import measure as run, report
 
     if isinstance(data, Measurement):
         path, options = data.path, data.options
@@ -554,7 +554,7 @@ def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmo
     if isinstance(harmonics, bool) or not 1 <= int(harmonics) <= 10:
         raise UsageError(f"harmonics: expected an integer in [1, 10], got {harmonics}")
     if orders is not None:
-        from wormgear_cli.measure_report import parse_orders
+        from wormgear_cli.workflows.measure import parse_orders
 
         orders = parse_orders(",".join(repr(float(k)) for k in orders))
     core = run(path, options, drive, orders, int(harmonics))
@@ -705,7 +705,7 @@ class Sweep:
 def _axis(value, option: str):
     import numpy as np
 
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
 
     if isinstance(value, str):
         return core.parse_range_spec(value, option, positive=True).values()
@@ -749,7 +749,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: Optional[f
     >>> sorted(s.best)
     ['gear_transmission_error', 'total_transmission_error']
     """
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
     from wormgear_cli.errors import UsageError
 
     spec = _spec(spec)

@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wormgear_cli.analysis import analyze
+from wormgear_cli.analysis.accuracy import analyze
 from wormgear_cli.cli import app
-from wormgear_cli.simulation import compliance
-from wormgear_cli.spec import load_spec
+from wormgear_cli.analysis.simulate import compliance
+from wormgear_cli.spec.loader import load_spec
 
 from wormgear_cli.units import RAD_PER_UNIT
 from tests.conftest import MCH50

@@ -13,7 +13,7 @@ import pytest
 from tests.conftest import MCH50, ROOT
 
 HEAVY = ("scipy", "matplotlib", "wormgear_cli.diagnosis", "wormgear_cli.tolerance", "statsmodels",
-         "wormgear_cli.measurement", "wormgear_cli.api")
+         "wormgear_cli.measurement.reader", "wormgear_cli.api")
 
 PROBE = """
 import json, sys

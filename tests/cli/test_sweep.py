@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.spec import FIELD_BY_PATH
+from wormgear_cli.spec.loader import FIELD_BY_PATH
 
 
 def run(runner, *args):
@@ -157,8 +157,8 @@ def test_module_mode_reports_whole_teeth(runner, mch50_path):
 
 
 def test_param_sweep_reproduces_analyze(runner, mch50_path, mch50_spec):
-    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS, analyze
-    from wormgear_cli.spec import with_values
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS, analyze
+    from wormgear_cli.spec.loader import with_values
 
     r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3",
             "--param", "gear_pair.pinion.teeth=16:20:3", "--format", "csv", "--unit", "arcsec")
@@ -295,7 +295,7 @@ def test_huge_n_exits_2_naming_the_option(runner, mch50_path, args, message, fmt
 ])
 def test_point_limits_are_checked_before_building_anything(runner, mch50_path, tmp_path, monkeypatch, args,
                                                             message):
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
 
     def no_arrays(self):
         raise AssertionError("an axis was built before the size check")
@@ -344,7 +344,7 @@ def test_param_csv_streams_rows_to_stdout(runner, mch50_path, tmp_path, monkeypa
     streamed = run(runner, *args)
     assert streamed.exit_code == 0 and streamed.stdout == out.read_text()  # same bytes either way
     # streamed: rows computed before a failure are already out (nothing is held back)
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
     from wormgear_cli.errors import UsageError
 
     real = core.param_rows
@@ -399,7 +399,7 @@ def test_module_tooth_counts_stay_whole_and_positive(runner, mch50_path):
 ])
 @pytest.mark.parametrize("fmt", ["csv", "json", "table"])
 def test_infeasible_plot_fails_before_any_output(runner, mch50_path, tmp_path, monkeypatch, args, message, fmt):
-    from wormgear_cli import sweep as core
+    from wormgear_cli.analysis import sweep as core
 
     def no_work(*a, **k):
         raise AssertionError("the sweep ran before the plot check")
@@ -413,8 +413,8 @@ def test_infeasible_plot_fails_before_any_output(runner, mch50_path, tmp_path, m
 
 
 def test_effect_parameters_are_refused_with_a_reason(runner, mch50_path, mch50_spec):
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.spec import with_values
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.spec.loader import with_values
 
     # the reason: [effects.*] do not enter the analyze metrics, so every row would be the same
     with_effect = with_values(mch50_spec, {"effects.bearing_clearance.clearance_arcsec": 8.0})

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.measurement import read_measurement
-from wormgear_cli.spec import load_spec
+from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.spec.loader import load_spec
 
 from tests.test_synth import _rows  # the one parser of synth's CSV in the tests
-from wormgear_cli.synth import COLUMNS
+from wormgear_cli.analysis.synth import COLUMNS
 
 from tests.conftest import MCH50
 

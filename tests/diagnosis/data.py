@@ -2,9 +2,9 @@
 
 The hidden effects are the catalogue formulas written out here from the
 issue's table, with the MCH50 geometry computed from Table 1 by hand (not
-through ``wormgear_cli.analysis`` or the effect registry).  Only the spec's
+through ``wormgear_cli.analysis.accuracy`` or the effect registry).  Only the spec's
 own model (what ``diagnose`` fits against) comes from
-``wormgear_cli.simulation.simulate``.  Noise: white per point plus one
+``wormgear_cli.analysis.simulate.simulate``.  Noise: white per point plus one
 offset per run (both directions of a run share it).
 
 tests/diagnosis/test_data.py checks the hand-written formulas against the
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.measurement import parse_measurement
-from wormgear_cli.spec import with_values
+from wormgear_cli.measurement.reader import parse_measurement
+from wormgear_cli.spec.loader import with_values
 from wormgear_cli.units import ARCSEC
 
 # --- MCH50 geometry from Table 1 (module 2.5 mm; z1 = 144, z2 = 18, wheel z3 = 30, single-start worm) --------------
@@ -109,8 +109,8 @@ def make_csv(spec, plan: Plan, hidden: dict | None = None, seed: int = 0, white:
              run_sd: float = 0.2, phases: str = "random", offset: float = 0.7, decoy=None):
     """(CSV text, truth dict): the spec's model at random (or the spec's) phases plus the hidden
     effects, an optional decoy callable(theta, d) -> arcsec, a zero offset, and noise."""
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import periodic_sources, simulate
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.analysis.simulate import periodic_sources, simulate
 
     rng = np.random.default_rng(seed)
     rows = make_rows(plan, rng)
@@ -145,7 +145,7 @@ def _cell(v) -> str:
 
 
 def make_measurement(spec, plan: Plan, **kw):
-    from wormgear_cli.measurement import parse_measurement
+    from wormgear_cli.measurement.reader import parse_measurement
 
     text, truth = make_csv(spec, plan, **kw)
     return parse_measurement(text, "<test>"), truth

@@ -1,6 +1,6 @@
 """Measurements written from the physics, for the field-fault tests of ``diagnose`` (issue 10).
 
-No call to ``wormgear_cli.simulation``: the drives are made so that their
+No call to ``wormgear_cli.analysis.simulate``: the drives are made so that their
 model is known by hand.
 
 * A *perfect* MCH50 (:func:`perfect_mch50_toml`): every tolerance,

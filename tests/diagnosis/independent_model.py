@@ -1,6 +1,6 @@
 """Measurements for the diagnosis statistics tests, written from the physics alone.
 
-Nothing here calls ``wormgear_cli.simulation`` or the effect registry.  The drive is a
+Nothing here calls ``wormgear_cli.analysis.simulate`` or the effect registry.  The drive is a
 "perfect" drive (every tolerance, clearance and load of the spec zero), so the spec's own
 model is zero and the measured error is the hidden effects plus noise:
 
@@ -63,7 +63,7 @@ def perfect_spec():
     (face widths 5000 mm): its own wind-up under an external torque is then 1.5e-4 arcsec/(N m),
     below 0.2 % of the compliance 1/c >= 0.1 arcsec/(N m) the stiffness tests hide (a bias far
     inside their intervals).  The generator adds no wind-up of its own."""
-    from wormgear_cli.spec import loads_spec, with_values
+    from wormgear_cli.spec.loader import loads_spec, with_values
 
     spec = loads_spec(SPEC_TOML, "independent.toml")
     zero = {k: 0.0 for k in (
@@ -146,9 +146,9 @@ def noise(design: Design, run, d, rng) -> np.ndarray:
 
 
 def measurement(design: Design, hidden: dict, seed: int):
-    """A :class:`~wormgear_cli.measurement.Measurement` of the perfect drive with ``hidden``
+    """A :class:`~wormgear_cli.measurement.reader.Measurement` of the perfect drive with ``hidden``
     effects ({name: catalogue-unit parameters}) and the design's noise, via the CSV reader."""
-    from wormgear_cli.measurement import parse_measurement
+    from wormgear_cli.measurement.reader import parse_measurement
 
     theta, d, run, load, temp = rows(design, seed)
     rng = np.random.default_rng(10_000 + seed)

@@ -14,8 +14,8 @@ from tests.diagnosis.data import Plan, make_measurement
 
 
 def test_candidate_columns_recognise_the_three_signature_forms(mch50_spec):
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.effects import Signals
 
     sig = Signals(np.linspace(0, 6, 50), np.ones(50), np.linspace(-100, 100, 50), np.linspace(20, 30, 50),
                   np.zeros(50))

@@ -13,8 +13,8 @@ import tomllib
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.models.effects import EFFECTS
-from wormgear_cli.spec import load_spec
+from wormgear_cli.physics.effects import EFFECTS
+from wormgear_cli.spec.loader import load_spec
 
 from tests.conftest import CONFIGS, ROOT
 
@@ -49,7 +49,7 @@ def test_demo_names_thermal_backlash_and_the_gap_shrinks(demo_json):
     assert doc["gap_after"]["differential_rms_arcsec"] < 0.5 * doc["gap_before"]["differential_rms_arcsec"]
     # diagnose's own prediction assumes uniform warming; the demo's mesh warms 2.5x as far as its housing
     # (truth "thermal"), and the materials with that housing share predict the coefficient it was made with
-    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
     assert found["prediction"]["inside_interval"] is False
     share = truth["thermal"]["housing_share"]

@@ -10,8 +10,8 @@ from tests.diagnosis.data import ARCSEC, CASES, Plan, hidden_error, make_rows
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_hand_written_formula_matches_the_registry(name, mch50_spec):
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.effects import EFFECTS, Signals, params_from_keys
 
     rng = np.random.default_rng(5)
     theta = rng.uniform(0, 2 * np.pi, 500)

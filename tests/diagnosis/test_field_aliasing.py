@@ -94,9 +94,9 @@ def test_jittered_targets_of_the_same_drive_name_the_mesh_error(runner, tmp_path
 def test_aliased_effects_follow_the_target_count(mch50_spec, n, expected):
     # 144 - 136 = 8 and 152 - 144 = 8 (mirrored); with 24 targets order 144 falls on a constant (144 = 6 x 24),
     # not on order 8; 1000 targets resolve every catalogue order (all below 500)
-    from wormgear_cli.analysis import geometry
+    from wormgear_cli.analysis.accuracy import geometry
     from wormgear_cli.diagnosis.candidates import aliased_effects
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     theta = 2 * math.pi * np.arange(n) / n
     assert aliased_effects(theta, "intermediate_shaft_runout", list(EFFECTS), geometry(mch50_spec)) == expected

@@ -82,6 +82,6 @@ def test_housing_rise_ratio_outside_its_range_is_refused(runner, tmp_path, value
 
 
 def test_housing_rise_ratio_at_the_top_of_its_range_loads(tmp_path):
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     assert load_spec(_spec_copy(tmp_path, "housing_rise_ratio = 1.5")).materials.housing_rise_ratio == 1.5

@@ -48,7 +48,7 @@ def test_same_order_excess_beyond_the_spec_sources_is_named_with_its_rivals(mch5
 
 @pytest.fixture(scope="module")
 def same_order():
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(CONFIGS / "mch50.toml")
     text, _ = make_csv(spec, Plan(), seed=1, hidden={"intermediate_shaft_runout":

@@ -97,7 +97,7 @@ def test_same_order_effect_absorbed_by_fitted_phases_is_reported_unobservable(mc
     # intermediate-shaft runout of that size and phase is exactly what a different phase would give.
     import math
 
-    from wormgear_cli.simulation import periodic_sources
+    from wormgear_cli.analysis.simulate import periodic_sources
 
     amp = next(s.amplitude for s in periodic_sources(mch50_spec) if s.name == "wheel_eccentricity")  # rad
     e_um = amp * (R_B1 * 1e3)  # chord length 2 A sin(30 deg) = A, as an eccentricity at the base radius
@@ -131,8 +131,8 @@ def test_less_lost_motion_than_modelled_is_not_forced_onto_bearing_clearance(mch
 
 
 def test_drifting_run_noise_does_not_make_a_thermal_backlash(mch50_spec):
-    from wormgear_cli.synth import Noise, Programme, synthesize
-    from wormgear_cli.synth import Plan as SynthPlan
+    from wormgear_cli.analysis.synth import Noise, Programme, synthesize
+    from wormgear_cli.analysis.synth import Plan as SynthPlan
 
     cols, _ = synthesize(mch50_spec, SynthPlan(kind="dense", points=720, runs=3), noise=Noise(0.3, 0.5, "drift"),
                          seed=205, random_phases=True, temperature=Programme("cycle", (20.0, 30.0, 600.0)))

@@ -16,10 +16,10 @@ import pytest
 
 from tests.conftest import CONFIGS
 from wormgear_cli import diagnosis as dg
-from wormgear_cli import harmonics
+from wormgear_cli.measurement import harmonics
 from wormgear_cli.diagnosis import phases, runs, scan
-from wormgear_cli.measurement import read_measurement
-from wormgear_cli.spec import load_spec
+from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.spec.loader import load_spec
 
 DEMO = CONFIGS / "mch50-warm.csv"
 
@@ -29,7 +29,7 @@ def _report_json(meas, spec) -> str:
 
 
 def _radar_measurement(tmp_path):
-    from wormgear_cli.synth import Noise, Plan, format_csv, synthesize
+    from wormgear_cli.analysis.synth import Noise, Plan, format_csv, synthesize
 
     spec = load_spec(CONFIGS / "radar-pedestal-2start.toml")
     syn = synthesize(spec, Plan(kind="iso", points=40, runs=5, dwell_s=0.1),
@@ -67,8 +67,8 @@ def test_report_is_the_same_without_any_shortcut(monkeypatch, tmp_path, case):
 
 
 def test_pointwise_source_values_per_distinct_pair_equal_the_rows(mch50_spec):
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.effects import Signals
 
     rng = np.random.default_rng(11)
     theta = np.radians(np.tile(rng.uniform(0, 360, 50), 6))
@@ -89,8 +89,8 @@ def test_pointwise_source_values_per_distinct_pair_equal_the_rows(mch50_spec):
 def test_source_curves_per_distinct_angle_equal_the_rows(drive):
     # forward and reverse passes over the same targets: the pairs repeat their angles, and the sources'
     # curves (and lost motion) are evaluated once per angle
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.effects import Signals
 
     spec = load_spec(CONFIGS / f"{drive}.toml")
     rng = np.random.default_rng(12)
@@ -112,7 +112,7 @@ def test_source_curves_per_distinct_angle_equal_the_rows(drive):
 
 
 def test_distinct_pairs_only_when_rows_repeat():
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     theta = np.linspace(0.0, 1.0, 40)
     assert phases.distinct_pairs(Signals.make(theta, 1.0)) is None
@@ -124,9 +124,9 @@ def test_distinct_pairs_only_when_rows_repeat():
 
 
 def test_phase_fit_is_the_same_per_pair_and_per_row(mch50_spec):
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import periodic_sources, simulate
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.analysis.simulate import periodic_sources, simulate
 
     rng = np.random.default_rng(5)
     theta = np.radians(np.tile(np.sort(rng.uniform(0, 360, 60)), 4))
@@ -191,7 +191,7 @@ def test_mode_fits_of_several_responses_equal_one_at_a_time():
 
 
 def test_order_tables_equal_order_table_each(mch50_spec):
-    from wormgear_cli.analysis import geometry
+    from wormgear_cli.analysis.accuracy import geometry
 
     meas = read_measurement(DEMO)
     rng = np.random.default_rng(8)

@@ -10,7 +10,7 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
-from wormgear_cli.io import atomic_stream, atomic_write, output_transaction
+from wormgear_cli.files import atomic_stream, atomic_write, output_transaction
 
 from tests.conftest import MCH50
 

@@ -12,7 +12,7 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
-from wormgear_cli.io import atomic_write, check_output_path, output_transaction, refuse_input
+from wormgear_cli.files import atomic_write, check_output_path, output_transaction, refuse_input
 
 from tests.conftest import MCH50, ROOT
 
@@ -120,7 +120,7 @@ def test_plot_onto_an_input_is_refused_by_the_one_check(tmp_path, runner):
 
 
 def test_files_read_in_a_run_are_protected_without_being_named(tmp_path):
-    from wormgear_cli.io import read_text_file
+    from wormgear_cli.files import read_text_file
 
     f = tmp_path / "in.txt"
     f.write_text("data\n")

@@ -7,9 +7,9 @@ import os
 
 import pytest
 
-from wormgear_cli import io as wio
+from wormgear_cli import files as wio
 from wormgear_cli.errors import DataError
-from wormgear_cli.io import MAX_INPUT_BYTES, read_text_file
+from wormgear_cli.files import MAX_INPUT_BYTES, read_text_file
 
 from tests.conftest import CONFIGS
 
@@ -44,7 +44,7 @@ def test_the_default_limit_is_the_documented_constant():
 def test_measurement_from_an_endless_device_is_refused_at_once(device):
     if not os.path.exists(device):
         pytest.skip(f"no {device}")
-    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.measurement.reader import read_measurement
 
     with pytest.raises(DataError) as exc:
         read_measurement(device)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from wormgear_cli.io import remove_stale_staged
+from wormgear_cli.files import remove_stale_staged
 
 from tests.conftest import MCH50, ROOT
 
@@ -116,7 +116,7 @@ def test_sigkill_leftover_is_removed_by_the_next_run_in_that_folder(tmp_path, ru
 
 
 def test_stale_removal_keeps_live_foreign_and_unrecognised_files(tmp_path):
-    from wormgear_cli.io import _host_tag
+    from wormgear_cli.files import _host_tag
 
     host = _host_tag()
     dead = subprocess.Popen([sys.executable, "-c", "pass"])

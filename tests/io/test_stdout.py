@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from wormgear_cli import io as wio
+from wormgear_cli import files as wio
 from wormgear_cli.errors import UsageError
 
 from tests.conftest import MCH50, ROOT

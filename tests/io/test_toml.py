@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from wormgear_cli.errors import SpecError
-from wormgear_cli.tomlguard import MAX_KEY_PARTS, MAX_NESTING, MAX_SPEC_BYTES, MAX_TOKEN_CHARS, parse_toml
+from wormgear_cli.spec.toml import MAX_KEY_PARTS, MAX_NESTING, MAX_SPEC_BYTES, MAX_TOKEN_CHARS, parse_toml
 
 from tests.conftest import CONFIGS, MCH50, ROOT
 
@@ -158,7 +158,7 @@ def test_a_file_just_under_the_size_limit_is_read(tmp_path):
     assert len(text.encode()) <= MAX_SPEC_BYTES
     path = tmp_path / "big.toml"
     path.write_text(text)
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     assert load_spec(path).drive.name == load_spec(MCH50).drive.name
 

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from wormgear_cli.harmonics import ALIAS_TOL, alias_groups, folded_orders
+from wormgear_cli.measurement.harmonics import ALIAS_TOL, alias_groups, folded_orders
 
 N = 24
 THETA = 2 * np.pi * np.arange(N) / N
@@ -99,7 +99,7 @@ def test_diagnosis_resolvable_orders_uses_the_same_tolerance():
 def test_order_and_offset_correlations_by_hand():
     """On the 24 even angles: C_minus between k and k + N + d is dirichlet(d), 1 on the diagonal;
     C_plus of 5 and 19 + d is dirichlet(d); the offset correlation of N + d is dirichlet(d), of 1 zero."""
-    from wormgear_cli.harmonics import offset_correlations, order_correlations
+    from wormgear_cli.measurement.harmonics import offset_correlations, order_correlations
 
     c_minus, c_plus = order_correlations(THETA, [1.0, 25 + OUTSIDE])
     assert c_minus[0, 1] == pytest.approx(1 - 2e-3, abs=1e-12) and c_minus[1, 0] == pytest.approx(1 - 2e-3, abs=1e-12)
@@ -123,10 +123,10 @@ def test_weights_decide_like_the_weighted_samples():
     assert folded_orders(theta, [N / 2 + INSIDE / 2], weights=weights) == [N / 2 + INSIDE / 2]
     assert folded_orders(theta, [N / 2 + INSIDE / 2]) == []
     assert alias_groups(np.concatenate([THETA, THETA]), [1.0, k2]) == [(1.0, k2)]
-    from wormgear_cli.harmonics import offset_correlations
+    from wormgear_cli.measurement.harmonics import offset_correlations
 
     np.testing.assert_allclose(offset_correlations(theta, [N + INSIDE], weights=weights), [1 - 5e-4], atol=1e-12)
-    from wormgear_cli.harmonics import order_correlations
+    from wormgear_cli.measurement.harmonics import order_correlations
 
     c_minus, _ = order_correlations(theta, [1.0, k2], weights=weights)
     assert c_minus[0, 1] == pytest.approx(1 - 5e-4, abs=1e-12)

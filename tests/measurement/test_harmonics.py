@@ -1,4 +1,4 @@
-"""Harmonic least squares at exact orders, aliasing and order labels (wormgear_cli.harmonics)."""
+"""Harmonic least squares at exact orders, aliasing and order labels (wormgear_cli.measurement.harmonics)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wormgear_cli.harmonics import (
+from wormgear_cli.measurement.harmonics import (
     alias_groups,
     analyse_orders,
     fit_modes,
@@ -18,7 +18,7 @@ from wormgear_cli.harmonics import (
     physical_orders,
     physical_priority,
 )
-from wormgear_cli.models.effects import DriveGeometry
+from wormgear_cli.physics.effects import DriveGeometry
 
 TWO_PI = 2.0 * math.pi
 
@@ -223,7 +223,7 @@ def test_analyse_orders_keeps_the_priority_orders_when_targets_are_few():
 
 
 def test_physical_orders_of_mch50(mch50_spec):
-    from wormgear_cli.analysis import geometry
+    from wormgear_cli.analysis.accuracy import geometry
 
     # MCH50: z1 = 144, z2 = 18 -> i_c = 8; wheel z3 = 30, single-start worm -> n_w = 8 * 30 = 240
     orders = physical_orders(geometry(mch50_spec), harmonics=3)

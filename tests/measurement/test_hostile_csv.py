@@ -16,7 +16,7 @@ import pytest
 
 from tests.conftest import ROOT
 from wormgear_cli.errors import DataError
-from wormgear_cli.measurement import MAX_FILE_BYTES, ReadOptions, read_measurement
+from wormgear_cli.measurement.reader import MAX_FILE_BYTES, ReadOptions, read_measurement
 
 LIMIT_AS = 1536 * 1024 * 1024
 LIMIT_CPU = 60

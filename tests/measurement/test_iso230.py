@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wormgear_cli.iso230 import group_targets, iso230_figures, withhold_directional
+from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
 
 
 def test_one_position_test_hand_worked():

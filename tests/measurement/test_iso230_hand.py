@@ -29,7 +29,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from wormgear_cli.iso230 import TARGET_TOL, group_targets, iso230_figures, measurement_figures
+from wormgear_cli.measurement.iso230 import TARGET_TOL, group_targets, iso230_figures, measurement_figures
 
 R3 = math.sqrt(3.0)
 UP = {0.0: (1, 2, 3), 1.0: (-3, -3, 0), 2.0: (8, 8, 8)}

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.measure_report import measure
+from wormgear_cli.workflows.measure import measure
 
 
 def write(tmp_path, name, header, rows):
@@ -74,8 +74,8 @@ def test_tables_fit_80_columns_without_cutting_numbers(runner, tmp_path, mch50_p
 def test_duplicate_count_matches_a_set_of_rows(tmp_path, seed):
     from collections import Counter
 
-    from wormgear_cli.measure_report import duplicate_rows
-    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.workflows.measure import duplicate_rows
+    from wormgear_cli.measurement.reader import read_measurement
 
     rng = np.random.default_rng(seed)
     rows = [(int(rng.integers(0, 6)) * 30, int(rng.integers(0, 3)), int(rng.choice([-1, 1])), int(rng.integers(0, 2)))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.iso230 import iso230_figures
+from wormgear_cli.measurement.iso230 import iso230_figures
 
 # --- a hand-worked ISO 230-2 example -------------------------------------------------------------------------
 # 3 targets x 3 runs x 2 directions, deviations in arcsec chosen so every figure is a small number:

@@ -9,7 +9,7 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import DataError
-from wormgear_cli.measurement import parse_measurement, read_measurement
+from wormgear_cli.measurement.reader import parse_measurement, read_measurement
 
 
 def write(tmp_path, text, name="data.csv", newline="\n"):
@@ -160,7 +160,7 @@ def test_unterminated_quote_is_a_data_error():
 ])
 def test_implausible_or_exotic_numbers_are_rejected_with_line_and_column(tmp_path, cell, column, message):
     from wormgear_cli.errors import DataError
-    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.measurement.reader import read_measurement
 
     cols = ["angle_deg", "error_arcsec", "run", "temperature_C"]
     row = {"angle_deg": "0", "error_arcsec": "1", "run": "1", "temperature_C": "20"}

@@ -1,4 +1,4 @@
-"""The full error budget (wormgear_cli.budget): lines, totals, origins, and agreement with simulate."""
+"""The full error budget (wormgear_cli.analysis.budget): lines, totals, origins, and agreement with simulate."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from wormgear_cli.analysis import analyze
-from wormgear_cli.budget import Rule, budget
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.analysis.budget import Rule, budget
 from wormgear_cli.cli import app
 from wormgear_cli.errors import SpecError
-from wormgear_cli.models.effects import Signals
-from wormgear_cli.simulation import simulate
-from wormgear_cli.spec import loads_spec, with_values
+from wormgear_cli.physics.effects import Signals
+from wormgear_cli.analysis.simulate import simulate
+from wormgear_cli.spec.loader import loads_spec, with_values
 from wormgear_cli.units import to_unit
 
 from tests.conftest import CONFIGS
@@ -67,7 +67,7 @@ def test_cumulative_pitch_conversion_by_hand():
 @pytest.mark.parametrize("path", ["configs/mch50.toml", "configs/rotary-table-precision.toml",
                                   "configs/radar-pedestal-2start.toml"])
 def test_lines_add_up_to_the_totals_under_each_rule(path):
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     b = budget(load_spec(CONFIGS.parent / path))
     amps = [ln.amplitude for ln in b.lines]
@@ -195,8 +195,8 @@ def test_paper_mode_leaves_the_paper_keys_and_involute_differs_by_hand(mch50_spe
 
 # --- mutation-testing round 2 (issue 13): the phased peak by hand, the report, the static lines ----
 
-from wormgear_cli.budget import Budget, BudgetLine, phased_peak  # noqa: E402
-from wormgear_cli.simulation import Source  # noqa: E402
+from wormgear_cli.analysis.budget import Budget, BudgetLine, phased_peak  # noqa: E402
+from wormgear_cli.analysis.simulate import Source  # noqa: E402
 
 
 def _sine_source(name, amplitude, order):
@@ -240,7 +240,7 @@ def test_report_by_hand():
 
 def test_static_lines_and_fields_of_the_rotary_table():
     # i_c = 180/20 = 9: the worm deflection is referred to the output by 1/9; both loads given in the spec
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(CONFIGS / "rotary-table-precision.toml")
     a = analyze(spec)

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from wormgear_cli.analysis import geometry
-from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys, params_to_keys
-from wormgear_cli.models.thermal import centre_distance_growth, predicted_centre_distance_um_per_K
-from wormgear_cli.spec import loads_spec
+from wormgear_cli.analysis.accuracy import geometry
+from wormgear_cli.physics.effects import EFFECTS, Signals, params_from_keys, params_to_keys
+from wormgear_cli.physics.thermal import centre_distance_growth, predicted_centre_distance_um_per_K
+from wormgear_cli.spec.loader import loads_spec
 from tests.conftest import MCH50
 
 AS = math.pi / 648000.0  # rad per arcsec, written out independently of the package
@@ -30,7 +30,7 @@ FIXED = {
 
 @pytest.fixture(scope="module")
 def spec():
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     return load_spec(MCH50)
 

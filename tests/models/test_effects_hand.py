@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from wormgear_cli.models.effects import EFFECTS, DriveGeometry, Signals, effect_error, params_from_keys, \
+from wormgear_cli.physics.effects import EFFECTS, DriveGeometry, Signals, effect_error, params_from_keys, \
     params_to_keys
 
 AS = math.pi / 648000.0
@@ -128,7 +128,7 @@ def test_spec_default_phases_are_zero():
     """The drive spec's phase keys default to 0 deg: a spec without them loads phases of exactly 0,
     and an [effects] table without phase_deg gets phase 0."""
     from tests.models.test_effects import SPEC_HEAD
-    from wormgear_cli.spec import loads_spec
+    from wormgear_cli.spec.loader import loads_spec
 
     spec = loads_spec(SPEC_HEAD + "[effects.gear_mesh_error]\namplitude_um = 3\n", "d.toml")
     assert spec.worm_pair.lead_error_phase == 0.0

@@ -18,7 +18,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from wormgear_cli.models import deformation, gear, thermal, worm
+from wormgear_cli.physics import deformation, spur as gear, thermal, worm
 
 LAM = math.atan(0.1)  # lead angle: cos^2 = 1/1.01, 1/cos = sqrt(1.01) = 1.004987562
 ALPHA2 = math.atan(0.4)  # wheel transverse pressure angle: cos^2 = 1/1.16

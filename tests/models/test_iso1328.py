@@ -1,4 +1,4 @@
-"""ISO 1328-1:2013 / ISO 1328-2:1997 tolerances from a grade (wormgear_cli.models.iso1328).
+"""ISO 1328-1:2013 / ISO 1328-2:1997 tolerances from a grade (wormgear_cli.physics.iso1328).
 
 Golden values: the standard's worked example (d = 100 mm, m = 2 mm, b = 20 mm, class 6:
 f_pT 8.5, F_pT 27, F_alphaT 11, F_rT 24 um, exact after the standard's rounding) and
@@ -11,8 +11,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wormgear_cli.models import iso1328
-from wormgear_cli.models.iso1328 import GradeError, flank_tolerances, radial_composite, round_tolerance
+from wormgear_cli.physics import iso1328
+from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances, radial_composite, round_tolerance
 
 
 def test_the_standards_worked_example():

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wormgear_cli.analysis import analyze, deflections
-from wormgear_cli.models import deformation, gear, worm
-from wormgear_cli.spec import with_values
+from wormgear_cli.analysis.accuracy import analyze, deflections
+from wormgear_cli.physics import deformation, spur as gear, worm
+from wormgear_cli.spec.loader import with_values
 from wormgear_cli.units import ANGLE_UNITS, PAPER_ARCMIN_CONSTANT, from_unit, to_unit
 
 ALPHA = math.radians(20.0)

@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from wormgear_cli.analysis import deflections, line_loads
-from wormgear_cli.models import deformation
-from wormgear_cli.spec import with_values
+from wormgear_cli.analysis.accuracy import deflections, line_loads
+from wormgear_cli.physics import deformation
+from wormgear_cli.spec.loader import with_values
 
 
 @pytest.mark.parametrize("w, factor", [(12.5, 0.5946), (2.0, 0.3761), (100.0, 1.0), (250.0, 1.0), (0.0, 0.0)])

@@ -16,9 +16,9 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
-from wormgear_cli.models.thermal import (centre_distance_change_mm, mesh_housing_warmup,
+from wormgear_cli.physics.thermal import (centre_distance_change_mm, mesh_housing_warmup,
                                          predicted_centre_distance_um_per_K)
-from wormgear_cli.synth import Noise, Plan, parse_temperature, synthesize
+from wormgear_cli.analysis.synth import Noise, Plan, parse_temperature, synthesize
 
 from tests.conftest import MCH50
 

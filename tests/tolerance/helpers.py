@@ -7,7 +7,7 @@ from pathlib import Path
 import tomli_w
 
 from tests.conftest import MCH50
-from wormgear_cli.spec import load_spec, raw_copy, spec_from_dict
+from wormgear_cli.spec.loader import load_spec, raw_copy, spec_from_dict
 from wormgear_cli.tolerance.quantities import QUANTITIES
 
 ZERO_ERRORS = [0.0] * 6

@@ -11,9 +11,9 @@ import pytest
 
 from tests.conftest import CONFIGS
 from tests.tolerance.helpers import mch50_doc, spec_of, write
-from wormgear_cli.budget import budget
+from wormgear_cli.analysis.budget import budget
 from wormgear_cli.cli import app
-from wormgear_cli.spec import load_spec, raw_copy
+from wormgear_cli.spec.loader import load_spec, raw_copy
 from wormgear_cli.tolerance import engine
 from wormgear_cli.tolerance.allocation import describe, iso1328_finer_grade
 

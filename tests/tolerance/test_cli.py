@@ -214,7 +214,7 @@ def test_allocation_ranks_the_key_that_buys_yield_first(runner, tmp_path):
 
 
 def test_check_min_yield_pass_fail_undecided(runner, tmp_path):
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance.engine import check_yield
 
     est = check_yield(load_spec(_tight(tmp_path, 0.5))).estimate

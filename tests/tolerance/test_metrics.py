@@ -10,12 +10,12 @@ import pytest
 
 from tests.tolerance.helpers import mch50_doc, only, set_path, spec_of
 from tests.conftest import CONFIGS
-from wormgear_cli.analysis import analyze
-from wormgear_cli.budget import budget
-from wormgear_cli.iso230 import iso230_figures
-from wormgear_cli.models.effects import Signals
-from wormgear_cli.simulation import periodic_sources, simulate
-from wormgear_cli.spec import load_spec, with_values
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.analysis.budget import budget
+from wormgear_cli.measurement.iso230 import iso230_figures
+from wormgear_cli.physics.effects import Signals
+from wormgear_cli.analysis.simulate import periodic_sources, simulate
+from wormgear_cli.spec.loader import load_spec, with_values
 from wormgear_cli.tolerance import engine, metrics, sampling
 from wormgear_cli.tolerance.quantities import PHASES, varied_quantities
 

@@ -93,7 +93,7 @@ def test_second_pass_percentiles_equal_the_in_memory_ones(monkeypatch, seed):
 
 def test_large_run_second_pass_gives_the_same_report(monkeypatch):
     from tests.conftest import MCH50
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, statistics
 
     s = engine.setup(load_spec(MCH50), engine.Options(samples=3000, seed=9, metrics="all"))

@@ -102,7 +102,7 @@ class WormgearGroup(TyperGroup):
     def invoke(self, ctx):
         from typer._click.exceptions import NoArgsIsHelpError, UsageError
 
-        from wormgear_cli.io import BROKEN_PIPE_EXIT, StdoutClosed, flush_stdout, output_transaction
+        from wormgear_cli.files import BROKEN_PIPE_EXIT, StdoutClosed, flush_stdout, output_transaction
 
         restore = _install_stop_handlers()
         try:
@@ -158,7 +158,7 @@ def _output_error_exit(exc: OSError):
     not an output error."""
     import errno
 
-    from wormgear_cli.io import BROKEN_PIPE_EXIT, StdoutClosed, UsageError, _stdout_failed
+    from wormgear_cli.files import BROKEN_PIPE_EXIT, StdoutClosed, UsageError, _stdout_failed
 
     if exc.errno not in (errno.EPIPE, errno.ENOSPC, errno.EIO, errno.EFBIG,
                          getattr(errno, "EDQUOT", -1)):

@@ -37,10 +37,10 @@ def analyze(
 
     Example: wormgear analyze configs/mch50.toml --unit deg --format json
     """
-    from wormgear_cli.analysis import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.analysis.accuracy import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
+    from wormgear_cli.spec.loader import load_spec
 
-    from wormgear_cli.reports.analyze import document
+    from wormgear_cli.output.analyze import document
 
     spec = load_spec(drive)
     result = run(spec)
@@ -147,7 +147,7 @@ def check(
 
     Example: wormgear check configs/*.toml --format json
     """
-    from wormgear_cli.requirements import check_file
+    from wormgear_cli.analysis.requirements import check_file
 
     fmt = getattr(format, "value", format)
     checks = [check_file(path) for path in drives]
@@ -190,15 +190,15 @@ def new(
     Example: wormgear new my-table.toml && wormgear analyze my-table.toml
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.io import atomic_write
-    from wormgear_cli.template import template
+    from wormgear_cli.files import atomic_write
+    from wormgear_cli.spec.template import template
 
     if path.exists() or path.is_symlink():
         raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
     from wormgear_cli.cli.common import announce_written
-    from wormgear_cli.io import after_commit
+    from wormgear_cli.files import after_commit
 
     atomic_write(path, template(name or path.stem))
     announce_written(path)

@@ -3,7 +3,7 @@
 One set of options (``--format``, ``--unit``, ``-o``) defined once, as sqlite-utils does.
 Every byte a command puts on stdout goes through :func:`write_stdout`; every file it writes
 is announced on stderr by :func:`announce_written`.  Text formats (numbers, CSV, JSON,
-tables as data) are the core's (:mod:`wormgear_cli.formats`); here they are only drawn.
+tables as data) are the core's (:mod:`wormgear_cli.output.formats`); here they are only drawn.
 rich is imported only when a table is drawn.
 
 Tables follow one rule (:func:`render`): they fit the width (80 columns at COLUMNS=80)
@@ -22,7 +22,7 @@ from typing import Annotated, Iterable, Optional, Union
 
 import typer
 
-from wormgear_cli.formats import csv_text, fmt_angle, fmt_number, json_text  # noqa: F401  (re-exported)
+from wormgear_cli.output.formats import csv_text, fmt_angle, fmt_number, json_text  # noqa: F401  (re-exported)
 
 
 class TableFormat(str, Enum):
@@ -59,7 +59,7 @@ UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the
                                                case_sensitive=False)]
 def _check_output(value: Optional[Path]) -> Optional[Path]:
     """-o: a directory or a missing folder is the project's one-line error, before any work."""
-    from wormgear_cli.io import check_output_path
+    from wormgear_cli.files import check_output_path
 
     check_output_path(value, "-o")
     return value
@@ -78,9 +78,9 @@ DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_d
 def write_stdout(data: Union[str, bytes]) -> None:
     """Write ``data`` (text, or bytes of ASCII/UTF-8 text) to stdout and flush.
 
-    The one place a command's result reaches stdout: :func:`wormgear_cli.io.write_stdout`
+    The one place a command's result reaches stdout: :func:`wormgear_cli.files.write_stdout`
     checks and completes every write (a full disk is exit 2, a closed pipe a quiet stop)."""
-    from wormgear_cli.io import write_stdout as checked_write
+    from wormgear_cli.files import write_stdout as checked_write
 
     checked_write(data)
 
@@ -94,7 +94,7 @@ def announce_written(path: Union[str, Path]) -> None:
     """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
     and only once the run's outputs are committed (a failed run claims no file)."""
-    from wormgear_cli.io import after_commit
+    from wormgear_cli.files import after_commit
 
     after_commit(lambda: typer.echo(f"wrote {path}", err=True))
 
@@ -105,7 +105,7 @@ def emit(data: Union[str, bytes], output: Optional[Path], inputs: Iterable = ())
     if is_stdout(output):
         write_stdout(data)
         return
-    from wormgear_cli.io import atomic_write
+    from wormgear_cli.files import atomic_write
 
     atomic_write(output, data, tuple(inputs))
     announce_written(output)
@@ -179,12 +179,12 @@ class Progress:
 
 
 def _rich_table(t):
-    """A :class:`wormgear_cli.tables.Table` as a rich Table (text is never read as markup)."""
+    """A :class:`wormgear_cli.output.tables.Table` as a rich Table (text is never read as markup)."""
     from rich.markup import escape
     from rich.table import Table
     from rich.text import Text
 
-    from wormgear_cli.tables import Cell
+    from wormgear_cli.output.tables import Cell
 
     out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header)
     for c in t.columns:
@@ -260,7 +260,7 @@ def fit_table(table, console, width: int) -> list:
 def _draw(console, renderables: list, width: int) -> None:
     from rich.table import Table as RichTable
 
-    from wormgear_cli.tables import Table
+    from wormgear_cli.output.tables import Table
 
     for r in renderables:
         if isinstance(r, Table):
@@ -270,7 +270,7 @@ def _draw(console, renderables: list, width: int) -> None:
 
 
 def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
-    """Draw tables (:class:`wormgear_cli.tables.Table` or rich renderables) to stdout
+    """Draw tables (:class:`wormgear_cli.output.tables.Table` or rich renderables) to stdout
     (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
     import io
 

@@ -79,13 +79,13 @@ def diagnose(
     """
     from wormgear_cli.diagnosis.report import run_diagnose
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.measurement import read_measurement
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.spec.loader import load_spec
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
     inputs = (drive, data)
-    from wormgear_cli.io import check_output_path, refuse_input, refuse_same_outputs
+    from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
 
     if output is not None and str(output) == "-":
         output = None
@@ -122,7 +122,7 @@ def diagnose(
 
         figure = draw(result.diagnosis, doc, unit)
     if write_spec is not None:
-        from wormgear_cli.io import atomic_write
+        from wormgear_cli.files import atomic_write
 
         atomic_write(write_spec, result.spec_toml, inputs)
         announce_written(write_spec)

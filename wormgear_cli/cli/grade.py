@@ -36,7 +36,7 @@ def grade(
     Example: wormgear grade --grade 6 --module-mm 2 --diameter-mm 100 --face-width-mm 20
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.models.iso1328 import PART2_GRADES, GradeError, flank_tolerances, radial_composite
+    from wormgear_cli.physics.iso1328 import PART2_GRADES, GradeError, flank_tolerances, radial_composite
 
     problems = [f"{opt}: expected a finite number > 0, got {v:g}" for opt, v in
                 (("--module-mm", module_mm), ("--diameter-mm", diameter_mm), ("--face-width-mm", face_width_mm))

@@ -71,7 +71,7 @@ def measure(
 
     Example: wormgear measure export.csv --map angle_deg="Position (deg)" --map error_arcsec=Deviation
     """
-    from wormgear_cli.measure_report import measure as run, parse_orders, report
+    from wormgear_cli.workflows.measure import measure as run, parse_orders, report
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -80,7 +80,7 @@ def measure(
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-        from wormgear_cli.io import refuse_input, refuse_same_outputs
+        from wormgear_cli.files import refuse_input, refuse_same_outputs
 
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])

@@ -42,10 +42,10 @@ AngleUnitOption = Annotated[Optional[InputAngleUnit], typer.Option(
 
 
 def read_options(column_map: Optional[list[str]], error_unit=None, angle_unit=None):
-    """:class:`~wormgear_cli.measurement.ReadOptions` from the option values; UsageError (one line
+    """:class:`~wormgear_cli.measurement.reader.ReadOptions` from the option values; UsageError (one line
     per bad ``--map``) otherwise.  (The measurement module is imported here, not at start-up.)"""
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.measurement import ReadOptions
+    from wormgear_cli.measurement.reader import ReadOptions
 
     pairs = []
     problems = []

@@ -85,9 +85,9 @@ def simulate(
     import math
 
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.reports import simulate as report
-    from wormgear_cli.spec import load_spec
-    from wormgear_cli.synth import parse_effects
+    from wormgear_cli.workflows import simulate as report
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.analysis.synth import parse_effects
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -107,7 +107,7 @@ def simulate(
     spec = load_spec(drive)
     effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
-    from wormgear_cli.io import refuse_same_outputs
+    from wormgear_cli.files import refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if at is not None:
@@ -117,7 +117,7 @@ def simulate(
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_simulation
 
-        from wormgear_cli.io import refuse_input
+        from wormgear_cli.files import refuse_input
 
         refuse_input(plot, inputs, "--plot")
         plot_simulation(result.curves, plot)
@@ -189,8 +189,8 @@ def synth(
     import math
 
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec import load_spec
-    from wormgear_cli.synth import (Noise, Plan, format_csv, parse_effects, parse_load, parse_temperature,
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.analysis.synth import (Noise, Plan, format_csv, parse_effects, parse_load, parse_temperature,
                                     synthesize)
 
     for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
@@ -206,7 +206,7 @@ def synth(
 
         check_plot_path(plot)
     outs = [p for p in (output, truth, plot) if p is not None]
-    from wormgear_cli.io import refuse_input, refuse_same_outputs
+    from wormgear_cli.files import refuse_input, refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (truth, "--truth"), (plot, "--plot")])
 

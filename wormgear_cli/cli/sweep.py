@@ -1,7 +1,7 @@
 """``wormgear sweep``: the gear-ratio / centre-distance response surface and any-parameter grids.
 
-Thin layer: parse the options, check the size policy (:mod:`wormgear_cli.sweep`), run the
-core and draw its outputs (:mod:`wormgear_cli.reports.sweep`); ``--plot`` draws the map.
+Thin layer: parse the options, check the size policy (:mod:`wormgear_cli.analysis.sweep`), run the
+core and draw its outputs (:mod:`wormgear_cli.output.sweep`); ``--plot`` draws the map.
 """
 
 from __future__ import annotations
@@ -81,10 +81,10 @@ def sweep(
 
     Example: wormgear sweep configs/mch50.toml --i 2:10:9 --l-mm 100:300:11 --unit arcsec
     """
-    from wormgear_cli import sweep as core
-    from wormgear_cli import sweep_limits as limits
+    from wormgear_cli.analysis import sweep as core
+    from wormgear_cli.analysis import sweep_limits as limits
     from wormgear_cli.plots import check_plot_path
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     fmt = getattr(format, "value", format)
     unit = getattr(unit, "value", unit)
@@ -93,7 +93,7 @@ def sweep(
                          shard=shard, fmt=fmt, plot=plot is not None)
     if plot is not None:
         check_plot_path(plot)
-        from wormgear_cli.io import refuse_same_outputs
+        from wormgear_cli.files import refuse_same_outputs
 
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     k_n = core.parse_shard(shard) if shard is not None else None
@@ -132,7 +132,7 @@ def _require_matplotlib() -> None:
 
 
 def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
-    from wormgear_cli.reports import sweep as report
+    from wormgear_cli.output import sweep as report
 
     start, stop = sw.run_bounds(k_n)
     with Progress(stop - start, (stop - start) * _SECONDS_PER_RL_POINT, "sweep") as bar:
@@ -159,9 +159,9 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
 
 
 def _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n):
-    from wormgear_cli.formats import csv_text
-    from wormgear_cli.reports import sweep as report
-    from wormgear_cli.sweep import param_size, shard_bounds
+    from wormgear_cli.output.formats import csv_text
+    from wormgear_cli.output import sweep as report
+    from wormgear_cli.analysis.sweep import param_size, shard_bounds
 
     start, stop = shard_bounds(param_size(axes), *k_n) if k_n else (0, param_size(axes))
     with Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:

@@ -83,7 +83,7 @@ def tolerance(
     from dataclasses import replace
 
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report
 
     fmt = getattr(format, "value", format)
@@ -95,7 +95,7 @@ def tolerance(
     if summarize is not None and fmt == "csv":
         raise UsageError("--summarize reports on samples: use --format table or json")
     if plot is not None:
-        from wormgear_cli.io import refuse_input, refuse_same_outputs
+        from wormgear_cli.files import refuse_input, refuse_same_outputs
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
@@ -154,7 +154,7 @@ def _csv_run(s, output, inputs):
             write_stdout(header)  # checked: a full disk is exit 2, a closed pipe a quiet stop
             return engine.run(s, on_block=lambda block: write_stdout(report.csv_rows(s, block)),
                               progress=bar.advance)
-        from wormgear_cli.io import atomic_stream
+        from wormgear_cli.files import atomic_stream
 
         with atomic_stream(output, tuple(inputs)) as write:
             write(header)

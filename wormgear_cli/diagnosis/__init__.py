@@ -32,7 +32,7 @@ temperature [degC], time [s]) the measured error y_i [arcsec] is
 
     y_i = m(theta_i, d_i, ...; psi) + c + sum_j beta_j x_ij + u_run(i) + v_pass(i) + e_i
 
-* m: the spec's model (:func:`wormgear_cli.simulation.simulate`) with the
+* m: the spec's model (:func:`wormgear_cli.analysis.simulate.simulate`) with the
   phases psi of its periodic sources fitted; their amplitudes stay as
   specified (a drawing knows sizes, not the angular position they were
   assembled at);

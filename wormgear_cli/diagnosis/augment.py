@@ -32,7 +32,7 @@ def _set_path(doc: dict, dotted: str, value) -> None:
 
 def augmented_params(found: Found) -> dict:
     """A named effect's parameters keyed as in the catalogue (rounded as written)."""
-    from wormgear_cli.models.effects import EFFECTS, params_to_keys
+    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
 
     eff = EFFECTS[found.name]
     keys = params_to_keys(found.name, found.params)
@@ -51,8 +51,8 @@ def augmented_params(found: Found) -> dict:
 def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y):
     """The spec as a TOML dict with fitted phases and the named effects, and its
     simulation (plus the fitted zero offset) at the measured rows [arcsec]."""
-    from wormgear_cli.simulation import simulate
-    from wormgear_cli.spec import raw_copy, spec_from_dict
+    from wormgear_cli.analysis.simulate import simulate
+    from wormgear_cli.spec.loader import raw_copy, spec_from_dict
 
     raw = raw_copy(spec)
     if fit_phases:

@@ -59,7 +59,7 @@ def candidate(name: str, signals, geometry) -> Candidate | None:
     to tell linear from reciprocal), the phase at 0 and 90 deg, every other
     parameter at its catalogue default.  Returns None for a signature that
     is none of the three forms (it cannot be fitted linearly)."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     eff = EFFECTS[name]
     base = {}
@@ -98,7 +98,7 @@ def candidate(name: str, signals, geometry) -> Candidate | None:
 
 def candidate_params(cand: Candidate, beta: np.ndarray) -> dict:
     """Internal parameters of an effect from its fitted column coefficients."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     eff = EFFECTS[cand.name]
     out = dict(cand.fixed)
@@ -163,7 +163,7 @@ def replication_problem(cand: "Candidate", basis, groups: Groups, info: DataInfo
 
 def physical_problem(name: str, params: dict) -> str | None:
     """A fitted parameter outside the catalogue's physical range (None: inside)."""
-    from wormgear_cli.models.effects import EFFECTS, params_to_keys
+    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
 
     eff = EFFECTS[name]
     keys = params_to_keys(name, params)
@@ -184,7 +184,7 @@ UNPHYSICAL_HINT = {
 
 def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     """Per periodic candidate: the orders it cannot be told from at these angles, as (order, label)."""
-    from wormgear_cli.harmonics import aliasing, physical_orders
+    from wormgear_cli.measurement.harmonics import aliasing, physical_orders
 
     labels = {o: lab for o, lab in physical_orders(geometry, 3)}
     for s in sources:
@@ -213,9 +213,9 @@ def unaliased_orders(theta, orders) -> tuple[list, dict]:
     out; of orders aliased with each other only the lowest is kept.  Aliasing
     only: whether the kept orders can be fitted together is
     :func:`jointly_fittable_orders`.  (Not the same test as
-    :func:`wormgear_cli.harmonics.resolvable_orders`, which judges the
+    :func:`wormgear_cli.measurement.harmonics.resolvable_orders`, which judges the
     conditioning of the whole design for ``measure``.)"""
-    from wormgear_cli.harmonics import aliasing
+    from wormgear_cli.measurement.harmonics import aliasing
 
     orders = [float(o) for o in orders]
     aliased = {}
@@ -263,7 +263,7 @@ def jointly_fittable_orders(theta, orders, priority=None,
 
 def effect_order(name: str, geometry) -> float | None:
     """The order [cycles/rev] of catalogue effect ``name`` on this drive (None: not periodic)."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     eff = EFFECTS[name]
     return float(eff.order(geometry)) if eff.order is not None else None
@@ -274,13 +274,13 @@ def aliased_effects(theta, name: str, names, geometry) -> list[tuple[str, float]
 
     Two periodic effects at different orders k1, k2 are indistinguishable
     when the angles ``theta`` [rad] sample their columns alike
-    (:func:`wormgear_cli.harmonics.alias_groups`: k1 - k2 or k1 + k2 a
+    (:func:`wormgear_cli.measurement.harmonics.alias_groups`: k1 - k2 or k1 + k2 a
     multiple of the number of equally spaced targets, e.g. the spur-mesh
     order 144 and the intermediate-shaft order 8 at 136 targets): either
     explains the data equally well.  Orders aliased onto a constant are left
     out (the offset takes them).  Returns [(name, order)] sorted by order;
     empty when ``name`` is not periodic or nothing folds onto it."""
-    from wormgear_cli.harmonics import alias_groups
+    from wormgear_cli.measurement.harmonics import alias_groups
 
     k = effect_order(name, geometry)
     if k is None:

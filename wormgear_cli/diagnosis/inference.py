@@ -73,7 +73,7 @@ def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups
     The first ``fixed`` linear columns (the zero offset, and any unexplained
     structure held in the model) are nuisance; the named effects follow, in
     ``lin_names`` order."""
-    from wormgear_cli.models.effects import EFFECTS, params_to_keys
+    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
 
     if not accepted:
         return []
@@ -172,7 +172,7 @@ def same_order_range(f: Found, ctx: FitContext, state: ModelFit, lin, sl, cand: 
     between 0 and the fitted size, the upper end by bisection beyond it.  Sets
     ``f.intervals`` to that range of the amplitude key (the phase has none) and
     adds a note."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     eff = EFFECTS[cand.name]

@@ -85,8 +85,8 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     ``[effects.*]`` (those with a phase key).  A term is fittable when its
     contribution at these samples changes with its phase (a source of zero
     size, or one whose lost motion does not depend on the phase, is not)."""
-    from wormgear_cli.models.effects import EFFECTS
-    from wormgear_cli.simulation import periodic_sources
+    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.analysis.simulate import periodic_sources
 
     out = []
     for src in periodic_sources(spec):
@@ -112,13 +112,13 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
 
 
 def unit_circle(n: int = 720):
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     return Signals.make(np.linspace(0.0, 2.0 * np.pi, n, endpoint=False))
 
 
 def probe_signals(signals, n: int = 2000):
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     step = max(1, signals.theta.shape[0] // n)
     sl = slice(None, None, step)
@@ -129,7 +129,7 @@ def probe_signals(signals, n: int = 2000):
 
 
 def subset(sig, idx):
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     return Signals(sig.theta[idx], sig.direction[idx], sig.load[idx], sig.temperature[idx], sig.time[idx])
 
@@ -139,7 +139,7 @@ class FitContext:
     """The fixed inputs of every fit of one measurement.
 
     ``y`` (N,) measured error [arcsec]; ``sig``: its signals
-    (:class:`wormgear_cli.models.effects.Signals`); ``groups``: run
+    (:class:`wormgear_cli.physics.effects.Signals`); ``groups``: run
     structure; ``base`` (N,) the spec's model without the fitted sources
     [arcsec]; ``sources``: the periodic sources whose phases are fitted;
     ``spec_psi`` (m,) their specified (or starting) phases [rad]."""
@@ -410,7 +410,7 @@ def _harmonic_starts(ctx: FitContext):
     """Deterministic starting phases: as specified; aligned with the measured
     harmonic at each order; and rotated variants for shafts carrying several sources."""
     y, sig, base, sources, spec_psi = ctx.y, ctx.sig, ctx.base, ctx.sources, ctx.spec_psi
-    from wormgear_cli.harmonics import fit_orders
+    from wormgear_cli.measurement.harmonics import fit_orders
 
     starts = [np.array(spec_psi, dtype=float)]
     if not sources:
@@ -450,7 +450,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     misplaced by half a step costs more than a wrong basin), so besides the best
     vector the ``keep`` lowest local minima of each shaft's grid are returned,
     for the caller to polish and compare."""
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     psi = np.array(psi, dtype=float)

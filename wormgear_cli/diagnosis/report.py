@@ -19,7 +19,7 @@ from wormgear_cli.units import ARCSEC
 
 
 def _status(diag: Diagnosis, twins: dict) -> list[dict]:
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     stop = diag.stop
     out = []
@@ -138,8 +138,8 @@ def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
     Each twin: ``name``, ``order``, and (for an effect whose size is determined) ``estimate``, the twin's
     parameters that reproduce the named effect's fitted signature at the measured angles (least squares
     of the named signature on the twin's columns), keyed as in the catalogue."""
-    from wormgear_cli.analysis import geometry as drive_geometry
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.physics.effects import EFFECTS
 
     g = drive_geometry(diag.spec)
     names = [n for n in EFFECTS if n not in diag.spec.effects]
@@ -177,14 +177,14 @@ FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell t
 
 
 def _effect_order(name: str, diag: "Diagnosis") -> float:
-    from wormgear_cli.analysis import geometry as drive_geometry
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.physics.effects import EFFECTS
 
     return float(EFFECTS[name].order(drive_geometry(diag.spec)))
 
 
 def _keys(name, params) -> dict:
-    from wormgear_cli.models.effects import params_to_keys
+    from wormgear_cli.physics.effects import params_to_keys
 
     return {k: float(v) for k, v in params_to_keys(name, params).items()}
 
@@ -278,9 +278,9 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
 def data_findings(meas) -> list:
     """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
     pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
-    ``measure``'s checks (:func:`wormgear_cli.measure_report.structure_findings`), the one definition."""
-    from wormgear_cli.iso230 import group_targets
-    from wormgear_cli.measure_report import structure_findings
+    ``measure``'s checks (:func:`wormgear_cli.workflows.measure.structure_findings`), the one definition."""
+    from wormgear_cli.measurement.iso230 import group_targets
+    from wormgear_cli.workflows.measure import structure_findings
 
     tgt, _ = group_targets(meas.angle)
     findings, _ = structure_findings(meas, tgt)
@@ -318,8 +318,8 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> 
     UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}.
     ``tables``: the :func:`order_table` of the measured error and of the
     fitted model before the effects, when already made (else made here)."""
-    from wormgear_cli.analysis import geometry as drive_geometry
-    from wormgear_cli.measurement import ERROR_UNITS
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.measurement.reader import ERROR_UNITS
     from wormgear_cli.units import RAD_PER_UNIT
 
     meas = diag.meas
@@ -399,7 +399,7 @@ def report(diag: Diagnosis) -> dict:
 
 
 def _report(diag: Diagnosis) -> dict:
-    from wormgear_cli.analysis import geometry as drive_geometry
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
 
     g = drive_geometry(diag.spec)
     meas = diag.meas

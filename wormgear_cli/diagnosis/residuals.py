@@ -40,7 +40,7 @@ def noise_floor_rms(state: ModelFit, groups: Groups, time=None) -> float:
 
 def _target_pairs(meas):
     """(key of each row's target/run cell, common and differential per cell with both directions)."""
-    from wormgear_cli.iso230 import group_targets
+    from wormgear_cli.measurement.iso230 import group_targets
 
     tgt, _ = group_targets(meas.angle)
     run = meas.run if "run" in meas.present else np.zeros(len(meas), dtype=int)
@@ -97,9 +97,9 @@ def order_tables(meas, resids, geometry) -> list[list[dict]]:
 
     Which orders are fitted depends on the angles only, and the joint fit's
     design is built once for all residuals
-    (:func:`wormgear_cli.harmonics.fit_modes_each`): the same tables as one
+    (:func:`wormgear_cli.measurement.harmonics.fit_modes_each`): the same tables as one
     call per residual, for little more than the cost of one."""
-    from wormgear_cli.harmonics import fit_modes_each, physical_orders
+    from wormgear_cli.measurement.harmonics import fit_modes_each, physical_orders
 
     phys = physical_orders(geometry, 3)
     bases = (1.0, float(geometry.gear_ratio), float(geometry.output_teeth), float(geometry.worm_order))
@@ -175,7 +175,7 @@ def versus(meas, resid, info: DataInfo, bins: int = 5) -> dict:
 def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
     """Scatter over repeated runs [arcsec]: pooled standard deviation of the residual
     per target and direction, and the fitted white, pass and run components."""
-    from wormgear_cli.iso230 import iso230_figures
+    from wormgear_cli.measurement.iso230 import iso230_figures
 
     t = iso230_figures(meas.angle, resid * ARCSEC, meas.direction).targets
     num = 0.0
@@ -193,7 +193,7 @@ def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
 
 def iso_figures(meas, error_arcsec) -> dict:
     """ISO 230-2 axis figures A, B, E, M, R [arcsec] of an error array at the measured rows."""
-    from wormgear_cli.iso230 import iso230_figures
+    from wormgear_cli.measurement.iso230 import iso230_figures
 
     f = iso230_figures(meas.angle, np.asarray(error_arcsec) * ARCSEC, meas.direction)
     out = {}

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.measurement import time_restarts  # noqa: F401  (re-exported)
+from wormgear_cli.measurement.reader import time_restarts  # noqa: F401  (re-exported)
 
 
 @dataclass(frozen=True)
@@ -165,7 +165,7 @@ class Cells:
 
 def make_cells(theta: np.ndarray, direction: np.ndarray) -> Cells:
     """Cells of a measurement: rows at the same target (angles within 1e-6 deg) and direction."""
-    from wormgear_cli.iso230 import group_targets
+    from wormgear_cli.measurement.iso230 import group_targets
 
     tgt, _ = group_targets(theta)
     key = tgt.astype(np.int64) * 2 + (np.asarray(direction) < 0)

@@ -19,7 +19,7 @@ from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE
 
 #: the catalogue effect whose signature a pattern of the residual scan is
 def _signature_of(item: dict, geometry) -> str | None:
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     if item["kind"] == "reversal":
         return "bearing_clearance"
@@ -35,7 +35,7 @@ def _signature_of(item: dict, geometry) -> str | None:
 
 def _pattern(name: str, geometry) -> tuple[str, str]:
     """(mode, words) of a catalogue effect's signature."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     eff = EFFECTS[name]
     if name == "thermal_backlash":
@@ -107,10 +107,10 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     time, and a mean reversal; Bonferroni over every test made.  ``orders_cache``:
     a dict that keeps the orders the targets resolve between scans of one
     measurement (they depend on the angles only)."""
-    from wormgear_cli.harmonics import physical_orders
-    from wormgear_cli.iso230 import group_targets
+    from wormgear_cli.measurement.harmonics import physical_orders
+    from wormgear_cli.measurement.iso230 import group_targets
 
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     catalogue_orders = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
     r = state.residual
@@ -375,7 +375,7 @@ def unowned_order_columns(items: list[dict], sig, geometry, state: ModelFit) -> 
     held in the model every candidate is tested against, so that strong content at such an
     order (a worm-mesh harmonic of a multi-start worm, say) cannot leak into a catalogue
     effect whose columns it partly projects onto at unevenly spaced targets (issue 10)."""
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     owned = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
     basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)

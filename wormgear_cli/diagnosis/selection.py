@@ -134,8 +134,8 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
 
     Parameters
     ----------
-    spec : a loaded drive (:class:`wormgear_cli.spec.Spec`)
-    meas : a :class:`wormgear_cli.measurement.Measurement` with measured errors
+    spec : a loaded drive (:class:`wormgear_cli.spec.loader.Spec`)
+    meas : a :class:`wormgear_cli.measurement.reader.Measurement` with measured errors
     alpha : family-wise significance level per selection step (0 < alpha < 0.5)
     fit_phases : False holds the spec's phases (when they are known), fitting
         only the zero offset and effects
@@ -151,9 +151,9 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
 
 
 def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -> Diagnosis:
-    from wormgear_cli.analysis import geometry as drive_geometry
-    from wormgear_cli.models.effects import EFFECTS
-    from wormgear_cli.simulation import simulate
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.analysis.simulate import simulate
 
     if not (0.0 < alpha < 0.5):
         raise UsageError(f"--alpha: expected a number in (0, 0.5), got {alpha:g}")
@@ -357,7 +357,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     augmented, aug_fitted = augment(spec, sig, after, sources, found, fit_phases, y)
     thermal = None
     try:
-        from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+        from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
         thermal = float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
     except (ImportError, AttributeError):

@@ -44,10 +44,10 @@ def pyplot():
 
 def check_plot_path(path: Path) -> None:
     """Refuse, before any work, a plot file name whose suffix matplotlib cannot write, or that names
-    a directory or a file in a missing folder (:func:`wormgear_cli.io.check_output_path`)."""
+    a directory or a file in a missing folder (:func:`wormgear_cli.files.check_output_path`)."""
     if Path(path).suffix.lower() not in PLOT_SUFFIXES:
         raise UsageError(f"{path}: --plot expects a file ending in {', '.join(PLOT_SUFFIXES)}")
-    from wormgear_cli.io import check_output_path
+    from wormgear_cli.files import check_output_path
 
     check_output_path(path, "--plot")
 
@@ -66,14 +66,14 @@ def figure_bytes(fig, fmt: str) -> bytes:
 
 def save_figure(fig, path: Path) -> None:
     """Save ``fig`` to ``path`` as one output of the run (atomic, committed with the
-    others; see :func:`wormgear_cli.io.atomic_write`).
+    others; see :func:`wormgear_cli.files.atomic_write`).
 
     Raises
     ------
     UsageError
         Unsupported suffix, or the file cannot be written.
     """
-    from wormgear_cli.io import atomic_write
+    from wormgear_cli.files import atomic_write
 
     check_plot_path(path)
     fmt = Path(path).suffix.lower().lstrip(".")

@@ -32,12 +32,12 @@ def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     """The tolerance [mm] of ``path`` one ISO 1328-1:2013 class finer than the spec's, and the two classes.
 
     Only for a spur-gear key the part's ``accuracy_grade`` sets (the value comes from the
-    grade, not written in the spec: :func:`wormgear_cli.spec.value_origin` is "grade"), with
+    grade, not written in the spec: :func:`wormgear_cli.spec.loader.value_origin` is "grade"), with
     the standard's formulas (eq. 5 F_pT... eq. 6; rounding 5.2.3) at the gear's module,
     reference diameter m z and face width.  None otherwise (no grade, an explicit value,
     already class 1): the step is then the 70 % factor.
     """
-    from wormgear_cli.spec import value_origin
+    from wormgear_cli.spec.loader import value_origin
 
     section, _, key = path.rpartition(".")
     if key not in GRADE_TOLERANCE or section not in ("gear_pair.output_gear", "gear_pair.pinion"):
@@ -49,7 +49,7 @@ def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     grade = part.accuracy_grade
     if grade is None or grade <= 1:
         return None
-    from wormgear_cli.models.iso1328 import flank_tolerances
+    from wormgear_cli.physics.iso1328 import flank_tolerances
 
     tol = flank_tolerances(grade - 1, gp.module, gp.module * part.teeth, gp.face_width, part.teeth)
     return getattr(tol, GRADE_TOLERANCE[key]) * 1e-3, int(grade), int(grade) - 1

@@ -104,7 +104,7 @@ def shard_range(samples: int, shard: tuple[int, int] | None) -> tuple[int, int]:
 
 def plan_targets(options: Options) -> np.ndarray:
     """Test targets [deg]: ``synth``'s iso plan for this seed (its first random stream), or a dense scan."""
-    from wormgear_cli.synth import Plan, plan_angles
+    from wormgear_cli.analysis.synth import Plan, plan_angles
 
     if options.plan == "dense":
         return plan_angles(Plan(kind="dense", points=options.points, runs=1))
@@ -295,7 +295,7 @@ def run(s: Setup, on_block: Callable[[Block], None] | None = None,
 
 
 def _aligned(spec, quantity: str) -> dict[str, np.ndarray]:
-    from wormgear_cli.simulation import aligned_phases, periodic_sources
+    from wormgear_cli.analysis.simulate import aligned_phases, periodic_sources
 
     a = aligned_phases(spec, quantity)  # sources without a size are left out there: 90 deg, as the sinusoids
     return {src.phase_path: np.array([a.get(src.name, 0.5 * math.pi)])
@@ -317,14 +317,14 @@ def reference_values(s: Setup) -> tuple[dict, dict]:
     """Corner case and RSS estimate per metric [unit].
 
     Corner: every tolerance at its limit -- for the paper's totals
-    :func:`wormgear_cli.analysis.analyze` of the spec itself; for the ISO
+    :func:`wormgear_cli.analysis.accuracy.analyze` of the spec itself; for the ISO
     figures the simulated test with every tolerance at its limit and the
     phases aligned (``simulation.aligned_phases``: "reversal" for B, "error"
     otherwise).  RSS: f0 + sqrt(sum_k (f_k - f0)^2), f0 the metric with every
     varied quantity at 0, f_k with quantity k alone at its limit (the classic
     root-sum-square stack-up of the single contributions).
     """
-    from wormgear_cli.analysis import analyze
+    from wormgear_cli.analysis.accuracy import analyze
 
     unit = s.options.unit
     corner, rss = {}, {}

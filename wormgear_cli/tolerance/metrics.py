@@ -1,11 +1,11 @@
 """Metrics of each sampled drive, vectorised over samples.
 
 * ``total_transmission_error``, ``total_backlash``: the paper's totals
-  exactly as :func:`wormgear_cli.analysis.analyze` computes them (same model
+  exactly as :func:`wormgear_cli.analysis.accuracy.analyze` computes them (same model
   functions, here on arrays of sampled values); phases do not enter them.
 * ``iso230_E``, ``iso230_B``, ``iso230_M``, ``iso230_A``: the ISO 230-2:2014
   (clause 2) figures of an acceptance test without measurement noise, on the
-  curve :func:`wormgear_cli.simulation.simulate` gives for the sample's values
+  curve :func:`wormgear_cli.analysis.simulate.simulate` gives for the sample's values
   and phases, at the test's targets (one run; with no noise every run is the
   same, s = 0, so A = E):
   E = max_i,dir x_i - min_i,dir x_i;  B = max_i |x_i(up) - x_i(down)|;
@@ -13,7 +13,7 @@
   A = max(x + 2 s) - min(x - 2 s) with s = 0.
 
 * ``budget_linear``, ``budget_rss``: the full error budget's TE at the output
-  (:mod:`wormgear_cli.budget`, the lines of ``simulation.periodic_sources`` with
+  (:mod:`wormgear_cli.analysis.budget`, the lines of ``simulation.periodic_sources`` with
   every budget source plus the two static deflection lines) under the linear
   rule (sum of every line's maximum) and the rss rule (static lines + root-sum-
   square of the periodic ones); phases do not enter them.  The peak rule (a
@@ -22,7 +22,7 @@
 Both gear-stage kinematics are followed (``gear_pair.kinematics``): ``paper``
 (the paper's Delta phi_cc curve of Delta e) and ``involute`` (TE e/r_b1 at the
 pinion's order, centre-distance error and thickness allowances in the backlash;
-:func:`wormgear_cli.models.gear.involute_stage`).
+:func:`wormgear_cli.physics.spur.involute_stage`).
 
 The simulated error (simulation module doc) written per sample with the
 sinusoidal sources of one shaft combined into one term
@@ -49,8 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.models import gear as gear_model
-from wormgear_cli.models import worm as worm_model
+from wormgear_cli.physics import spur as gear_model
+from wormgear_cli.physics import worm as worm_model
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
 BUDGET_METRICS = ("budget_linear", "budget_rss")
@@ -69,7 +69,7 @@ _ISO_CELLS = 2_097_152
 class GearTeMax:
     """max over phi of the paper's Delta phi_cc as a function of Delta e alone (the other
     inputs are fixed by the spec).  Evaluated with a Chebyshev interpolant on [0, T]
-    of :func:`wormgear_cli.models.gear.gear_te_max_fast` (degree 48, checked against
+    of :func:`wormgear_cli.physics.spur.gear_te_max_fast` (degree 48, checked against
     the exact maximiser between the nodes to 1e-11 relative; the exact maximiser
     is used when the check fails).  Capped at the value at T (the maximum grows
     with Delta e), so no sample exceeds the corner case.  ``part="deformation"``:
@@ -130,9 +130,9 @@ class Context:
 def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, dwell_s: float = 10.0) -> Context:
     """Build the :class:`Context` of ``spec`` for test targets ``targets_rad`` [rad] (one
     run, forward pass then reverse pass, ``dwell_s`` [s] per point as ``synth``)."""
-    from wormgear_cli.analysis import deflections
-    from wormgear_cli.models.effects import Signals
-    from wormgear_cli.simulation import components
+    from wormgear_cli.analysis.accuracy import deflections
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.analysis.simulate import components
 
     d = deflections(spec)
     theta = np.asarray(targets_rad, dtype=float)
@@ -197,7 +197,7 @@ def _sinusoids(ctx: Context, v: dict) -> list:
     """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), in
     the order of ``simulation.periodic_sources`` (the gear eccentricity only under the involute
     kinematics, where it is the sinusoid e/r_b1 at order i_c)."""
-    from wormgear_cli.analysis import geometry
+    from wormgear_cli.analysis.accuracy import geometry
 
     spec = ctx.spec
     g = geometry(spec)
@@ -236,7 +236,7 @@ def _sinusoids(ctx: Context, v: dict) -> list:
 
 def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     """The full budget's TE [rad] per sample under the linear and the rss rule, as
-    :func:`wormgear_cli.budget.budget` combines its lines (module doc there):
+    :func:`wormgear_cli.analysis.budget.budget` combines its lines (module doc there):
     linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
 
     Lines: the gear eccentricity (paper: the kinematic maximum of Delta phi_cc at no
@@ -279,7 +279,7 @@ def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarra
 
 
 def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
-    from wormgear_cli.analysis import geometry
+    from wormgear_cli.analysis.accuracy import geometry
 
     spec = ctx.spec
     g = geometry(spec)

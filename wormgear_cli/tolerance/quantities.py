@@ -183,7 +183,7 @@ class Varied:
 
 def spec_value(spec, path: str):
     """The value of a TOML ``path`` in a loaded spec (internal units; a tuple for an array key)."""
-    from wormgear_cli.spec import FIELD_BY_PATH
+    from wormgear_cli.spec.loader import FIELD_BY_PATH
 
     f = FIELD_BY_PATH[path]
     node = spec
@@ -201,11 +201,11 @@ def tolerance_value(spec, quantity: Quantity):
     """The tolerance the model reads for ``quantity`` [mm] (a tuple for an array key): the
     spec value; 0 when the spec's kinematics does not read the key; for the gear
     eccentricity under the involute kinematics only an eccentricity written in the spec
-    (:func:`wormgear_cli.analysis.gear_eccentricity`)."""
+    (:func:`wormgear_cli.analysis.accuracy.gear_eccentricity`)."""
     if not applies(spec, quantity):
         return (0.0,) * quantity.length if quantity.length > 1 else 0.0
     if quantity.path == "assembly.gear_eccentricity_mm":
-        from wormgear_cli.analysis import gear_eccentricity
+        from wormgear_cli.analysis.accuracy import gear_eccentricity
 
         return gear_eccentricity(spec)
     return spec_value(spec, quantity.path)
@@ -239,7 +239,7 @@ def statistics_table(spec) -> dict[str, dict]:
     distribution that does not fit the quantity's kind, ``cp``/``cpk`` not a
     positive number, ``cpk`` > ``cp``, ``cp``/``cpk`` with the uniform law.
     """
-    from wormgear_cli.spec import FIELD_BY_PATH
+    from wormgear_cli.spec.loader import FIELD_BY_PATH
     from wormgear_cli.tolerance.sampling import DISTRIBUTIONS
 
     table = spec.raw.get("statistics")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 
-from wormgear_cli.spec import FIELDS, UNIT_SCALE, Field
+from wormgear_cli.spec.loader import FIELDS, UNIT_SCALE, Field
 
 #: values of configs/mch50.toml that the paper's Table 1 does not give (the assumptions named
 #: and justified in that file), in key units
@@ -60,7 +60,7 @@ def _value(f: Field):
 
 def _derived(values: dict, name: str) -> dict:
     """path -> the value (key units) the drive derives for each key left out of ``values``."""
-    from wormgear_cli.spec import spec_from_dict
+    from wormgear_cli.spec.loader import spec_from_dict
 
     data: dict = {}
     for path, v in values.items():

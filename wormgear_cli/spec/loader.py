@@ -23,7 +23,7 @@ from types import MappingProxyType, SimpleNamespace
 from typing import Any, NamedTuple
 
 from wormgear_cli.errors import SpecError, did_you_mean
-from wormgear_cli.models.deformation import DEFORMATION_MODELS
+from wormgear_cli.physics.deformation import DEFORMATION_MODELS
 
 from wormgear_cli.units import ARCSEC, DEG  # noqa: E402  (the one definition of each)
 
@@ -389,11 +389,11 @@ def _freeze(obj):
 
 def load_spec(path: str | Path) -> Spec:
     """Read and validate a drive file.  Raises :class:`SpecError` listing every problem."""
-    from wormgear_cli.io import read_text_file
+    from wormgear_cli.files import read_text_file
 
     path = Path(path)
     name = str(path)
-    from wormgear_cli.tomlguard import MAX_SPEC_BYTES
+    from wormgear_cli.spec.toml import MAX_SPEC_BYTES
 
     text = read_text_file(path, "a TOML drive file", SpecError, encoding="utf-8-sig",  # a BOM is tolerated
                           max_bytes=MAX_SPEC_BYTES)
@@ -403,9 +403,9 @@ def load_spec(path: str | Path) -> Spec:
 
 
 def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:
-    """Parse TOML text (bounded, see :mod:`wormgear_cli.tomlguard`) and validate it (see
+    """Parse TOML text (bounded, see :mod:`wormgear_cli.spec.toml`) and validate it (see
     :func:`load_spec`)."""
-    from wormgear_cli.tomlguard import parse_toml
+    from wormgear_cli.spec.toml import parse_toml
 
     data = parse_toml(text, source)
     return spec_from_dict(data, source, default_name)
@@ -478,7 +478,7 @@ def _apply_grades(values: dict, bad) -> None:
         teeth = values[f"{sec}.teeth"]
         if teeth is _MISSING:
             continue
-        from wormgear_cli.models.iso1328 import GradeError, flank_tolerances
+        from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
 
         try:
             tol = flank_tolerances(grade, module, module * teeth, face, teeth)
@@ -646,7 +646,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
         return {}
     if not isinstance(table, dict):
         return {}
-    from wormgear_cli.models.effects import EFFECTS, params_from_keys
+    from wormgear_cli.physics.effects import EFFECTS, params_from_keys
 
     out = {}
     for name, params in table.items():
@@ -714,7 +714,7 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
         for key in ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm"):
             v[f"{sec}.{key}"] = take(f"{sec}.{key}", 0.0)
     if v["stiffness.contact_ratio"] is _MISSING:
-        from wormgear_cli.models.deformation import spur_contact_ratio
+        from wormgear_cli.physics.deformation import spur_contact_ratio
 
         v["stiffness.contact_ratio"] = float(spur_contact_ratio(
             v["gear_pair.output_gear.teeth"], v["gear_pair.pinion.teeth"], v["gear_pair.pressure_angle_deg"]))

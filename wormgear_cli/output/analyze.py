@@ -8,9 +8,9 @@ from __future__ import annotations
 
 def document(spec, result, unit: str) -> dict:
     """The JSON document of ``wormgear analyze`` (angles in ``unit``): the paper's stage and
-    total values (:meth:`wormgear_cli.analysis.Analysis.report`), the full error budget
-    (:func:`wormgear_cli.budget.budget`) and the values used with their origin."""
-    from wormgear_cli.budget import budget
+    total values (:meth:`wormgear_cli.analysis.accuracy.Analysis.report`), the full error budget
+    (:func:`wormgear_cli.analysis.budget.budget`) and the values used with their origin."""
+    from wormgear_cli.analysis.budget import budget
 
     return {**result.report(unit), **budget(spec, result).report(unit), "values_used": values_used(spec)}
 
@@ -29,7 +29,7 @@ LISTED_KEYS = (
 
 def values_used(spec) -> list:
     """``[{"key", "value_um", "origin"}]`` for :data:`LISTED_KEYS` (origin: spec / grade / default)."""
-    from wormgear_cli.spec import FIELD_BY_PATH, value_origin
+    from wormgear_cli.spec.loader import FIELD_BY_PATH, value_origin
 
     out = []
     for path in LISTED_KEYS:

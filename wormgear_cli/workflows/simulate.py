@@ -2,7 +2,7 @@
 CSV, as CSV text or a JSON document, plus the curves for the plot.
 
 Core code (no I/O beyond reading the ``--at`` measurement file through
-:func:`wormgear_cli.measurement.read_measurement`, no typer, no rich).  Angles are converted
+:func:`wormgear_cli.measurement.reader.read_measurement`, no typer, no rich).  Angles are converted
 to the output unit here.
 """
 
@@ -14,8 +14,8 @@ from typing import Optional
 
 import numpy as np
 
-from wormgear_cli.formats import csv_text, fmt_number, json_text
-from wormgear_cli.models.effects import Signals
+from wormgear_cli.output.formats import csv_text, fmt_number, json_text
+from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import to_unit
 
 #: --phases values: as in the spec, or aligned so every source peaks at 0 deg
@@ -33,7 +33,7 @@ class SimulationReport:
 
 def phase_map(spec, which: str) -> Optional[dict]:
     """Source name -> phase [rad] for ``--phases`` ``which``; None keeps the spec's."""
-    from wormgear_cli.simulation import aligned_phases
+    from wormgear_cli.analysis.simulate import aligned_phases
 
     if which == "spec":
         return None
@@ -42,12 +42,12 @@ def phase_map(spec, which: str) -> Optional[dict]:
 
 def effect_params(spec, requested: dict) -> Optional[dict]:
     """The effects to simulate: the spec's merged with ``requested`` (name -> {key: value},
-    :func:`wormgear_cli.synth.parse_effects`) as parameter records; None (the spec's own)
+    :func:`wormgear_cli.analysis.synth.parse_effects`) as parameter records; None (the spec's own)
     when nothing is requested."""
     if not requested:
         return None
-    from wormgear_cli.models.effects import params_from_keys
-    from wormgear_cli.synth import resolve_effects
+    from wormgear_cli.physics.effects import params_from_keys
+    from wormgear_cli.analysis.synth import resolve_effects
 
     return {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
 
@@ -60,10 +60,10 @@ def _summary(v) -> dict:
 def context(spec, unit: str, phases: Optional[dict], effects: Optional[dict]) -> dict:
     """Spec-level facts shared by both JSON documents: sources (order, amplitude in ``unit``,
     phase), effects, the analyze totals and the predicted thermal centre-distance change."""
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.models.effects import params_to_keys
-    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
-    from wormgear_cli.simulation import periodic_sources
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.physics.effects import params_to_keys
+    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.analysis.simulate import periodic_sources
 
     a = analyze(spec)
     sources = {}
@@ -87,7 +87,7 @@ def dense(spec, points: int, revs: float, unit: str, fmt: str, temperature_c: fl
     end excluded).  CSV columns: angle_deg, forward_<unit>, reverse_<unit>, common_<unit>
     (mean of both), lost_motion_<unit> (reverse - forward); ``fmt`` "json" gives the
     document with summaries and the curve."""
-    from wormgear_cli.simulation import simulate as run
+    from wormgear_cli.analysis.simulate import simulate as run
 
     phases = phase_map(spec, which)
     angle_deg = np.arange(points) * (360.0 * revs / points)
@@ -132,8 +132,8 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     import csv
     import io
 
-    from wormgear_cli.measurement import read_measurement
-    from wormgear_cli.simulation import simulate as run
+    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.analysis.simulate import simulate as run
 
     data = read_measurement(at, require_error=False)
     phases = phase_map(spec, which)

@@ -2,7 +2,7 @@
 
 The (i, l) CSV is mostly number formatting: blocks of the grid are computed in order and
 formatted by two worker threads (numpy releases the GIL) with the vectorised
-:func:`wormgear_cli.formats.csv_block`, at most three blocks in flight, so memory stays
+:func:`wormgear_cli.output.formats.csv_block`, at most three blocks in flight, so memory stays
 constant however large the grid.  Angles are converted to the output unit here.
 """
 
@@ -12,10 +12,10 @@ from typing import Callable, Iterator, Optional
 
 import numpy as np
 
-from wormgear_cli.formats import csv_block, csv_text, fmt_angle
-from wormgear_cli.tables import Cell, Column, Table
-from wormgear_cli import sweep as core
-from wormgear_cli.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
+from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
+from wormgear_cli.output.tables import Cell, Column, Table
+from wormgear_cli.analysis import sweep as core
+from wormgear_cli.analysis.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
 from wormgear_cli.units import to_unit
 
 #: heat-map size shown in the table (rows = i values, columns = l values)
@@ -219,7 +219,7 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
 
 def param_columns(axes) -> list:
     """CSV/JSON columns of a --param sweep: the keys, then every analyze metric."""
-    from wormgear_cli.analysis import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
 
     return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.harmonics import _as_1d
+from wormgear_cli.measurement.harmonics import _as_1d
 
 
 #: degree of the polynomial trend that stands for the orders longer than a partial span

@@ -14,7 +14,7 @@ r_0 = 0, r_i uniform in +/- ``jitter`` p, rounded to 0.001 deg) so periodic
 errors are sampled fairly; the ``dense`` plan scans ``points`` evenly
 spaced angles per pass.
 
-Each sample's error is the model (:func:`wormgear_cli.simulation.simulate`
+Each sample's error is the model (:func:`wormgear_cli.analysis.simulate.simulate`
 with the spec's sources at their phases, plus the chosen effects) at that
 sample's angle, direction, load, temperature and time, plus noise:
 
@@ -37,7 +37,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from wormgear_cli.errors import UsageError, did_you_mean
-from wormgear_cli.models.effects import EFFECTS, Signals, params_from_keys, params_to_keys
+from wormgear_cli.physics.effects import EFFECTS, Signals, params_from_keys, params_to_keys
 
 from wormgear_cli.units import ARCSEC  # noqa: E402  (the one definition)
 
@@ -141,7 +141,7 @@ class Programme:
     is the worm mesh's (sensor at the mesh / in its oil) and warms as
     ``warmup``; the housing rises towards ``share`` of the mesh's rise,
     lagging it by a first-order lag ``lag_s``
-    (:func:`wormgear_cli.models.thermal.mesh_housing_warmup`).
+    (:func:`wormgear_cli.physics.thermal.mesh_housing_warmup`).
     Load kinds: ``constant`` (L); ``steps`` (L1, L2, ...): run j (1-based)
     at L[(j - 1) mod n].
     """
@@ -170,7 +170,7 @@ class Programme:
         """The housing temperature [degC] at times ``t`` [s] of a ``mesh-warmup``, else None."""
         if self.kind != "mesh-warmup":
             return None
-        from wormgear_cli.models.thermal import mesh_housing_warmup
+        from wormgear_cli.physics.thermal import mesh_housing_warmup
 
         t0, t1, tau, share, lag = self.values
         return t0 + mesh_housing_warmup(t, t1 - t0, tau, share, lag)[1]
@@ -299,7 +299,7 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
     outside its physical range or an unknown name raises UsageError.
     Returns name -> {key: value} in catalogue units, in catalogue order.
     """
-    from wormgear_cli.models.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
     merged: dict[str, dict] = {}
     if include_spec:
@@ -372,7 +372,7 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
 
     Parameters
     ----------
-    spec : a loaded drive (:class:`wormgear_cli.spec.Spec`)
+    spec : a loaded drive (:class:`wormgear_cli.spec.loader.Spec`)
     plan : :class:`Plan` (default: iso, 24 targets, 5 runs, one turn, 10 s per point)
     effects : name -> {key: value} in catalogue units (merged over the spec's
         ``[effects.*]``; see :func:`resolve_effects`)
@@ -390,7 +390,7 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
     angle_deg, error_arcsec, direction (+1/-1), run (1..runs), load_Nm,
     temperature_C, time_s, each a numpy array, rows in measuring order.
     """
-    from wormgear_cli.simulation import periodic_sources, simulate
+    from wormgear_cli.analysis.simulate import periodic_sources, simulate
 
     plan = plan or Plan()
     noise = noise or Noise()
@@ -503,7 +503,7 @@ def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
     Worm and wheel are at the recorded (mesh) temperature T_m, the housing at
     T_H (:meth:`Programme.housing`); the centre distance changes by
     Delta a(t) = a alpha_H dT_H - (r_1 alpha_1 + r_2 alpha_2) dT_m
-    (:func:`wormgear_cli.models.thermal.centre_distance_change_mm`), and the
+    (:func:`wormgear_cli.physics.thermal.centre_distance_change_mm`), and the
     catalogue signature turns Delta a into the output error: the backlash
     changes by 2 Delta a tan(alpha_x) at the wheel pitch circle.  The
     temperatures are those of the rounded time column; dT from the
@@ -511,15 +511,15 @@ def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
 
     The truth's ``thermal_backlash`` coefficient is the physics' own,
     a alpha_H s - (r_1 alpha_1 + r_2 alpha_2)
-    (:func:`~wormgear_cli.models.thermal.predicted_centre_distance_um_per_K`
+    (:func:`~wormgear_cli.physics.thermal.predicted_centre_distance_um_per_K`
     with q = the housing share s: exact once the lag has settled).  The
     ``thermal`` block adds the linear equivalent over this test (least
     squares of Delta a on dT_m through the start) and the non-linearity the
     lag leaves (the physical term minus the linear one, RMS and max over the
     rows [arcsec]).
     """
-    from wormgear_cli.analysis import geometry
-    from wormgear_cli.models.thermal import (centre_distance_change_mm, predicted_centre_distance_um_per_K,
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.physics.thermal import (centre_distance_change_mm, predicted_centre_distance_um_per_K,
                                              worm_pair_radii)
 
     t0, _t1, _tau, share, lag = temperature.values

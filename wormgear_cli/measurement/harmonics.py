@@ -15,8 +15,8 @@ evenly spaced targets over one revolution order 240 is indistinguishable
 from a constant and order 300 from order 12.
 
 The measurement-level steps live in their own modules and are re-exported
-here: :mod:`wormgear_cli.coverage` (span covered, trend, unwrapping) and
-:mod:`wormgear_cli.order_analysis` (:func:`analyse_orders`).  The one test
+here: :mod:`wormgear_cli.measurement.coverage` (span covered, trend, unwrapping) and
+:mod:`wormgear_cli.measurement.orders` (:func:`analyse_orders`).  The one test
 of which orders can be fitted together is :func:`select_orders` /
 :func:`resolvable_orders` here.
 
@@ -650,7 +650,7 @@ def physical_orders(geometry, harmonics: int = 3, worm_starts: int = 1,
     mesh order z_worm n_w = i_c z3 "worm mesh" (for a single-start worm the
     two coincide and the label is "worm shaft and worm mesh").  Each base
     order k also contributes h k for h = 2..``harmonics`` ("2nd harmonic of
-    ...").  ``geometry``: :class:`~wormgear_cli.models.effects.DriveGeometry`
+    ...").  ``geometry``: :class:`~wormgear_cli.physics.effects.DriveGeometry`
     (fields gear_ratio, worm_order, output_teeth).  Orders equal within
     ``rel_tol`` are merged and their labels joined with " / " in the order
     above.  Returns (order, label) sorted by order.
@@ -821,5 +821,5 @@ def resolvable_orders(theta, candidates: Sequence[float], min_eigenvalue: float 
 
 
 # --- re-exported: the measurement-level analysis lives in its own modules --------------------------------------
-from wormgear_cli.coverage import Coverage, coverage, trend_columns, unwrap_passes  # noqa: E402,F401
-from wormgear_cli.order_analysis import STATUSES, OrderReport, OrdersAnalysis, analyse_orders  # noqa: E402,F401
+from wormgear_cli.measurement.coverage import Coverage, coverage, trend_columns, unwrap_passes  # noqa: E402,F401
+from wormgear_cli.measurement.orders import STATUSES, OrderReport, OrdersAnalysis, analyse_orders  # noqa: E402,F401

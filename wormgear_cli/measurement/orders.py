@@ -16,8 +16,8 @@ from typing import Sequence
 
 import numpy as np
 
-from wormgear_cli.coverage import TREND_DEGREE, Coverage, coverage, trend_columns, unwrap_passes
-from wormgear_cli.harmonics import (
+from wormgear_cli.measurement.coverage import TREND_DEGREE, Coverage, coverage, trend_columns, unwrap_passes
+from wormgear_cli.measurement.harmonics import (
     ALIAS_TOL,
     BLOCK_ROWS,
     ModeFit,

@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from wormgear_cli.models import deformation, gear, worm
+from wormgear_cli.physics import deformation, spur as gear, worm
 from wormgear_cli.units import to_unit
 
 #: flat metric columns (CSV of analyze, columns of sweep --param); all angles
@@ -52,7 +52,7 @@ class Deflections(NamedTuple):
 
 def geometry(spec):
     """Derived geometry used by the effect catalogue and simulation (a ``DriveGeometry``)."""
-    from wormgear_cli.models.geometry import DriveGeometry
+    from wormgear_cli.physics.geometry import DriveGeometry
 
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
@@ -148,7 +148,7 @@ def gear_eccentricity(spec) -> float:
     backlash, not TE, so it does not default into the eccentricity."""
     if spec.gear_pair.kinematics == "paper":
         return spec.assembly.gear_eccentricity
-    from wormgear_cli.spec import value_origin
+    from wormgear_cli.spec.loader import value_origin
 
     return spec.assembly.gear_eccentricity if value_origin(spec, "assembly.gear_eccentricity_mm") == "spec" else 0.0
 
@@ -259,7 +259,7 @@ class WormStage(NamedTuple):
 def worm_stage(spec, deflection) -> WormStage:
     """The paper's worm stage of ``spec`` at tooth deflection ``deflection`` [mm] (delta2; scalar
     or array): its TE and backlash at the wheel shaft with their parts (paper's Delta phi_wc and
-    Delta phi_wh equations; :mod:`wormgear_cli.models.worm`).  The one definition that ``analyze``
+    Delta phi_wh equations; :mod:`wormgear_cli.physics.worm`).  The one definition that ``analyze``
     and the torque-held ``sweep`` use."""
     wp, asm = spec.worm_pair, spec.assembly
     lam, a2 = wp.lead_angle, wp.transverse_pressure_angle

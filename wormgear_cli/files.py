@@ -35,7 +35,7 @@ from pathlib import Path
 from wormgear_cli.errors import UsageError
 
 #: largest input file (drive spec or measurement CSV) any command reads [bytes]; the TOML
-#: guard (:mod:`wormgear_cli.tomlguard`) has a smaller limit of its own for drive files
+#: guard (:mod:`wormgear_cli.spec.toml`) has a smaller limit of its own for drive files
 MAX_INPUT_BYTES = 16 * 1024 * 1024
 
 #: bytes read per step by :func:`read_text_file` (binary content is refused after the first one)

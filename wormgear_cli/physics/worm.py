@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from wormgear_cli.models.gear import pitch_arc_to_angle
+from wormgear_cli.physics.spur import pitch_arc_to_angle
 
 
 def wheel_transverse_pressure_angle(normal_pressure_angle, lead_angle):

@@ -20,7 +20,7 @@ import numpy as np
 
 UM = 1e-3  # mm per um
 from wormgear_cli.units import ARCSEC, DEG  # noqa: E402,F401  (rad per arcsec, per degree: one definition)
-from wormgear_cli.models.geometry import DriveGeometry  # noqa: E402,F401  (re-exported: its old home)
+from wormgear_cli.physics.geometry import DriveGeometry  # noqa: E402,F401  (re-exported: its old home)
 
 
 @dataclass(frozen=True)

@@ -5,10 +5,10 @@ No I/O, no typer, no rich.  Two kinds of sweep:
 * :class:`RatioDistanceSweep` -- the paper's Figure 1 study.  For every (i, l) of a grid the
   spur stage gets R1 = l/(1+i), R2 = l i/(1+i); everything else comes from the drive spec.
   Evaluated in chunks, fully vectorised, with the exact maximum over phi from
-  :func:`wormgear_cli.models.gear.gear_te_max_fast` (the kinematic peak is found once per
+  :func:`wormgear_cli.physics.spur.gear_te_max_fast` (the kinematic peak is found once per
   centre distance).  ``module`` snaps each point to whole tooth counts.
 * :func:`param_rows` -- a grid over any numeric spec keys (TOML paths); each point is
-  :func:`wormgear_cli.spec.with_values` + :func:`wormgear_cli.analysis.analyze`, so every row
+  :func:`wormgear_cli.spec.loader.with_values` + :func:`wormgear_cli.analysis.accuracy.analyze`, so every row
   reproduces ``wormgear analyze`` exactly.
 
 What is held fixed as i and l change (``hold``):
@@ -218,8 +218,8 @@ class RatioDistanceSweep:
 
     def __init__(self, spec, i_values, l_values, hold: str = "force", module: Optional[float] = None,
                  min_teeth: Optional[int] = None):
-        from wormgear_cli.analysis import analyze, gear_eccentricity
-        from wormgear_cli.models import gear
+        from wormgear_cli.analysis.accuracy import analyze, gear_eccentricity
+        from wormgear_cli.physics import spur as gear
 
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
@@ -319,8 +319,8 @@ class RatioDistanceSweep:
 
     def _deflections(self, z1, z2, module, r2, ratio):
         """delta1 [mm] of the spur mesh and the worm-mesh load factor, per design."""
-        from wormgear_cli.analysis import deflections
-        from wormgear_cli.models.deformation import spur_contact_ratio
+        from wormgear_cli.analysis.accuracy import deflections
+        from wormgear_cli.physics.deformation import spur_contact_ratio
 
         spec, ref = self.spec, self.reference
         gp, st = spec.gear_pair, spec.stiffness
@@ -342,10 +342,10 @@ class RatioDistanceSweep:
     def evaluate(self, i, l, peak=None, teeth=None) -> dict:
         """Metrics [rad, mm, um, deg] of designs with ratio ``i`` and centre distance ``l`` [mm]
         (arrays), with the sweep's module, hold and spec.  ``peak``: the kinematic peak per
-        design (:func:`~wormgear_cli.models.gear.kinematic_peak`), computed when omitted.
+        design (:func:`~wormgear_cli.physics.spur.kinematic_peak`), computed when omitted.
         ``teeth``: whole (z1, z2) of snapped designs (then R = m z / 2 exactly); otherwise
         z = 2 R / m."""
-        from wormgear_cli.models import gear
+        from wormgear_cli.physics import spur as gear
 
         i = np.asarray(i, dtype=float)
         l = np.asarray(l, dtype=float)
@@ -376,7 +376,7 @@ class RatioDistanceSweep:
             # the worm-mesh force follows the intermediate-shaft torque: the worm stage at that force, by the
             # same equations as analyze (the deflection is not linear in the force: ISO 6336-1's low-load
             # stiffness), once per distinct ratio
-            from wormgear_cli.analysis import deflections, worm_stage
+            from wormgear_cli.analysis.accuracy import deflections, worm_stage
 
             scales, where = np.unique(np.asarray(worm_scale, dtype=float), return_inverse=True)
             ws = worm_stage(self.spec, deflections(self.spec, worm_force=ref.worm_force * scales).worm)
@@ -397,7 +397,7 @@ class RatioDistanceSweep:
         """The kinematic peak at l indices ``li``.  A long l axis is done in fixed blocks of
         :data:`CHUNK_POINTS` l values (the last two kept), so a value never depends on which
         points share its block of work: shards stay byte-identical to the whole run."""
-        from wormgear_cli.models import gear
+        from wormgear_cli.physics import spur as gear
 
         if self._peak is not None:
             return tuple(p[li] for p in self._peak)
@@ -424,7 +424,7 @@ class RatioDistanceSweep:
         index of each row.  With a module, skipped designs are left out.  ``progress(n)`` is
         called after each block with the number of grid points it covered.
         """
-        from wormgear_cli.models import gear
+        from wormgear_cli.physics import spur as gear
 
         stop = self.size if stop is None else stop
         for a in range(start, stop, chunk):
@@ -635,7 +635,7 @@ class ParamAxis:
 
 
 def _effect_param_keys() -> list[str]:
-    from wormgear_cli.models.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS
 
     return [f"effects.{name}.{p.key}" for name, eff in EFFECTS.items() for p in eff.params]
 
@@ -648,7 +648,7 @@ def parse_param(text: str) -> ParamAxis:
     ``diagnose``, not the ``analyze`` metrics a --param sweep reports, so every row would be
     the same.
     """
-    from wormgear_cli.spec import FIELD_BY_PATH
+    from wormgear_cli.spec.loader import FIELD_BY_PATH
 
     if "=" not in text:
         raise UsageError(f'--param "{text}": expected KEY=START:STOP:N, e.g. worm_pair.lead_error_mm=0:0.05:11')
@@ -701,8 +701,8 @@ def param_rows(spec, axes: list[ParamAxis], start: int = 0, stop: Optional[int] 
                progress: Optional[Callable[[int], None]] = None) -> Iterator[tuple]:
     """(values, Analysis) for points [start, stop) of the grid over ``axes`` (row-major, the
     first axis outermost).  Each point is ``analyze(with_values(spec, {key: value, ...}))``."""
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.spec import with_values
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.spec.loader import with_values
 
     total = param_size(axes)
     stop = total if stop is None else stop

@@ -9,7 +9,7 @@ them to get exactly the bytes the CLI writes.
 * :func:`json_text`: deterministic JSON (NaN/inf -> null).
 * :func:`fmt_angle`: an angle for a table cell, at the unit's natural resolution.
 * Tables as data (:class:`Table`, :class:`Column`, :class:`Cell`) live in
-  :mod:`wormgear_cli.tables` (still importable from here).
+  :mod:`wormgear_cli.output.tables` (still importable from here).
 """
 
 from __future__ import annotations
@@ -23,10 +23,10 @@ CSV_DIGITS = 12
 
 
 def __getattr__(name: str):
-    # the table classes moved to wormgear_cli.tables (one topic per module, and ``analyze``
+    # the table classes moved to wormgear_cli.output.tables (one topic per module, and ``analyze``
     # does not pay for three dataclasses it does not draw); the old names still work
     if name in ("Cell", "Column", "Table"):
-        from wormgear_cli import tables
+        from wormgear_cli.output import tables
 
         return getattr(tables, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -9,7 +9,7 @@ serious ones also in the verdict line):
 
 * no direction column yet a run visits a target more than once (an up/down
   table flattened): warned, and the one-direction figures are withheld
-  (:func:`~wormgear_cli.iso230.withhold_directional`);
+  (:func:`~wormgear_cli.measurement.iso230.withhold_directional`);
 * passes inferred where ``time_s`` goes backwards (from the reader);
 * exact duplicate rows; ``time_s`` going backwards inside a run;
 * one direction only; one target only (one-position test);
@@ -47,10 +47,10 @@ class Finding:
 class MeasureResult:
     """Result of :func:`measure`.
 
-    ``measurement`` (:class:`~wormgear_cli.measurement.Measurement`),
-    ``figures`` (:class:`~wormgear_cli.iso230.Iso230Figures`, one-direction
+    ``measurement`` (:class:`~wormgear_cli.measurement.reader.Measurement`),
+    ``figures`` (:class:`~wormgear_cli.measurement.iso230.Iso230Figures`, one-direction
     values withheld when the directions are mixed), ``analysis``
-    (:class:`~wormgear_cli.harmonics.OrdersAnalysis`), ``drive_name``,
+    (:class:`~wormgear_cli.measurement.harmonics.OrdersAnalysis`), ``drive_name``,
     ``findings`` (tuple of :class:`Finding`), ``mixed_directions``.
     """
 
@@ -147,7 +147,7 @@ def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list
     ----------
     m : Measurement
     target_index : ndarray of int, shape (n,)
-        Target of each row (:func:`~wormgear_cli.iso230.group_targets`).
+        Target of each row (:func:`~wormgear_cli.measurement.iso230.group_targets`).
     repeated : ndarray of bool, shape (n,), optional
         Rows whose angle occurs more than once (see :func:`duplicate_rows`).
     """
@@ -216,7 +216,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     Parameters
     ----------
     data : str or Path
-        Measurement CSV (:func:`~wormgear_cli.measurement.read_measurement`).
+        Measurement CSV (:func:`~wormgear_cli.measurement.reader.read_measurement`).
     options : ReadOptions or None
         Column map and units.
     drive : str or Path or None
@@ -232,17 +232,17 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
-    from wormgear_cli.harmonics import physical_orders, physical_priority
-    from wormgear_cli.order_analysis import analyse_orders
-    from wormgear_cli.iso230 import group_targets, iso230_figures, withhold_directional
-    from wormgear_cli.measurement import read_measurement
+    from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
+    from wormgear_cli.measurement.orders import analyse_orders
+    from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
+    from wormgear_cli.measurement.reader import read_measurement
 
     physical: list = []
     priority = None
     drive_name = None
     if drive is not None:
-        from wormgear_cli.analysis import geometry
-        from wormgear_cli.spec import load_spec
+        from wormgear_cli.analysis.accuracy import geometry
+        from wormgear_cli.spec.loader import load_spec
 
         spec = load_spec(drive)
         drive_name = spec.drive.name

@@ -134,7 +134,7 @@ def empirical_deflection(normal_force, modulus, face_width, contact_ratio, lambd
     a1, b, c : the empirical constants A1, B, C [-]
 
     The paper gives neither the constants nor the meaning of lambda2; see
-    :data:`wormgear_cli.spec` defaults for the chosen values and why.
+    :data:`wormgear_cli.spec.loader` defaults for the chosen values and why.
     Linear in load.
     """
     return a1 * normal_force / ((contact_ratio + 1.0) ** b * (lambda2 + 1.0) ** c * modulus * face_width)

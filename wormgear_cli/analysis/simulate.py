@@ -71,13 +71,13 @@ from typing import Callable, NamedTuple, TYPE_CHECKING
 
 import numpy as np
 
-from wormgear_cli.analysis import deflections, gear_eccentricity, geometry
-from wormgear_cli.models import gear as gear_model
-from wormgear_cli.models import worm as worm_model
-from wormgear_cli.models.geometry import DriveGeometry  # noqa: F401  (annotations)
+from wormgear_cli.analysis.accuracy import deflections, gear_eccentricity, geometry
+from wormgear_cli.physics import spur as gear_model
+from wormgear_cli.physics import worm as worm_model
+from wormgear_cli.physics.geometry import DriveGeometry  # noqa: F401  (annotations)
 
 if TYPE_CHECKING:
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
 
 # an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
@@ -315,7 +315,7 @@ def components(spec, signals: Signals, phases: dict | None = None,
     out["lost_motion"] = -d * lost / 2.0
     out["deformation"] = -d * comp.process_lag + comp.per_Nm * signals.load
     g = geometry(spec)
-    from wormgear_cli.models.effects import EFFECTS  # the catalogue: not needed by ``analyze``
+    from wormgear_cli.physics.effects import EFFECTS  # the catalogue: not needed by ``analyze``
 
     for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
@@ -333,7 +333,7 @@ def simulate(spec, signals: Signals, phases: dict | None = None, offset: float =
 
 def max_reversal(spec, revolutions: int = 1, points: int = 20000) -> float:
     """Largest simulated lost motion over the given turns [rad] (for tests and docs)."""
-    from wormgear_cli.models.effects import Signals
+    from wormgear_cli.physics.effects import Signals
 
     theta = np.linspace(0.0, 2.0 * np.pi * revolutions, points, endpoint=False)
     fwd = simulate(spec, Signals.make(theta, 1.0))

@@ -1,6 +1,6 @@
 """The full error budget of a drive: every source as a line at the output, and three totals.
 
-No I/O.  The periodic lines are exactly :func:`wormgear_cli.simulation.periodic_sources`
+No I/O.  The periodic lines are exactly :func:`wormgear_cli.analysis.simulate.periodic_sources`
 (same names, orders, sizes and phases that ``simulate``, ``synth`` and ``diagnose``
 use); the static lines are the two tooth deflections of ``analyze`` (the paper's
 deformation parts of Delta phi_cc and Delta phi_wc / i_c).
@@ -95,7 +95,7 @@ class Budget:
 
 
 def _origin(spec, paths) -> str:
-    from wormgear_cli.spec import value_origin
+    from wormgear_cli.spec.loader import value_origin
 
     origins = {value_origin(spec, p) for p in paths}
     for o in ("grade", "spec"):
@@ -107,11 +107,11 @@ def _origin(spec, paths) -> str:
 def budget(spec, analysis=None) -> Budget:
     """Every error source of ``spec`` as a :class:`BudgetLine` and the three totals.
 
-    ``analysis``: the spec's :func:`wormgear_cli.analysis.analyze` result (computed when
+    ``analysis``: the spec's :func:`wormgear_cli.analysis.accuracy.analyze` result (computed when
     omitted); its deformation parts give the static lines.
     """
-    from wormgear_cli.analysis import analyze
-    from wormgear_cli.simulation import periodic_sources
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.simulate import periodic_sources
 
     a = analysis if analysis is not None else analyze(spec)
     sources = periodic_sources(spec, all_budget_sources=True)

@@ -14,7 +14,7 @@ REQUIREMENT_METRICS = {
     "max_gear_backlash": "gear_backlash",
     "max_worm_transmission_error": "worm_transmission_error",
     "max_worm_backlash": "worm_backlash",
-    # the full budget's TE at the output under each combination rule (wormgear_cli.budget.Rule)
+    # the full budget's TE at the output under each combination rule (wormgear_cli.analysis.budget.Rule)
     "max_budget_linear": "budget:linear",
     "max_budget_rss": "budget:rss",
     "max_budget_peak": "budget:peak",
@@ -47,7 +47,7 @@ def evaluate(spec, analysis) -> list[Verdict]:
         limit_arcsec = float(written) if written is not None else float(to_unit(limit, "arcsec"))
         if metric.startswith("budget:"):
             if full is None:
-                from wormgear_cli.budget import budget
+                from wormgear_cli.analysis.budget import budget
 
                 full = budget(spec, analysis)
             value = full.total(metric.split(":", 1)[1])
@@ -92,9 +92,9 @@ def check_file(path) -> FileCheck:
     A spec error is not raised: it is returned as an invalid :class:`FileCheck` with the
     error's lines as ``problems``.
     """
-    from wormgear_cli.analysis import analyze
+    from wormgear_cli.analysis.accuracy import analyze
     from wormgear_cli.errors import WormgearError
-    from wormgear_cli.spec import load_spec
+    from wormgear_cli.spec.loader import load_spec
 
     name = str(path)
     try:

@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from wormgear_cli.errors import DataError
-from wormgear_cli.models.effects import Signals
+from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import RAD_PER_UNIT
 
 #: 1 arcsec [rad] (re-exported from :mod:`wormgear_cli.units`)
@@ -181,7 +181,7 @@ class Measurement:
 def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: int = MAX_FILE_BYTES) -> str:
     """The UTF-8 text of a user-named input (BOM tolerated), at most ``limit`` bytes.
 
-    The one bounded reader of user files (:func:`wormgear_cli.io.read_text_file`) with the
+    The one bounded reader of user files (:func:`wormgear_cli.files.read_text_file`) with the
     measurement's own size limit and error class.
 
     Raises
@@ -191,7 +191,7 @@ def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: in
         chunk), not UTF-8, or larger than ``limit`` (endless inputs such as ``/dev/zero``
         stop at the first chunk or at the limit).
     """
-    from wormgear_cli.io import read_text_file
+    from wormgear_cli.files import read_text_file
 
     return read_text_file(path, expected, DataError, encoding="utf-8-sig", max_bytes=limit)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Optional
 
 from wormgear_cli.errors import UsageError
-from wormgear_cli.sweep import check_param_axes, param_size, shard_bounds
+from wormgear_cli.analysis.sweep import check_param_axes, param_size, shard_bounds
 
 
 def check_options(*, params: list, i: Optional[str], l_mm: Optional[str], module_mm: Optional[float],

@@ -265,5 +265,5 @@ def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
 
 
 def measurement_figures(measurement, tol: float = TARGET_TOL) -> Iso230Figures:
-    """:func:`iso230_figures` of a :class:`~wormgear_cli.measurement.Measurement`."""
+    """:func:`iso230_figures` of a :class:`~wormgear_cli.measurement.reader.Measurement`."""
     return iso230_figures(measurement.angle, measurement.error, measurement.direction, tol)
