@@ -86,8 +86,8 @@ def make_csv(rows: int, path: Path) -> None:
 
 
 def _make_csv(rows: int, path: Path) -> None:
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.analysis.synth import Noise, Plan, Programme, format_csv, synthesize
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(ROOT / "configs" / "mch50.toml")
     syn = synthesize(spec, Plan(kind="dense", points=rows // 10, runs=5, dwell_s=0.1),

@@ -99,7 +99,8 @@ def main() -> None:
             writer(path, args.rows, rng)
             size = path.stat().st_size
             t_after, c_after, m_after = best(ROOT, path, args.repeat)
-            line = (f"{name:5s} {args.rows:8d} rows ({size / 1e6:.0f} MB): {t_after:6.2f} s (CPU {c_after:.2f} s), peak "
+            line = (f"{name:5s} {args.rows:8d} rows ({size / 1e6:.0f} MB): {t_after:6.2f} s "
+                    f"(CPU {c_after:.2f} s), peak "
                     f"{m_after / 1e6:7.0f} MB = {m_after / args.rows:5.0f} B/row "
                     f"({'under' if t_after < 5 else 'OVER'} 5 s, {'under' if m_after / args.rows < 300 else 'OVER'} "
                     "300 B/row)")

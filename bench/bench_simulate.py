@@ -33,10 +33,10 @@ def command(*args):
 def main() -> None:
     import numpy as np
 
-    from wormgear_cli.physics.effects import Signals
     from wormgear_cli.analysis.simulate import simulate
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.analysis.synth import Noise, Plan, format_csv, parse_temperature, synthesize
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(DRIVE)
     with tempfile.TemporaryDirectory() as tmp:

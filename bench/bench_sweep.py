@@ -95,8 +95,8 @@ def main() -> None:
 
     import numpy as np
 
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.analysis.sweep import RatioDistanceSweep
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(DRIVE)
     rng = np.random.default_rng(0)

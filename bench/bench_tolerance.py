@@ -39,7 +39,8 @@ def command(*args):
 def plain_loop(spec, draw, n: int) -> float:
     """Seconds for n samples, one scalar call of each of analyze's model functions per sample."""
     from wormgear_cli.analysis.accuracy import deflections
-    from wormgear_cli.physics import spur as gear, worm
+    from wormgear_cli.physics import spur as gear
+    from wormgear_cli.physics import worm
 
     gp, wp = spec.gear_pair, spec.worm_pair
     z1, z2, m, a = gp.output_gear.teeth, gp.pinion.teeth, gp.module, gp.pressure_angle
@@ -109,14 +110,14 @@ def main() -> None:
         sp = load_spec(drive)
         print(f"{drive.name} (gear_pair.kinematics = {sp.gear_pair.kinematics}):")
         paper = engine.setup(sp, engine.Options(samples=n, metrics="paper"))
-        w, cpu = min(timed(lambda: engine.run(paper)) for _ in range(2))
+        w, cpu = min(timed(lambda: engine.run(paper)) for _ in range(2))  # noqa: B023
         wall = w if wall is None else wall
         print(f"  core, {n} samples, paper metrics:            wall {w:6.2f} s, cpu {cpu:6.2f} s  (target 2 s)")
         bud = engine.setup(sp, engine.Options(samples=n, metrics="budget"))
-        w_b, cpu_b = timed(lambda: engine.run(bud))
+        w_b, cpu_b = timed(lambda: engine.run(bud))  # noqa: B023
         print(f"  core, {n} samples, budget linear + rss:      wall {w_b:6.2f} s, cpu {cpu_b:6.2f} s")
         iso = engine.setup(sp, engine.Options(samples=n, metrics="iso", targets=24))
-        wall_i, cpu_i = timed(lambda: engine.run(iso))
+        wall_i, cpu_i = timed(lambda: engine.run(iso))  # noqa: B023
         print(f"  core, {n} samples, ISO 230-2 at 24 targets:  wall {wall_i:6.2f} s, cpu {cpu_i:6.2f} s  "
               "(target 10 s)")
     m = 2000
@@ -128,8 +129,10 @@ def main() -> None:
     t_cmd = best_of(lambda: subprocess.run(command(*args), check=True, stdout=subprocess.DEVNULL), repeat=1)
     print(f"wormgear {' '.join(args[:1] + args[2:])}: {t_cmd:.2f} s (new process, start-up included)")
     for k in (n, 4 * n):
-        print(f"peak memory, wormgear tolerance -n {k} --metrics paper: {peak_rss_mb('tolerance', str(DRIVE), '-n', str(k), '--metrics', 'paper', '--format', 'json'):.0f} MB")
-    print(f"peak memory, wormgear tolerance -n {n // 4} --metrics all:   {peak_rss_mb('tolerance', str(DRIVE), '-n', str(n // 4), '--metrics', 'all', '--format', 'json'):.0f} MB")
+        mb = peak_rss_mb('tolerance', str(DRIVE), '-n', str(k), '--metrics', 'paper', '--format', 'json')
+        print(f"peak memory, wormgear tolerance -n {k} --metrics paper: {mb:.0f} MB")
+    mb = peak_rss_mb('tolerance', str(DRIVE), '-n', str(n // 4), '--metrics', 'all', '--format', 'json')
+    print(f"peak memory, wormgear tolerance -n {n // 4} --metrics all:   {mb:.0f} MB")
 
 
 if __name__ == "__main__":

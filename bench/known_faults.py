@@ -39,13 +39,14 @@ FAULTS = {
     "bonferroni-final": ("Bonferroni multiplier dropped for the named effects",
                          r"w\.p \* len\(accepted\)", "w.p", ("tests/diagnosis/test_calibration.py",)),
     "phase": ("catalogue effects' default phase 0 -> 90 deg",
-              r'("phase", "deg", DEG, -360\.0, 360\.0, )0\.0', r"\g<1>90.0", ("tests/models/test_effects_hand.py",)),
+              r'("phase", "deg", DEG, -360\.0, 360\.0, )0\.0', r"\g<1>90.0", ("tests/physics/test_effects_hand.py",)),
     "spec-phase": ("the spec's default phases 0 -> 90 deg",
-                   r'_f\(path, attr, "deg", 0\.0,', '_f(path, attr, "deg", 90.0,', ("tests/models/test_effects_hand.py",)),
+                   r'_f\(path, attr, "deg", 0\.0,', '_f(path, attr, "deg", 90.0,',
+                   ("tests/physics/test_effects_hand.py",)),
     "alias": ("aliasing tolerance loosened 1e-3 -> 0.1",
               r"^ALIAS_TOL = 1e-3", "ALIAS_TOL = 0.1", ("tests/measurement/test_aliasing.py",)),
     "iso6336": ("transposed digit in ISO 6336 C1 (0.04723 -> 0.04732)",
-                r"0\.04723, 0\.15551", "0.04732, 0.15551", ("tests/models/test_hand_worked.py",)),
+                r"0\.04723, 0\.15551", "0.04732, 0.15551", ("tests/physics/test_hand_worked.py",)),
 }
 
 

@@ -14,8 +14,8 @@ only the target's file(s) and runs only the target's test selection, runs ``mutm
     target  killed  survived  timeout  no-tests  score
     worm        61         0        0         0  100.0 %
 
-followed by the name of every surviving mutant (``--show``: with its diff).  The score counts killed + timeout over every
-mutant that ran; mutants no selected test reaches ("no tests") count as survivors.  A
+followed by the name of every surviving mutant (``--show``: with its diff).  The score counts killed + timeout
+over every mutant that ran; mutants no selected test reaches ("no tests") count as survivors.  A
 surviving mutant is either equivalent (state why in docs/development-testing.md) or a gap
 in the tests (write the test that kills it).  The scratch copy is left in place so
 ``mutmut show <name>`` / ``mutmut results`` can be run there; ``--clean`` removes it first.
@@ -39,19 +39,19 @@ ROOT = Path(__file__).resolve().parent.parent
 #: one core.
 TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | None]] = {
     "worm": (("wormgear_cli/physics/worm.py",),
-             ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
+             ("tests/physics/test_hand_worked.py", "tests/physics/test_stage_models.py"), None),
     "deformation": (("wormgear_cli/physics/deformation.py",),
-                    ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
+                    ("tests/physics/test_hand_worked.py", "tests/physics/test_stage_models.py"), None),
     "thermal": (("wormgear_cli/physics/thermal.py",),
-                ("tests/models/test_hand_worked.py",), None),
+                ("tests/physics/test_hand_worked.py",), None),
     "gear": (("wormgear_cli/physics/spur.py",),
-             ("tests/models/test_hand_worked.py", "tests/models/test_models.py"), None),
+             ("tests/physics/test_hand_worked.py", "tests/physics/test_stage_models.py"), None),
     # the catalogue's records (_phase, _tref) are built when the module is imported, before mutmut
     # switches a mutant on, so their mutants cannot be seen in a forked worker: they are left out
-    # here and checked by tests/models/test_effects_hand.py::test_*_parameter_record and by hand
+    # here and checked by tests/physics/test_effects_hand.py::test_*_parameter_record and by hand
     # (docs/development-testing.md)
     "effects": (("wormgear_cli/physics/effects.py",),
-                ("tests/models/test_effects_hand.py", "tests/models/test_effects.py"),
+                ("tests/physics/test_effects_hand.py", "tests/physics/test_effects.py"),
                 ("output_gear_runout", "intermediate_shaft_runout", "worm_runout", "gear_mesh_error",
                  "thermal_backlash", "thermal_drift", "torsional_compliance", "bearing_clearance", "make",
                  "param", "effect_error", "params_from_keys", "params_to_keys")),
@@ -78,10 +78,10 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                     "wald", "contrast_df")),
     # ISO 1328 grades: pure functions of the grade and the geometry
     "iso1328": (("wormgear_cli/physics/iso1328.py",),
-                ("tests/models/test_iso1328.py",), None),
+                ("tests/physics/test_iso1328.py",), None),
     # the error budget (lines, sums, phased peak); analysis is run for real by its tests
     "budget": (("wormgear_cli/analysis/budget.py",),
-               ("tests/models/test_budget.py",), None),
+               ("tests/analysis/test_budget.py",), None),
     # tolerance analysis: the input distributions and the streaming statistics
     "tolerance-sampling": (("wormgear_cli/tolerance/sampling.py",),
                            ("tests/tolerance/test_sampling.py",), None),
@@ -90,7 +90,7 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     # the gear functions that compute values (the maximiser is scored with them; the location of
     # its maximum is checked against scipy's bounded minimiser in test_hand_worked.py)
     "gear-values": (("wormgear_cli/physics/spur.py",),
-                    ("tests/models/test_hand_worked.py",),
+                    ("tests/physics/test_hand_worked.py",),
                     ("eccentricity_ratio", "contact_phase_angle", "kinematic_bracket", "gear_kinematic_te",
                      "gear_deformation_te", "gear_te", "gear_te_max", "gear_backlash", "gear_backlash_max",
                      "pitch_arc_to_angle", "_bracket_constants", "kinematic_bracket_derivatives",
@@ -180,7 +180,7 @@ def main(argv=None) -> int:
     if functions:
         keep = re.compile(r"(?:x_|\u01c1)(" + "|".join(functions) + r")__mutmut_\d+$")
         rows = [r for r in rows if keep.search(r[0])]
-    count = {k: 0 for k in ("killed", "survived", "timeout", "no tests", "suspicious", "skipped")}
+    count = dict.fromkeys(("killed", "survived", "timeout", "no tests", "suspicious", "skipped"), 0)
     for _, status in rows:
         count[status] = count.get(status, 0) + 1
     ran = count["killed"] + count["survived"] + count["timeout"] + count["no tests"] + count["suspicious"]

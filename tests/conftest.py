@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import os
+from pathlib import Path
 
 import pytest
 from hypothesis import settings
 from typer.testing import CliRunner
+
+from tests.support.paths import CONFIGS, MCH50, ROOT  # noqa: F401  (the shared paths)
 
 # No per-example deadline (a loaded 2-core machine must not turn a slow example into a
 # failure).  Under CI (CI=true) the examples are derandomised, so a run is reproducible;
@@ -16,10 +17,6 @@ from typer.testing import CliRunner
 settings.register_profile("dev", deadline=None)
 settings.register_profile("ci", deadline=None, derandomize=True, database=None)
 settings.load_profile("ci" if os.environ.get("CI") else "dev")
-
-ROOT = Path(__file__).resolve().parent.parent
-CONFIGS = ROOT / "configs"
-MCH50 = CONFIGS / "mch50.toml"
 
 
 @pytest.fixture

@@ -23,12 +23,11 @@ import numpy as np
 import pytest
 
 import wormgear_cli.api as wg
+from tests.support.paths import CONFIGS, MCH50, ROOT
 from wormgear_cli.angles import Angle, AngleArray
 from wormgear_cli.cli import app
 from wormgear_cli.errors import SpecError, UsageError
 from wormgear_cli.units import RAD_PER_UNIT
-
-from tests.conftest import CONFIGS, MCH50, ROOT
 
 WARM = CONFIGS / "mch50-warm.csv"
 FLAGS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
@@ -371,7 +370,6 @@ def test_analyze_command_never_loads_the_api_or_scipy():
 
 def test_package_names_do_not_shadow_submodules():
     import wormgear_cli
-
     from wormgear_cli import tolerance  # the core modules, as the CLI imports them
     from wormgear_cli.analysis import sweep
 

@@ -17,10 +17,9 @@ import shlex
 
 import pytest
 
+from tests.support.paths import CONFIGS, MCH50, ROOT
 from wormgear_cli.cli import app
 from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
-
-from tests.conftest import CONFIGS, MCH50, ROOT
 
 TRUTH = json.loads((CONFIGS / "mch50-warm.truth.json").read_text())
 

@@ -17,12 +17,11 @@ import re
 import pytest
 from typer.main import get_command
 
+from tests.support.paths import ROOT
 from wormgear_cli import _docgen
 from wormgear_cli.cli import app
 from wormgear_cli.physics.effects import EFFECTS
 from wormgear_cli.spec.loader import FIELDS
-
-from tests.conftest import ROOT
 
 DOCS = ROOT / "docs"
 README = (ROOT / "README.md").read_text(encoding="utf-8")

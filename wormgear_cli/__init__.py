@@ -68,14 +68,6 @@ MOVED_MODULES = {
 }
 
 
-def moved(old: str, new: str, stacklevel: int = 3) -> None:
-    """Warn that ``old`` is now ``new`` (a DeprecationWarning, shown once per call site)."""
-    import warnings
-
-    warnings.warn(f"{old} moved to {new}; the old name will be removed in wormgear-cli 0.3",
-                  DeprecationWarning, stacklevel=stacklevel)
-
-
 class _MovedFinder:
     """Finds an old module path and hands out the module at its new home."""
 
@@ -95,6 +87,8 @@ class _MovedLoader:
 
     def create_module(self, spec):
         import importlib
+
+        from wormgear_cli.errors import moved
 
         moved(self.old, self.new, stacklevel=6)
         return importlib.import_module(self.new)

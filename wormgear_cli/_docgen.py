@@ -28,11 +28,11 @@ Run from the project root::
 from __future__ import annotations
 
 import argparse
-import re
 import inspect
+import re
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 #: Width of the help text [characters]: click's width for an 80-column terminal.
 HELP_WIDTH = 78
@@ -268,7 +268,7 @@ def refresh_session(text: str, root: Path) -> str:
     with tempfile.TemporaryDirectory() as tmp, contextlib.chdir(tmp):
         shutil.copytree(root / "configs", Path(tmp) / "configs")
         for m in _DIRECTIVE.finditer(text):
-            kind, head, arg, fence, body = m.group(1), m.group(2), m.group(3), m.group(4), m.group(5)
+            kind, head, arg, _fence, body = m.group(1), m.group(2), m.group(3), m.group(4), m.group(5)
             if kind == "write":
                 Path(arg).write_text(body, encoding="utf-8")
                 continue

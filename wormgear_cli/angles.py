@@ -143,7 +143,7 @@ class Angle:
     def __ge__(self, other):
         return self._rad >= self._other(other)
 
-    def isclose(self, other: "Angle", rel: float = 1e-9, abs_rad: float = 0.0) -> bool:
+    def isclose(self, other: Angle, rel: float = 1e-9, abs_rad: float = 0.0) -> bool:
         """``math.isclose`` on the two values [rad]."""
         return math.isclose(self._rad, self._other(other), rel_tol=rel, abs_tol=abs_rad)
 

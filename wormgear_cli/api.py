@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Optional, Sequence, Union
+from typing import Union
 
 from wormgear_cli.angles import Angle, AngleArray
 
@@ -83,7 +84,7 @@ def _plain(doc) -> dict:
     return json.loads(json_text(doc))
 
 
-def _angle(x, unit: str = "rad") -> Optional[Angle]:
+def _angle(x, unit: str = "rad") -> Angle | None:
     return None if x is None else Angle(x, unit)
 
 
@@ -104,7 +105,7 @@ def _choice(name: str, value: str, choices: Sequence[str]) -> str:
 # --- spec ----------------------------------------------------------------------------------------------------
 
 
-def load_spec(source: Union[PathLike, str]):
+def load_spec(source: PathLike | str):
     """Read and validate a drive spec.
 
     Parameters
@@ -212,7 +213,8 @@ def analyze(spec) -> Analysis:
     >>> r.backlash > r.transmission_error
     True
     """
-    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS, analyze as run
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.accuracy import analyze as run
 
     spec = _spec(spec)
     core = run(spec)
@@ -244,7 +246,7 @@ def analyze(spec) -> Analysis:
 
 # --- simulate ------------------------------------------------------------------------------------------------
 
-def _effects(spec, effects: Optional[dict]):
+def _effects(spec, effects: dict | None):
     """The effects to simulate: None (the spec's) or the spec's merged with ``effects``
     (name -> {catalogue key: value}), as ``--effect NAME:key=value`` does."""
     from wormgear_cli.workflows.simulate import effect_params
@@ -252,7 +254,7 @@ def _effects(spec, effects: Optional[dict]):
     return effect_params(spec, {name: dict(values or {}) for name, values in (effects or {}).items()})
 
 
-def _check_conditions(temperature_c: float, load_nm: float, revs: Optional[float] = None) -> None:
+def _check_conditions(temperature_c: float, load_nm: float, revs: float | None = None) -> None:
     """The option checks of ``wormgear simulate`` (same bounds, same messages)."""
     import math
 
@@ -302,7 +304,7 @@ class SimulationAt:
     angle_deg: object
     direction: object
     simulated: AngleArray
-    measured: Optional[AngleArray]
+    measured: AngleArray | None
     _args: tuple = field(repr=False, compare=False)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
@@ -310,9 +312,9 @@ class SimulationAt:
         return json.loads(_simulate_at_report(*self._args[:2], unit, *self._args[2:])[0])
 
 
-def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLike] = None,
+def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None = None,
              temperature_c: float = 20.0, load_nm: float = 0.0, phases: str = "spec",
-             effects: Optional[dict] = None):
+             effects: dict | None = None):
     """The drive's predicted error over the output angle, forward and reverse.
 
     Parameters
@@ -376,9 +378,9 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: Optional[PathLi
     # checks that both give the same curve
     import numpy as np
 
+    from wormgear_cli.analysis.simulate import simulate as run
     from wormgear_cli.physics.effects import Signals
     from wormgear_cli.workflows.simulate import phase_map as phase_map_of
-    from wormgear_cli.analysis.simulate import simulate as run
 
     phase_map = phase_map_of(spec, phases)
     angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
@@ -428,8 +430,8 @@ def _read_options(column_map, error_unit, angle_unit):
     return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit)
 
 
-def read_measurement(path: PathLike, *, column_map: Optional[dict] = None, error_unit: Optional[str] = None,
-                     angle_unit: Optional[str] = None, require_error: bool = True) -> Measurement:
+def read_measurement(path: PathLike, *, column_map: dict | None = None, error_unit: str | None = None,
+                     angle_unit: str | None = None, require_error: bool = True) -> Measurement:
     """Read and validate a measurement CSV (as ``measure`` and ``diagnose`` read it).
 
     Parameters
@@ -475,13 +477,13 @@ class Order:
     not fitted (``status`` says why)."""
 
     order: float
-    label: Optional[str]
+    label: str | None
     status: str
-    amplitude: Optional[Angle]
-    amplitude_stderr: Optional[Angle]
-    phase_deg: Optional[float]
-    differential_amplitude: Optional[Angle]
-    differential_phase_deg: Optional[float]
+    amplitude: Angle | None
+    amplitude_stderr: Angle | None
+    phase_deg: float | None
+    differential_amplitude: Angle | None
+    differential_phase_deg: float | None
 
 
 @dataclass(frozen=True)
@@ -495,12 +497,12 @@ class MeasureResult:
     """
 
     source: str
-    drive: Optional[str]
+    drive: str | None
     rows: int
     targets: int
     iso230_2: dict
     orders: tuple
-    residual_rms: Optional[Angle]
+    residual_rms: Angle | None
     verdict: str
     warnings: tuple
     notes: tuple
@@ -513,9 +515,9 @@ class MeasureResult:
         return _plain(report(self.core, unit))
 
 
-def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmonics: int = 3,
-            column_map: Optional[dict] = None, error_unit: Optional[str] = None,
-            angle_unit: Optional[str] = None) -> MeasureResult:
+def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonics: int = 3,
+            column_map: dict | None = None, error_unit: str | None = None,
+            angle_unit: str | None = None) -> MeasureResult:
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 
     Parameters
@@ -543,7 +545,8 @@ def measure(data, drive=None, orders: Optional[Sequence[float]] = None, *, harmo
     (177.8, 154.9)
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.workflows.measure import measure as run, report
+    from wormgear_cli.workflows.measure import measure as run
+    from wormgear_cli.workflows.measure import report
 
     if isinstance(data, Measurement):
         path, options = data.path, data.options
@@ -586,7 +589,7 @@ class Gap:
     differential_max: Angle
 
 
-def _gap(d: Optional[dict]) -> Optional[Gap]:
+def _gap(d: dict | None) -> Gap | None:
     if d is None:
         return None
     return Gap(*(_angle(d[f"{k}_arcsec"], "arcsec") for k in
@@ -608,10 +611,10 @@ class Diagnosis:
     verdict: str
     effects: tuple
     effects_found: tuple
-    gap_as_specified: Optional[Gap]
-    gap_before: Optional[Gap]
-    gap_after: Optional[Gap]
-    noise_floor: Optional[Angle]
+    gap_as_specified: Gap | None
+    gap_before: Gap | None
+    gap_after: Gap | None
+    noise_floor: Angle | None
     core: object = field(repr=False, compare=False)
     _doc: dict = field(repr=False, compare=False)
     _data_name: str = field(repr=False, compare=False, default="")
@@ -717,8 +720,8 @@ def _axis(value, option: str):
     return arr
 
 
-def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: Optional[float] = None,
-          min_pinion_teeth: Optional[int] = None) -> Sweep:
+def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | None = None,
+          min_pinion_teeth: int | None = None) -> Sweep:
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
     Parameters
@@ -805,7 +808,7 @@ class Tolerance:
     metrics: dict
     yields: dict
     sensitivity: dict
-    allocation: Optional[dict]
+    allocation: dict | None
     _run: object = field(repr=False, compare=False)
     _docs: dict = field(repr=False, compare=False)
 
@@ -819,14 +822,14 @@ class Tolerance:
 
 def _tolerance_doc(spec, options, target_yield):
     """Set-up, run, allocation and document, as ``wormgear tolerance`` (no shard, no summarize)."""
-    from wormgear_cli.tolerance import engine
+    from wormgear_cli.tolerance import engine, study
 
     s = engine.setup(spec, options)
-    return engine.finish(s, engine.run(s), target_yield)
+    return study.finish(s, engine.run(s), target_yield)
 
 
 def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "all", plan: str = "iso",
-              targets: int = 24, points: int = 360, target_yield: Optional[float] = None) -> Tolerance:
+              targets: int = 24, points: int = 360, target_yield: float | None = None) -> Tolerance:
     """Statistical tolerance analysis: Monte Carlo over built drives.
 
     Parameters

@@ -41,3 +41,11 @@ def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: f
 
     near = difflib.get_close_matches(word, list(choices), n=1, cutoff=cutoff)
     return f" (did you mean {show(near[0])}?)" if near else otherwise
+
+
+def moved(old: str, new: str, stacklevel: int = 3) -> None:
+    """Warn that ``old`` is now ``new`` (a DeprecationWarning, shown once per call site)."""
+    import warnings
+
+    warnings.warn(f"{old} moved to {new}; the old name will be removed in wormgear-cli 0.3",
+                  DeprecationWarning, stacklevel=stacklevel)

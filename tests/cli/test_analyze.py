@@ -11,9 +11,8 @@ import sys
 
 import pytest
 
+from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
-
-from tests.conftest import CONFIGS, MCH50
 
 CONTRACT = [
     ("stages", "gear", "transmission_error"),

@@ -17,7 +17,7 @@ def test_json_has_the_standards_worked_example(runner):
     doc = json.loads(r.stdout)
     # ISO 1328-1:2013 worked example: 8.5, 27, 11, 24 um
     assert (doc["f_pT_um"], doc["F_pT_um"], doc["F_alphaT_um"], doc["F_rT_um"]) == (8.5, 27.0, 11.0, 24.0)
-    # ISO 1328-2 grade 6 with range means (hand, tests/models/test_iso1328.py): 31 and 9.5 um
+    # ISO 1328-2 grade 6 with range means (hand, tests/physics/test_iso1328.py): 31 and 9.5 um
     assert (doc["F_i2T_um"], doc["f_i2T_um"]) == (31.0, 9.5)
     assert doc["teeth"] == 50 and r.stderr == ""
 

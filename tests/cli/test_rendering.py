@@ -9,7 +9,7 @@ from collections import Counter
 
 import pytest
 
-from tests.conftest import MCH50
+from tests.support.paths import MCH50
 from wormgear_cli.cli import app, common
 
 NUMBER = re.compile(r"-?\d+\.\d+(?:e[-+]?\d+)?")

@@ -11,13 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.support.paths import MCH50
 from wormgear_cli.analysis.accuracy import analyze
-from wormgear_cli.cli import app
 from wormgear_cli.analysis.simulate import compliance
+from wormgear_cli.cli import app
 from wormgear_cli.spec.loader import load_spec
-
 from wormgear_cli.units import RAD_PER_UNIT
-from tests.conftest import MCH50
 
 AS = RAD_PER_UNIT["arcsec"]
 WORM_STAGE = ("worm_lead_error", "worm_eccentricity", "wheel_radial_composite", "wheel_eccentricity")

@@ -10,12 +10,12 @@ import sys
 
 import pytest
 
-from tests.conftest import MCH50, ROOT
+from tests.support.paths import MCH50, ROOT
 
 HEAVY = ("scipy", "matplotlib", "wormgear_cli.diagnosis", "wormgear_cli.tolerance", "statsmodels",
          "wormgear_cli.measurement.reader", "wormgear_cli.api")
 
-PROBE = """
+PROBE = f"""
 import json, sys
 from wormgear_cli.cli import main
 sys.argv = ["wormgear", *json.loads(sys.argv[1])]
@@ -23,10 +23,10 @@ try:
     main()
 except SystemExit:
     pass
-heavy = sorted({m.split(".")[0] if m.startswith(("scipy", "matplotlib", "statsmodels")) else m
-                for m in sys.modules if m.startswith(%r)})
+heavy = sorted({{m.split(".")[0] if m.startswith(("scipy", "matplotlib", "statsmodels")) else m
+                for m in sys.modules if m.startswith({HEAVY!r})}})
 sys.stderr.write("LOADED " + json.dumps(heavy) + "\\n")
-""" % (HEAVY,)
+"""
 
 
 @pytest.mark.parametrize("args", [

@@ -212,7 +212,7 @@ def _drive_with(tmp_path, name, **keys):
     """The MCH50 drive file with top-level-in-section keys replaced (like sed on the file)."""
     import re
 
-    from tests.conftest import MCH50
+    from tests.support.paths import MCH50
 
     text = MCH50.read_text()
     for key, value in keys.items():

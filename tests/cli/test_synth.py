@@ -8,14 +8,12 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.paths import MCH50
+from tests.support.synth import csv_rows
+from wormgear_cli.analysis.synth import COLUMNS
 from wormgear_cli.cli import app
 from wormgear_cli.measurement.reader import read_measurement
 from wormgear_cli.spec.loader import load_spec
-
-from tests.test_synth import _rows  # the one parser of synth's CSV in the tests
-from wormgear_cli.analysis.synth import COLUMNS
-
-from tests.conftest import MCH50
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +38,8 @@ def test_same_seed_same_bytes_other_seed_differs(runner, tmp_path):
     assert a.read_bytes() == b.read_bytes()
     assert (tmp_path / "ta.json").read_bytes() == (tmp_path / "tb.json").read_bytes()
     assert a.read_bytes() != c.read_bytes()
-    _, ca = _rows(a.read_text())
-    _, cc = _rows(c.read_text())
+    _, ca = csv_rows(a.read_text())
+    _, cc = csv_rows(c.read_text())
     assert not np.array_equal(ca["angle_deg"], cc["angle_deg"])  # other targets
     assert not np.array_equal(ca["error_arcsec"], cc["error_arcsec"])
 
@@ -49,7 +47,7 @@ def test_same_seed_same_bytes_other_seed_differs(runner, tmp_path):
 def test_stdout_when_no_output(runner, tmp_path):
     res = runner.invoke(app, ["synth", str(MCH50), "--targets", "5", "--runs", "1"])
     assert res.exit_code == 0
-    header, cols = _rows(res.stdout)
+    header, cols = csv_rows(res.stdout)
     assert tuple(header) == COLUMNS and len(cols["angle_deg"]) == 10
 
 
@@ -139,7 +137,7 @@ def test_shipped_demo_is_exactly_what_its_documented_command_makes(runner, tmp_p
     import json
     import shlex
 
-    from tests.conftest import CONFIGS, ROOT
+    from tests.support.paths import CONFIGS, ROOT
 
     truth = json.loads((CONFIGS / "mch50-warm.truth.json").read_text())
     args = shlex.split(truth["command"])[1:]

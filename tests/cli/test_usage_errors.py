@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import pytest
 
+from tests.support.paths import MCH50
 from wormgear_cli.cli import app
-
-from tests.conftest import MCH50
 
 
 @pytest.mark.parametrize("args,line", [

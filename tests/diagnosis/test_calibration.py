@@ -1,4 +1,4 @@
-"""The diagnosis statistics checked both ways, on data from tests/diagnosis/independent_model.py.
+"""The diagnosis statistics checked both ways, on data from tests/support/independent_model.py.
 
 Fast checks (every run):
 * a 95 % interval is estimate +- t(0.975, df) x standard error: the standard error is recovered
@@ -23,9 +23,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from tests.support.independent_model import Design, measurement, perfect_spec
 from wormgear_cli.diagnosis import diagnose
-
-from tests.diagnosis.independent_model import Design, measurement, perfect_spec
 
 CLEARANCE = {"clearance_arcsec": 1.5}
 DRIFT = {"arcsec_per_K": 0.3}

@@ -7,10 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.diagnosis_data import Plan, make_measurement
 from wormgear_cli import diagnosis as dg
 from wormgear_cli.diagnosis import diagnose, report
-
-from tests.diagnosis.data import Plan, make_measurement
 
 
 def test_candidate_columns_recognise_the_three_signature_forms(mch50_spec):

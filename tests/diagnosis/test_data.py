@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.diagnosis.data import ARCSEC, CASES, Plan, hidden_error, make_rows
+from tests.support.diagnosis_data import ARCSEC, CASES, Plan, hidden_error, make_rows
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

@@ -15,8 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from tests.diagnosis.data import R_1, R_B1
-from tests.diagnosis.field_data import error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv, wheel_ecc_amplitude
+from tests.support.diagnosis_data import R_1, R_B1
+from tests.support.field_data import error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv, wheel_ecc_amplitude
 
 MESH = {"gear_mesh_error": {"amplitude_um": 4.0, "phase_deg": 30.0}}
 

@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.diagnosis.field_data import error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv
+from tests.support.field_data import error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv
 
 RUNOUT = {"output_gear_runout": {"eccentricity_um": 6.0, "phase_deg": 50.0}}
 

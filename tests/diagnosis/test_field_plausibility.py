@@ -13,7 +13,7 @@ lost-motion variation at its intermediate-shaft order 8 (the paper's gear
 eccentricity and wheel runout), which these data lack entirely.
 
 Unit mix-up: a perfect MCH50 with only a wheel eccentricity (its model is
-known by hand, tests/diagnosis/field_data.py), its error column written in
+known by hand, tests/support/field_data.py), its error column written in
 arcmin (or degrees) and read as arcsec.
 """
 
@@ -25,9 +25,8 @@ import math
 import numpy as np
 import pytest
 
-from tests.conftest import CONFIGS, MCH50
-from tests.diagnosis.field_data import (error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv,
-                                        wheel_ecc_amplitude)
+from tests.support.field_data import error_arcsec, perfect_mch50_toml, plan_angles, rows, to_csv, wheel_ecc_amplitude
+from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.units import ARCSEC
 
 # radar pedestal: radii [mm] and the parts' errors [mm]

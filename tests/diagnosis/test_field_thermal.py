@@ -21,7 +21,7 @@ import math
 
 import pytest
 
-from tests.conftest import CONFIGS, MCH50
+from tests.support.paths import CONFIGS, MCH50
 
 R1 = 2.5 / math.tan(math.radians(3.178)) / 2.0
 R2 = 2.5 * 30 / 2.0

@@ -9,16 +9,14 @@ import re
 import numpy as np
 import pytest
 
+from tests.support.diagnosis_data import HIDDEN, TB, WARM_SLOW, Plan, diagnose_doc, make_csv, make_measurement
+from tests.support.paths import CONFIGS
 from wormgear_cli.cli import app
 from wormgear_cli.diagnosis import diagnose, report
-
-from tests.conftest import CONFIGS
-from tests.diagnosis.data import HIDDEN, TB, WARM_SLOW, Plan, diagnose_doc, make_csv, make_measurement
 
 
 @pytest.mark.slow  # 30-45 s: 30 and 40 seeded replicates
 def test_the_95_percent_interval_covers_the_truth_at_its_nominal_rate(mch50_spec):
-    import numpy as np
 
     _, plan, params, _ = HIDDEN["thermal_backlash"]
     inside, estimates, half = [], [], []

@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import json
 
+from tests.support.paths import CONFIGS, MCH50, ROOT
 from wormgear_cli.cli import app
-
-from tests.conftest import CONFIGS, MCH50, ROOT
 
 WARM = CONFIGS / "mch50-warm.csv"
 #: the warm-up recording as a spreadsheet saves it (field case); against MCH50 the selection stops at

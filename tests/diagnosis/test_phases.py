@@ -12,8 +12,8 @@ from wormgear_cli import diagnosis as dg
 
 def test_phase_fit_recovers_the_model_on_noise_free_data(mch50_spec):
     from wormgear_cli.analysis.accuracy import geometry
-    from wormgear_cli.physics.effects import Signals
     from wormgear_cli.analysis.simulate import periodic_sources, simulate
+    from wormgear_cli.physics.effects import Signals
 
     rng = np.random.default_rng(4)
     theta = np.radians(np.tile(np.sort(rng.uniform(0, 360, 40)), 4))

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import pytest
 
-from tests.diagnosis.data import REMEDY, TB, WARM_SLOW, Plan, diagnose_doc, drop_column, gap_never_grows, make_csv
+from tests.support.diagnosis_data import (
+    REMEDY,
+    TB,
+    WARM_SLOW,
+    Plan,
+    diagnose_doc,
+    drop_column,
+    gap_never_grows,
+    make_csv,
+)
 
 
 def test_data_without_a_direction_column_name_nothing_and_say_why(mch50_spec):

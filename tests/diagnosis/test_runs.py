@@ -5,11 +5,19 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.support.diagnosis_data import (
+    TB,
+    WARM_SLOW,
+    Plan,
+    diagnose_doc,
+    drop_column,
+    gap_never_grows,
+    make_csv,
+    set_column,
+)
+from tests.support.paths import CONFIGS, ROOT
 from wormgear_cli import diagnosis as dg
 from wormgear_cli.diagnosis import diagnose
-
-from tests.conftest import CONFIGS, ROOT
-from tests.diagnosis.data import TB, WARM_SLOW, Plan, diagnose_doc, drop_column, gap_never_grows, make_csv, set_column
 
 
 def test_groups_with_and_without_a_run_column():

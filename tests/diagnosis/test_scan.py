@@ -9,12 +9,11 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.diagnosis_data import Plan, make_csv
+from tests.support.paths import CONFIGS
 from wormgear_cli.diagnosis import diagnose, report
 from wormgear_cli.measurement.reader import parse_measurement
 from wormgear_cli.spec.loader import load_spec
-
-from tests.conftest import CONFIGS
-from tests.diagnosis.data import Plan, make_csv
 
 
 def _doc(spec, text):
@@ -60,8 +59,8 @@ def test_unowned_order_held_in_the_model_on_another_drive_and_a_real_mesh_error_
 def test_a_smooth_drift_over_a_short_span_is_not_dozens_of_large_harmonics(seed):
     # another drive, an 18 degree scan (two runs), the spec's model plus a quadratic drift (range ~4 arcsec)
     # and 0.3 arcsec white noise; before, the scan reported 30 "significant harmonics", order 1 at 58 arcsec
-    from wormgear_cli.physics.effects import Signals
     from wormgear_cli.analysis.simulate import simulate
+    from wormgear_cli.physics.effects import Signals
 
     spec = load_spec(CONFIGS / "rotary-table-precision.toml")
     rng = np.random.default_rng(seed)

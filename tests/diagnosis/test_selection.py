@@ -9,10 +9,20 @@ import math
 import numpy as np
 import pytest
 
+from tests.support.diagnosis_data import (
+    HIDDEN,
+    R_B1,
+    REMEDY,
+    STEPS,
+    WARM,
+    Plan,
+    diagnose_doc,
+    gap_never_grows,
+    make_csv,
+    make_measurement,
+    spec_with,
+)
 from wormgear_cli.diagnosis import diagnose, report
-
-from tests.diagnosis.data import (HIDDEN, R_B1, REMEDY, STEPS, WARM, Plan, diagnose_doc, gap_never_grows, make_csv,
-                                  make_measurement, spec_with)
 
 
 @pytest.mark.parametrize("name", sorted(HIDDEN))
@@ -95,7 +105,6 @@ def test_same_order_effect_absorbed_by_fitted_phases_is_reported_unobservable(mc
     # MCH50's wheel eccentricity is a pure sinusoid at order i_c = 8 of fixed size A (its phase is fitted).
     # Rotating it from 0 to 60 deg adds the chord A (sin(8t + 60) - sin(8t)) = A sin(8t + 120): an
     # intermediate-shaft runout of that size and phase is exactly what a different phase would give.
-    import math
 
     from wormgear_cli.analysis.simulate import periodic_sources
 

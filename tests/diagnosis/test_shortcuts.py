@@ -14,10 +14,10 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import CONFIGS
+from tests.support.paths import CONFIGS
 from wormgear_cli import diagnosis as dg
-from wormgear_cli.measurement import harmonics
 from wormgear_cli.diagnosis import phases, runs, scan
+from wormgear_cli.measurement import harmonics
 from wormgear_cli.measurement.reader import read_measurement
 from wormgear_cli.spec.loader import load_spec
 
@@ -125,8 +125,8 @@ def test_distinct_pairs_only_when_rows_repeat():
 
 def test_phase_fit_is_the_same_per_pair_and_per_row(mch50_spec):
     from wormgear_cli.analysis.accuracy import geometry
-    from wormgear_cli.physics.effects import Signals
     from wormgear_cli.analysis.simulate import periodic_sources, simulate
+    from wormgear_cli.physics.effects import Signals
 
     rng = np.random.default_rng(5)
     theta = np.radians(np.tile(np.sort(rng.uniform(0, 360, 60)), 4))

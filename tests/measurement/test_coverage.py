@@ -13,7 +13,9 @@ import numpy as np
 import pytest
 
 from wormgear_cli.cli import app
-from wormgear_cli.measurement.harmonics import analyse_orders, coverage, resolvable_orders, select_orders, unwrap_passes
+from wormgear_cli.measurement.coverage import coverage, unwrap_passes
+from wormgear_cli.measurement.harmonics import resolvable_orders, select_orders
+from wormgear_cli.measurement.orders import analyse_orders
 
 
 def test_coverage_of_a_table_a_scan_across_zero_and_passes():

@@ -13,7 +13,7 @@ import shlex
 import numpy as np
 import pytest
 
-from tests.conftest import ROOT
+from tests.support.paths import ROOT
 from wormgear_cli.cli import app
 
 FIELD = ROOT / "tests" / "data" / "field"

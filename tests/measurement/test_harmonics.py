@@ -11,13 +11,13 @@ from hypothesis import strategies as st
 
 from wormgear_cli.measurement.harmonics import (
     alias_groups,
-    analyse_orders,
     fit_modes,
     fit_orders,
     folded_orders,
     physical_orders,
     physical_priority,
 )
+from wormgear_cli.measurement.orders import analyse_orders
 from wormgear_cli.physics.effects import DriveGeometry
 
 TWO_PI = 2.0 * math.pi

@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-from tests.conftest import ROOT
+from tests.support.paths import ROOT
 from wormgear_cli.errors import DataError
 from wormgear_cli.measurement.reader import MAX_FILE_BYTES, ReadOptions, read_measurement
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.measurement.test_measure_cli import HAND
+from tests.support.iso230_hand import HAND
 from wormgear_cli.cli import app
 from wormgear_cli.errors import DataError, UsageError
 from wormgear_cli.measurement.reader import ReadOptions, detect_dialect, parse_measurement, read_measurement

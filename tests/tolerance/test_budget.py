@@ -9,8 +9,8 @@ import json
 
 import pytest
 
-from tests.conftest import CONFIGS
-from tests.tolerance.helpers import mch50_doc, spec_of, write
+from tests.support.paths import CONFIGS
+from tests.support.tolerance import mch50_doc, spec_of, write
 from wormgear_cli.analysis.budget import budget
 from wormgear_cli.cli import app
 from wormgear_cli.spec.loader import load_spec, raw_copy

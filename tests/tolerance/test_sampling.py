@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.tolerance.helpers import mch50_doc, spec_of
+from tests.support.tolerance import mch50_doc, spec_of
 from wormgear_cli.tolerance import sampling
 from wormgear_cli.tolerance.quantities import QUANTITY_BY_PATH, Varied, varied_quantities
 

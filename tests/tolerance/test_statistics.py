@@ -92,7 +92,7 @@ def test_second_pass_percentiles_equal_the_in_memory_ones(monkeypatch, seed):
 
 
 def test_large_run_second_pass_gives_the_same_report(monkeypatch):
-    from tests.conftest import MCH50
+    from tests.support.paths import MCH50
     from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, statistics
 

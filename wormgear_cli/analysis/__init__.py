@@ -12,14 +12,18 @@ DeprecationWarning naming their new home ``wormgear_cli.analysis.accuracy``.
 """
 
 #: names of the former module ``wormgear_cli.analysis`` (now ``wormgear_cli.analysis.accuracy``)
-_OLD_NAMES = frozenset(['Analysis', 'Deflections', 'INFO_COLUMNS', 'METRIC_COLUMNS', 'WormStage', 'analyze', 'deflections', 'gear_eccentricity', 'gear_tangential_force', 'geometry', 'line_loads', 'worm_stage', 'worm_tangential_force'])
+_OLD_NAMES = frozenset({
+    'Analysis', 'Deflections', 'INFO_COLUMNS', 'METRIC_COLUMNS', 'WormStage', 'analyze',
+    'deflections', 'gear_eccentricity', 'gear_tangential_force', 'geometry', 'line_loads',
+    'worm_stage', 'worm_tangential_force',
+})
 
 
 def __getattr__(name: str):
     if name in _OLD_NAMES:
         import importlib
 
-        from wormgear_cli import moved
+        from wormgear_cli.errors import moved
 
         moved(f"wormgear_cli.analysis.{name}", f"wormgear_cli.analysis.accuracy.{name}")
         return getattr(importlib.import_module("wormgear_cli.analysis.accuracy"), name)

@@ -13,7 +13,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from wormgear_cli.physics import deformation, spur as gear, worm
+from wormgear_cli.physics import deformation, worm
+from wormgear_cli.physics import spur as gear
 from wormgear_cli.units import to_unit
 
 #: flat metric columns (CSV of analyze, columns of sweep --param); all angles

@@ -37,7 +37,7 @@ The simulated error is
 * an external torque T_ext on the output (measured ``load_Nm``) winds the
   teeth up through the same tooth stiffness (C_teeth [rad/(N m)]).
 
-Relation to ``analyze`` (tested in tests/test_simulate.py):
+Relation to ``analyze`` (tested in tests/analysis/test_simulate.py):
 
 * The paper combines the worm-stage sources by root-sum-square,
   h = 1/2 sqrt(sum x_k^2), and quotes h as the +/- half-width.  The
@@ -67,14 +67,15 @@ Relation to ``analyze`` (tested in tests/test_simulate.py):
 from __future__ import annotations
 
 import math
-from typing import Callable, NamedTuple, TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from wormgear_cli.analysis.accuracy import deflections, gear_eccentricity, geometry
 from wormgear_cli.physics import spur as gear_model
 from wormgear_cli.physics import worm as worm_model
-from wormgear_cli.physics.geometry import DriveGeometry  # noqa: F401  (annotations)
+from wormgear_cli.physics.geometry import DriveGeometry
 
 if TYPE_CHECKING:
     from wormgear_cli.physics.effects import Signals

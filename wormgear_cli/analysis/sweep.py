@@ -33,8 +33,8 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
-from typing import Callable, Iterator, Optional
 
 import numpy as np
 
@@ -216,8 +216,8 @@ class RatioDistanceSweep:
     smaller gear has fewer than ``min_teeth`` teeth (default :func:`undercut_min_teeth`).
     """
 
-    def __init__(self, spec, i_values, l_values, hold: str = "force", module: Optional[float] = None,
-                 min_teeth: Optional[int] = None):
+    def __init__(self, spec, i_values, l_values, hold: str = "force", module: float | None = None,
+                 min_teeth: int | None = None):
         from wormgear_cli.analysis.accuracy import analyze, gear_eccentricity
         from wormgear_cli.physics import spur as gear
 
@@ -278,7 +278,7 @@ class RatioDistanceSweep:
         p = np.arange(start, stop, dtype=np.int64)
         return p // self.l_values.size, p % self.l_values.size
 
-    def run_bounds(self, shard: Optional[tuple[int, int]] = None) -> tuple[int, int]:
+    def run_bounds(self, shard: tuple[int, int] | None = None) -> tuple[int, int]:
         """Point indices [start, stop) of a run (all points, or part K of N for ``shard``).
 
         Raises UsageError for a snapped grid (``module``) of which no design is left."""
@@ -304,7 +304,7 @@ class RatioDistanceSweep:
         keep = np.minimum(z1, z2) >= self.min_teeth
         return z1, z2, keep
 
-    def kept_count(self, start: int = 0, stop: Optional[int] = None) -> int:
+    def kept_count(self, start: int = 0, stop: int | None = None) -> int:
         """Points of [start, stop) that survive snapping (all of them without a module)."""
         stop = self.size if stop is None else stop
         if self.module is None:
@@ -416,8 +416,8 @@ class RatioDistanceSweep:
                 o[sel] = p[li[sel] - b * size]
         return tuple(out)
 
-    def chunks(self, start: int = 0, stop: Optional[int] = None, chunk: int = CHUNK_POINTS,
-               progress: Optional[Callable[[int], None]] = None) -> Iterator[dict]:
+    def chunks(self, start: int = 0, stop: int | None = None, chunk: int = CHUNK_POINTS,
+               progress: Callable[[int], None] | None = None) -> Iterator[dict]:
         """Column arrays for grid points [start, stop), in blocks of ``chunk`` points.
 
         Each block is a dict column -> array (see :attr:`columns`) plus ``"_point"``, the grid
@@ -451,8 +451,8 @@ class RatioDistanceSweep:
                 progress(b - a)
             yield block
 
-    def collect(self, start: int = 0, stop: Optional[int] = None,
-                progress: Optional[Callable[[int], None]] = None) -> dict:
+    def collect(self, start: int = 0, stop: int | None = None,
+                progress: Callable[[int], None] | None = None) -> dict:
         """All of :meth:`chunks` concatenated into one dict of arrays."""
         blocks = list(self.chunks(start, stop, progress=progress))
         keys = self.columns + ("_point",)
@@ -462,7 +462,7 @@ class RatioDistanceSweep:
 
     # -- summary -----------------------------------------------------------------------------------
 
-    def continuous(self) -> "RatioDistanceSweep":
+    def continuous(self) -> RatioDistanceSweep:
         """The same sweep without snapping (the paper's continuous study)."""
         if self.module is None:
             return self
@@ -473,9 +473,9 @@ class RatioDistanceSweep:
         return self.continuous().evaluate(i, l)["gear_transmission_error"]
 
 
-def ratio_distance_sweep(spec, i_range: Optional[RangeSpec], l_range: Optional[RangeSpec],
-                         hold: Optional[str] = None, module: Optional[float] = None,
-                         min_teeth: Optional[int] = None) -> RatioDistanceSweep:
+def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | None,
+                         hold: str | None = None, module: float | None = None,
+                         min_teeth: int | None = None) -> RatioDistanceSweep:
     """The (i, l) sweep of ``spec`` over checked ranges; an axis not given is the spec's own
     value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold`` None means "force"."""
     gp = spec.gear_pair
@@ -697,8 +697,8 @@ def param_size(axes: list[ParamAxis]) -> int:
     return math.prod(len(ax.values) for ax in axes)
 
 
-def param_rows(spec, axes: list[ParamAxis], start: int = 0, stop: Optional[int] = None,
-               progress: Optional[Callable[[int], None]] = None) -> Iterator[tuple]:
+def param_rows(spec, axes: list[ParamAxis], start: int = 0, stop: int | None = None,
+               progress: Callable[[int], None] | None = None) -> Iterator[tuple]:
     """(values, Analysis) for points [start, stop) of the grid over ``axes`` (row-major, the
     first axis outermost).  Each point is ``analyze(with_values(spec, {key: value, ...}))``."""
     from wormgear_cli.analysis.accuracy import analyze

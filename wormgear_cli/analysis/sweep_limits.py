@@ -7,14 +7,12 @@ the option, the limit and what to do instead.
 
 from __future__ import annotations
 
-from typing import Optional
-
-from wormgear_cli.errors import UsageError
 from wormgear_cli.analysis.sweep import check_param_axes, param_size, shard_bounds
+from wormgear_cli.errors import UsageError
 
 
-def check_options(*, params: list, i: Optional[str], l_mm: Optional[str], module_mm: Optional[float],
-                  hold: Optional[str], min_teeth: Optional[int], shard: Optional[str], fmt: str,
+def check_options(*, params: list, i: str | None, l_mm: str | None, module_mm: float | None,
+                  hold: str | None, min_teeth: int | None, shard: str | None, fmt: str,
                   plot: bool) -> None:
     """Refuse option combinations that cannot run (UsageError naming them)."""
     if params and (i is not None or l_mm is not None or module_mm is not None or hold is not None
@@ -69,7 +67,7 @@ def ratio_distance_limits(fmt: str, plot: bool, to_file: bool) -> list:
 
 
 def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool, to_file: bool,
-                              shard: Optional[tuple[int, int]] = None) -> None:
+                              shard: tuple[int, int] | None = None) -> None:
     """Refuse (UsageError) a run whose point count exceeds the limit of its output (see
     :func:`ratio_distance_limits`), from the axes' sizes alone: nothing is built."""
     total = n_i * n_l
@@ -84,7 +82,7 @@ def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool, to_file:
                          "for --format json (it lists the grid); use --format csv")
 
 
-def check_param_size(axes: list, fmt: str, shard: Optional[tuple[int, int]] = None) -> None:
+def check_param_size(axes: list, fmt: str, shard: tuple[int, int] | None = None) -> None:
     """Refuse (UsageError) a --param run too large for its output (JSON: MAX_PARAM_JSON_POINTS;
     every grid: :func:`check_param_axes`)."""
     check_param_axes(axes)

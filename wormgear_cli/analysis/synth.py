@@ -38,8 +38,7 @@ import numpy as np
 
 from wormgear_cli.errors import UsageError, did_you_mean
 from wormgear_cli.physics.effects import EFFECTS, Signals, params_from_keys, params_to_keys
-
-from wormgear_cli.units import ARCSEC  # noqa: E402  (the one definition)
+from wormgear_cli.units import ARCSEC
 
 #: the data columns, in file order
 COLUMNS = ("angle_deg", "error_arcsec", "direction", "run", "load_Nm", "temperature_C", "time_s")
@@ -194,7 +193,7 @@ class Programme:
                  "mesh-warmup": ("start", "end", "tau_s", "housing_share", "housing_lag_s")}.get(self.kind)
         if names is None:
             return {"kind": self.kind, "levels": list(self.values)}
-        return {"kind": self.kind, **{n: x for n, x in zip(names, self.values)}}
+        return {"kind": self.kind, **dict(zip(names, self.values))}
 
 
 # --- parsing the command-line forms ---------------------------------------------------
@@ -519,8 +518,11 @@ def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
     rows [arcsec]).
     """
     from wormgear_cli.analysis.accuracy import geometry
-    from wormgear_cli.physics.thermal import (centre_distance_change_mm, predicted_centre_distance_um_per_K,
-                                             worm_pair_radii)
+    from wormgear_cli.physics.thermal import (
+        centre_distance_change_mm,
+        predicted_centre_distance_um_per_K,
+        worm_pair_radii,
+    )
 
     t0, _t1, _tau, share, lag = temperature.values
     mesh_dt = signals.temperature - t0

@@ -71,7 +71,7 @@ def _signal_name(signum: int) -> str:
         return f"signal {signum}"
 
 
-def _usage_error_exit(exc) -> "typer.Exit":
+def _usage_error_exit(exc) -> typer.Exit:
     """A command-line mistake (unknown option, bad choice, missing argument) as the project's one
     ``error:`` line with where to look, exit 2 -- not click's usage block of three lines."""
     ctx = getattr(exc, "ctx", None)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -37,10 +37,10 @@ def analyze(
 
     Example: wormgear analyze configs/mch50.toml --unit deg --format json
     """
-    from wormgear_cli.analysis.accuracy import METRIC_COLUMNS, INFO_COLUMNS, analyze as run
-    from wormgear_cli.spec.loader import load_spec
-
+    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.accuracy import analyze as run
     from wormgear_cli.output.analyze import document
+    from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(drive)
     result = run(spec)
@@ -147,7 +147,7 @@ def check(
 
     Example: wormgear check configs/*.toml --format json
     """
-    from wormgear_cli.analysis.requirements import check_file
+    from wormgear_cli.workflows.check import check_file
 
     fmt = getattr(format, "value", format)
     checks = [check_file(path) for path in drives]
@@ -162,7 +162,7 @@ def check(
         emit(json_text({"files": results, "passed": not (invalid or failed)}), output, drives)
     elif lines:
         if output is None and stdout_is_terminal():  # on a screen, long findings wrap at spaces;
-            import shutil                            # piped or to a file, one finding per line (grep)
+            import shutil  # piped or to a file, one finding per line (grep)
             import textwrap
 
             width = shutil.get_terminal_size((80, 24)).columns
@@ -179,7 +179,7 @@ def check(
 def new(
     path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
                                            metavar="NEW.toml")],
-    name: Annotated[Optional[str], typer.Option("--name", help="Drive name (default: file name).")] = None,
+    name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
     """Write a complete, commented drive template to start from.
 

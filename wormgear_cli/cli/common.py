@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Iterable
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Iterable, Optional, Union
+from typing import Annotated
 
 import typer
 
@@ -57,7 +58,7 @@ FormatOption = Annotated[TableFormat, typer.Option("--format", "-f", help="Outpu
 UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the angular errors in the "
                                                "output (positions such as target angles stay in deg).",
                                                case_sensitive=False)]
-def _check_output(value: Optional[Path]) -> Optional[Path]:
+def _check_output(value: Path | None) -> Path | None:
     """-o: a directory or a missing folder is the project's one-line error, before any work."""
     from wormgear_cli.files import check_output_path
 
@@ -65,7 +66,7 @@ def _check_output(value: Optional[Path]) -> Optional[Path]:
     return value
 
 
-OutputOption = Annotated[Optional[Path], typer.Option("--output", "-o", help="Write the result to FILE "
+OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
                                                       callback=_check_output)]
 DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False,
@@ -75,7 +76,7 @@ DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_d
 # --- writing ---------------------------------------------------------------------------------
 
 
-def write_stdout(data: Union[str, bytes]) -> None:
+def write_stdout(data: str | bytes) -> None:
     """Write ``data`` (text, or bytes of ASCII/UTF-8 text) to stdout and flush.
 
     The one place a command's result reaches stdout: :func:`wormgear_cli.files.write_stdout`
@@ -85,12 +86,12 @@ def write_stdout(data: Union[str, bytes]) -> None:
     checked_write(data)
 
 
-def is_stdout(output: Optional[Path]) -> bool:
+def is_stdout(output: Path | None) -> bool:
     """True when ``-o`` means stdout (not given, or ``-``)."""
     return output is None or str(output) == "-"
 
 
-def announce_written(path: Union[str, Path]) -> None:
+def announce_written(path: str | Path) -> None:
     """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
     and only once the run's outputs are committed (a failed run claims no file)."""
@@ -99,7 +100,7 @@ def announce_written(path: Union[str, Path]) -> None:
     after_commit(lambda: typer.echo(f"wrote {path}", err=True))
 
 
-def emit(data: Union[str, bytes], output: Optional[Path], inputs: Iterable = ()) -> None:
+def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
     """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``
     (refusing to overwrite any of ``inputs``) and announce it."""
     if is_stdout(output):
@@ -137,7 +138,7 @@ def no_color() -> bool:
     return bool(os.environ.get("NO_COLOR"))
 
 
-def terminal_console(stderr: bool = False, width: Optional[int] = None):
+def terminal_console(stderr: bool = False, width: int | None = None):
     """A rich console for a terminal: styled unless NO_COLOR is set, in which case it writes
     no escape code at all (``color_system=None`` drops bold, italic and dim too)."""
     from rich.console import Console
@@ -269,7 +270,7 @@ def _draw(console, renderables: list, width: int) -> None:
             console.print(part)
 
 
-def render(renderables: list, output: Optional[Path], inputs: Iterable = ()) -> None:
+def render(renderables: list, output: Path | None, inputs: Iterable = ()) -> None:
     """Draw tables (:class:`wormgear_cli.output.tables.Table` or rich renderables) to stdout
     (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
     import io

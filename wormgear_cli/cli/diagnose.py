@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -40,7 +40,7 @@ def diagnose(
         help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
         "time_s).", show_default=False, metavar="DATA.csv")],
     output: OutputOption = None,
-    write_spec: Annotated[Optional[Path], typer.Option(
+    write_spec: Annotated[Path | None, typer.Option(
         "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "
         "spec: the fitted phases and an [effects.NAME] table per named effect; the input's comments are not "
         "kept); never the input files.", show_default=False)] = None,
@@ -50,7 +50,7 @@ def diagnose(
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
-    plot: Annotated[Optional[Path], typer.Option(
+    plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
     alpha: Annotated[float, typer.Option(

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -19,7 +19,7 @@ def grade(
                                                show_default=False)],
     face_width_mm: Annotated[float, typer.Option("--face-width-mm", help="Face width b [mm].",
                                                  show_default=False)],
-    teeth: Annotated[Optional[int], typer.Option("--teeth", help="Number of teeth z (checked against the "
+    teeth: Annotated[int | None, typer.Option("--teeth", help="Number of teeth z (checked against the "
                                                  "standard's scope; default d/m).", show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format.",
                                                     case_sensitive=False)] = "table",

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -36,10 +36,10 @@ DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, 
 @app.command()
 def measure(
     data: DataArgument,
-    drive: Annotated[Optional[Path], typer.Option(
+    drive: Annotated[Path | None, typer.Option(
         "--drive", "-d", help="Drive spec (TOML): default orders are its shafts and meshes, labelled.",
         show_default=False)] = None,
-    orders: Annotated[Optional[str], typer.Option(
+    orders: Annotated[str | None, typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,8,240 "
         "(default: the drive's physical orders with --drive, else 1,2,3,4).", show_default=False)] = None,
     harmonics: Annotated[int, typer.Option(
@@ -51,7 +51,7 @@ def measure(
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
-    plot: Annotated[Optional[Path], typer.Option(
+    plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs the "
         "'plot' extra).", show_default=False)] = None,
 ):
@@ -71,7 +71,8 @@ def measure(
 
     Example: wormgear measure export.csv --map angle_deg="Position (deg)" --map error_arcsec=Deviation
     """
-    from wormgear_cli.workflows.measure import measure as run, parse_orders, report
+    from wormgear_cli.workflows.measure import measure as run
+    from wormgear_cli.workflows.measure import parse_orders, report
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -192,7 +193,8 @@ def _tables(doc: dict, ntargets: int) -> list:
     ot.add_column("status", overflow="fold")
     for it in od["items"]:
         c = it["common"]
-        ot.add_row(f"{it['order']:g}", escape(it["label"] or ""), a(c["amplitude"]) if c["amplitude"] is not None else "-",
+        ot.add_row(f"{it['order']:g}", escape(it["label"] or ""),
+                   a(c["amplitude"]) if c["amplitude"] is not None else "-",
                    a(c["amplitude_stderr"]) if c["amplitude"] is not None else "-", ph(c["phase_deg"]),
                    escape(status(it)))
     span = "full turn" if cov["full_turn"] else f"span {cov['span_deg']:.4g} deg, trend degree {cov['trend_degree']}"

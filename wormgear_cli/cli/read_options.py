@@ -11,10 +11,9 @@ Use in a command::
 from __future__ import annotations
 
 from enum import Enum
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
-
 
 
 class ErrorUnit(str, Enum):
@@ -29,19 +28,19 @@ class InputAngleUnit(str, Enum):
     rad = "rad"
 
 
-MapOption = Annotated[Optional[list[str]], typer.Option(
+MapOption = Annotated[list[str] | None, typer.Option(
     "--map", help="Column of the file to read as a canonical column, CANONICAL=HEADER (repeatable), e.g. "
     "--map angle_deg=Position --map error_arcsec=Deviation. Canonical names: angle_deg, error_arcsec, "
     "direction, run, load_Nm, temperature_C, time_s.", show_default=False)]
-ErrorUnitOption = Annotated[Optional[ErrorUnit], typer.Option(
+ErrorUnitOption = Annotated[ErrorUnit | None, typer.Option(
     "--error-unit", help="Unit of the error column (default: the unit in its header, e.g. 'error (arcmin)', "
     "else arcsec).", case_sensitive=False, show_default=False)]
-AngleUnitOption = Annotated[Optional[InputAngleUnit], typer.Option(
+AngleUnitOption = Annotated[InputAngleUnit | None, typer.Option(
     "--angle-unit", help="Unit of the angle column (default: the unit in its header, else deg).",
     case_sensitive=False, show_default=False)]
 
 
-def read_options(column_map: Optional[list[str]], error_unit=None, angle_unit=None):
+def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None):
     """:class:`~wormgear_cli.measurement.reader.ReadOptions` from the option values; UsageError (one line
     per bad ``--map``) otherwise.  (The measurement module is imported here, not at start-up.)"""
     from wormgear_cli.errors import UsageError

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -36,7 +36,7 @@ class RunNoiseKind(str, Enum):
     drift = "drift"
 
 
-PlotOption = Annotated[Optional[Path], typer.Option(
+PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
     show_default=False)]
 
@@ -48,7 +48,7 @@ def simulate(
                                         min=2, max=10_000_000)] = 3600,
     revs: Annotated[float, typer.Option("--revs", help="Dense scan: output turns covered (angles from 0, "
                                         "end excluded; 0 < R <= 1000).")] = 1.0,
-    at: Annotated[Optional[Path], typer.Option(
+    at: Annotated[Path | None, typer.Option(
         "--at", help="Evaluate at every row of this CSV (angle_deg; optional direction, load_Nm, "
         "temperature_C, time_s) and write the rows back with a simulated_error_<unit> column.",
         show_default=False)] = None,
@@ -62,7 +62,7 @@ def simulate(
         "--phases", help="Source phases: as in the spec, or aligned so every source peaks at 0 deg "
         "(aligned-error: common-mode peaks; aligned-reversal: lost-motion peaks).",
         case_sensitive=False)] = Phases.spec,
-    effect: Annotated[Optional[list[str]], typer.Option(
+    effect: Annotated[list[str] | None, typer.Option(
         "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
         "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
     format: Annotated[CsvJsonFormat, typer.Option("--format", "-f", help="Output format.",
@@ -84,10 +84,10 @@ def simulate(
     """
     import math
 
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.workflows import simulate as report
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.analysis.synth import parse_effects
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.workflows import simulate as report
 
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
@@ -115,9 +115,8 @@ def simulate(
     else:
         result = report.dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
     if plot is not None:
-        from wormgear_cli.plots.simulate import plot_simulation
-
         from wormgear_cli.files import refuse_input
+        from wormgear_cli.plots.simulate import plot_simulation
 
         refuse_input(plot, inputs, "--plot")
         plot_simulation(result.curves, plot)
@@ -129,7 +128,7 @@ def simulate(
 def synth(
     drive: DriveArgument,
     output: OutputOption = None,
-    truth: Annotated[Optional[Path], typer.Option(
+    truth: Annotated[Path | None, typer.Option(
         "--truth", help="Write the truth (phases, effects with parameters, noise, seed, plan) to this JSON "
         "file; it never goes into the data.", show_default=False)] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same bytes).",
@@ -144,7 +143,7 @@ def synth(
                                       min=1, max=10_000)] = 5,
     revs: Annotated[float, typer.Option("--revs", help="Output turns spanned by the targets (0 < R <= 1000).")
                     ] = 1.0,
-    dwell_s: Annotated[Optional[float], typer.Option(
+    dwell_s: Annotated[float | None, typer.Option(
         "--dwell-s", help="Time per point [s] (default 10 for iso, 0.5 for dense).", min=0.0,
         show_default=False)] = None,
     jitter: Annotated[float, typer.Option("--jitter", help="iso plan: target jitter, +/- this fraction of the "
@@ -154,7 +153,7 @@ def synth(
                                         max=1000)] = 1,
     cycle_gap_s: Annotated[float, typer.Option("--cycle-gap-s", help="Time between cycles [s]; the table "
                                                "keeps running, no rows are recorded.", min=0.0)] = 0.0,
-    effect: Annotated[Optional[list[str]], typer.Option(
+    effect: Annotated[list[str] | None, typer.Option(
         "--effect", "-e", help="Add an effect: NAME or NAME:key=value,key=value (catalogue units; "
         "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
     spec_effects: Annotated[bool, typer.Option("--spec-effects/--no-spec-effects",
@@ -188,10 +187,17 @@ def synth(
     """
     import math
 
+    from wormgear_cli.analysis.synth import (
+        Noise,
+        Plan,
+        format_csv,
+        parse_effects,
+        parse_load,
+        parse_temperature,
+        synthesize,
+    )
     from wormgear_cli.errors import UsageError
     from wormgear_cli.spec.loader import load_spec
-    from wormgear_cli.analysis.synth import (Noise, Plan, format_csv, parse_effects, parse_load, parse_temperature,
-                                    synthesize)
 
     for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
                         ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s),

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -39,32 +39,32 @@ class HoldMode(str, Enum):
 @app.command()
 def sweep(
     drive: DriveArgument,
-    i: Annotated[Optional[str], typer.Option("--i", metavar="START:STOP:N",
+    i: Annotated[str | None, typer.Option("--i", metavar="START:STOP:N",
                                              help="Gear ratio i = R2/R1 = z1/z2: N values from START to STOP "
                                                   "(default: the spec's ratio).", show_default=False)] = None,
-    l_mm: Annotated[Optional[str], typer.Option("--l-mm", metavar="START:STOP:N",
+    l_mm: Annotated[str | None, typer.Option("--l-mm", metavar="START:STOP:N",
                                                 help="Centre distance l = R1 + R2 [mm]: N values from START to "
                                                      "STOP (default: the spec's).", show_default=False)] = None,
-    param: Annotated[Optional[list[str]], typer.Option(
+    param: Annotated[list[str] | None, typer.Option(
         "--param", metavar="KEY=START:STOP:N",
         help="Sweep a numeric spec key (TOML path, the key's unit), e.g. worm_pair.lead_error_mm=0:0.05:11. "
              "Repeatable: the grid spans all of them (first key outermost), at most 100000 points. Every "
              "analyze metric is a column. Not for effects.* keys; not combinable with --i/--l-mm.",
         show_default=False)] = None,
-    hold: Annotated[Optional[HoldMode], typer.Option(
+    hold: Annotated[HoldMode | None, typer.Option(
         "--hold", help="What stays fixed as i and l change: the normal tooth forces (force, default) or "
                        "the output torque (torque).", case_sensitive=False, show_default=False)] = None,
-    module_mm: Annotated[Optional[float], typer.Option(
+    module_mm: Annotated[float | None, typer.Option(
         "--module-mm", help="Snap every point to whole tooth counts at this module [mm], 0.05 to 100; adds "
                             "columns z1, z2, i_used, l_used_mm.", show_default=False)] = None,
-    min_pinion_teeth: Annotated[Optional[int], typer.Option(
+    min_pinion_teeth: Annotated[int | None, typer.Option(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
         show_default=False)] = None,
-    shard: Annotated[Optional[str], typer.Option(
+    shard: Annotated[str | None, typer.Option(
         "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the point list "
                                        "(csv/json); parts concatenate to the full CSV.", show_default=False)] = None,
-    plot: Annotated[Optional[Path], typer.Option(
+    plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs the 'plot' "
                        "extra).", show_default=False)] = None,
     format: FormatOption = "table",
@@ -159,9 +159,9 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
 
 
 def _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n):
-    from wormgear_cli.output.formats import csv_text
-    from wormgear_cli.output import sweep as report
     from wormgear_cli.analysis.sweep import param_size, shard_bounds
+    from wormgear_cli.output import sweep as report
+    from wormgear_cli.output.formats import csv_text
 
     start, stop = shard_bounds(param_size(axes), *k_n) if k_n else (0, param_size(axes))
     with Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:

@@ -4,14 +4,24 @@ from __future__ import annotations
 
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import (DriveArgument, FormatOption, OutputOption, Progress, UnitOption,
-                                     announce_written, emit, is_stdout,
-                                     json_text, render, write_stdout)
+from wormgear_cli.cli.common import (
+    DriveArgument,
+    FormatOption,
+    OutputOption,
+    Progress,
+    UnitOption,
+    announce_written,
+    emit,
+    is_stdout,
+    json_text,
+    render,
+    write_stdout,
+)
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
@@ -51,20 +61,20 @@ def tolerance(
         "(--points even angles).", case_sensitive=False)] = PlanKind.iso,
     targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.")] = 24,
     points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.")] = 360,
-    target_yield: Annotated[Optional[float], typer.Option(
+    target_yield: Annotated[float | None, typer.Option(
         "--target-yield", help="Yield to aim at (0 < P < 1; default: [requirements] min_yield): rank the "
         "tolerances by the yield one step of tightening gains.", show_default=False)] = None,
-    shard: Annotated[Optional[str], typer.Option(
+    shard: Annotated[str | None, typer.Option(
         "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the samples (CSV parts "
         "concatenate, header once, to the whole run's CSV).", show_default=False)] = None,
-    summarize: Annotated[Optional[Path], typer.Option(
+    summarize: Annotated[Path | None, typer.Option(
         "--summarize", help="Report on the samples of this CSV (concatenated --format csv parts) instead of "
         "drawing; give the run's --seed, --plan, --targets and --unit.",
         show_default=False)] = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
-    plot: Annotated[Optional[Path], typer.Option(
+    plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
         "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
 ):
@@ -84,7 +94,7 @@ def tolerance(
 
     from wormgear_cli.errors import UsageError
     from wormgear_cli.spec.loader import load_spec
-    from wormgear_cli.tolerance import engine, report
+    from wormgear_cli.tolerance import engine, report, study
 
     fmt = getattr(format, "value", format)
     unit = getattr(unit, "value", unit)
@@ -130,7 +140,7 @@ def tolerance(
     plan = engine.allocation_runs(s, target, n_rows if n_rows is not None else samples)
     cost = (plan[0] * plan[1] * _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]) if plan else 0.0
     with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
-        doc = engine.finish(s, summary, target_yield, n_rows if n_rows is not None else samples, shard, bar.advance)
+        doc = study.finish(s, summary, target_yield, n_rows if n_rows is not None else samples, shard, bar.advance)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
 

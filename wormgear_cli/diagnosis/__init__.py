@@ -112,12 +112,11 @@ freedom follow Satterthwaite (1946) and Fai & Cornelius (1996); the
 F and t distributions are scipy.special's fdtrc and stdtrit.
 """
 
-from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml
 from wormgear_cli.diagnosis.candidates import (
-    Candidate,
-    CandidateKind,
     REPLICATION_REMEDY,
     UNPHYSICAL_HINT,
+    Candidate,
+    CandidateKind,
     candidate,
     candidate_params,
     jointly_fittable_orders,
@@ -126,7 +125,7 @@ from wormgear_cli.diagnosis.candidates import (
     replication_problem,
     unaliased_orders,
 )
-from wormgear_cli.diagnosis.inference import Accepted, Found
+from wormgear_cli.diagnosis.inference import Accepted, Found, augmented_params
 from wormgear_cli.diagnosis.mixed import (
     CellTester,
     Cross,
@@ -140,9 +139,16 @@ from wormgear_cli.diagnosis.mixed import (
     wald,
 )
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, PhaseSource, fit_model, phase_sources, sources_total
-from wormgear_cli.diagnosis.report import DiagnoseResult, report, run_diagnose
-from wormgear_cli.diagnosis.residuals import (gap_summary, iso_figures, noise_floor, order_table, order_tables,
-                                              short_term_noise, versus)
+from wormgear_cli.diagnosis.report import DiagnoseResult, augmented_toml, report, run_diagnose
+from wormgear_cli.diagnosis.residuals import (
+    gap_summary,
+    iso_figures,
+    noise_floor,
+    order_table,
+    order_tables,
+    short_term_noise,
+    versus,
+)
 from wormgear_cli.diagnosis.runs import (
     Cells,
     DataInfo,
@@ -173,14 +179,15 @@ from wormgear_cli.diagnosis.thresholds import (
 from wormgear_cli.units import ARCSEC
 
 __all__ = [
-    "ARCSEC", "Accepted", "DiagnoseResult", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross", "DataInfo", "Diagnosis",
-    "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE", "JOINT_MIN_SINGULAR_VALUE", "MIN_HELD_TOLERANCE", "MIN_RUNS", "MIN_SCAN_SHARE", "MIN_STABILITY",
+    "ARCSEC", "Accepted", "DiagnoseResult", "Candidate", "CandidateKind", "CellTester", "Cells", "Cross",
+    "DataInfo", "Diagnosis", "EXCESS_FACTOR", "FitContext", "Found", "Groups", "INDISTINGUISHABLE",
+    "JOINT_MIN_SINGULAR_VALUE", "MIN_HELD_TOLERANCE", "MIN_RUNS", "MIN_SCAN_SHARE", "MIN_STABILITY",
     "MIN_TEMPERATURE_RANGE", "MIN_TOLERANCE", "MONOTONIC", "ModelFit", "NEARLY", "NEAR_FACTOR", "NEAR_SHARE",
-    "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason", "UNPHYSICAL_HINT",
-    "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate", "candidate_params", "cell_level",
-    "containment_df", "contrast_df", "data_info", "diagnose", "f_sf", "fit_model", "gap_summary", "iso_figures",
-    "jointly_fittable_orders", "make_cells", "make_groups", "needs_problem", "noise_floor", "order_table",
-    "order_tables",
-    "phase_sources", "physical_problem", "reml", "replication_problem", "report", "unaliased_orders", "run_diagnose",
-    "short_term_noise", "sources_total", "t_ppf", "time_restarts", "versus", "wald",
+    "PhaseSource", "REPLICATION_REMEDY", "Score", "ScoreStatus", "Step", "Stop", "StopReason",
+    "UNPHYSICAL_HINT", "VarFit", "Wald", "augmented_params", "augmented_toml", "candidate",
+    "candidate_params", "cell_level", "containment_df", "contrast_df", "data_info", "diagnose", "f_sf",
+    "fit_model", "gap_summary", "iso_figures", "jointly_fittable_orders", "make_cells", "make_groups",
+    "needs_problem", "noise_floor", "order_table", "order_tables", "phase_sources", "physical_problem",
+    "reml", "replication_problem", "report", "unaliased_orders", "run_diagnose", "short_term_noise",
+    "sources_total", "t_ppf", "time_restarts", "versus", "wald",
 ]

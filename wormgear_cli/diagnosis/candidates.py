@@ -137,7 +137,7 @@ def needs_problem(name: str, needs: str | None, info: DataInfo) -> str | None:
 REPLICATION_REMEDY = "measure at least 3 runs in each direction"
 
 
-def replication_problem(cand: "Candidate", basis, groups: Groups, info: DataInfo) -> tuple[str, str] | None:
+def replication_problem(cand: Candidate, basis, groups: Groups, info: DataInfo) -> tuple[str, str] | None:
     """Why, with fewer than MIN_RUNS runs, a candidate cannot be tested (None: it can), and the remedy.
 
     Its test needs replication between runs when its columns (after the
@@ -186,7 +186,7 @@ def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     """Per periodic candidate: the orders it cannot be told from at these angles, as (order, label)."""
     from wormgear_cli.measurement.harmonics import aliasing, physical_orders
 
-    labels = {o: lab for o, lab in physical_orders(geometry, 3)}
+    labels = dict(physical_orders(geometry, 3))
     for s in sources:
         labels.setdefault(s.order, s.name)
     orders = sorted({*labels, *(c.order for c in cands.values() if c is not None and c.order is not None)})

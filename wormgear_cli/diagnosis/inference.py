@@ -9,13 +9,39 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wormgear_cli.diagnosis.augment import augmented_params
 from wormgear_cli.diagnosis.candidates import Candidate, CandidateKind, candidate_params, physical_problem
 from wormgear_cli.diagnosis.design import orthonormal, residualise
 from wormgear_cli.diagnosis.mixed import Cross, Wald, containment_df, contrast_df, reml, t_ppf, variance_info, wald
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, PhaseSource, effect_contrib, fit_model
 from wormgear_cli.diagnosis.scoring import Score
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, NEAR_SHARE
+
+
+def wrap_deg(x: float) -> float:
+    v = (math.degrees(x) + 180.0) % 360.0 - 180.0
+    return 180.0 if v == -180.0 else v
+
+
+def _sig6(x: float) -> float:
+    return float(f"{x:.6g}")
+
+
+def augmented_params(found: Found) -> dict:
+    """A named effect's parameters keyed as in the catalogue (rounded as written)."""
+    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
+
+    eff = EFFECTS[found.name]
+    keys = params_to_keys(found.name, found.params)
+    out = {}
+    for p in eff.params:
+        v = keys[p.key]
+        if p.name == eff.phase:
+            v = wrap_deg(v * p.scale)
+            v = round(v, 4)
+        else:
+            v = _sig6(v)
+        out[p.key] = v
+    return out
 
 
 @dataclass
@@ -73,7 +99,7 @@ def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups
     The first ``fixed`` linear columns (the zero offset, and any unexplained
     structure held in the model) are nuisance; the named effects follow, in
     ``lin_names`` order."""
-    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
+    from wormgear_cli.physics.effects import EFFECTS
 
     if not accepted:
         return []

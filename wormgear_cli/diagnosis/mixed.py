@@ -53,10 +53,10 @@ class Cross:
         self.k = xtx.shape[0]
 
     @classmethod
-    def build(cls, x: np.ndarray, y: np.ndarray, groups: Groups) -> "Cross":
+    def build(cls, x: np.ndarray, y: np.ndarray, groups: Groups) -> Cross:
         return cls(x.T @ x, x.T @ y, float(y @ y), pass_sums(x, groups), pass_sums(y, groups), groups)
 
-    def take(self, cols) -> "Cross":
+    def take(self, cols) -> Cross:
         cols = np.asarray(cols, dtype=int)
         return Cross(self.xtx[np.ix_(cols, cols)], self.xty[cols], self.yty, self.s_x[:, cols], self.s_y,
                      self.groups, self.pass_count, self.run_count)
@@ -168,8 +168,8 @@ def reml(cross: Cross) -> VarFit:
 
             def around(centre):
                 if np.isinf(centre):
-                    return np.concatenate([[-np.inf], lo + (np.arange(3)) * step])
-                pts = centre + offs
+                    return np.concatenate([[-np.inf], lo + (np.arange(3)) * step])  # noqa: B023
+                pts = centre + offs  # noqa: B023
                 return np.where(pts < lo - 1e-12, -np.inf, pts)
 
             pa = around(cp) if p_free else zero

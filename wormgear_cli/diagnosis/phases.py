@@ -8,9 +8,9 @@ metric and REML variance components, alternated (:func:`fit_model`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Callable
 
 import numpy as np
 
@@ -50,7 +50,7 @@ def _source_contrib(src):
             out = out - sig.direction * src.lost_motion(sig.theta, psi) / 2.0
         return out / ARCSEC
 
-    def at_pairs(d: "Distinct", psi):
+    def at_pairs(d: Distinct, psi):
         # contrib(d.sig, psi) with the curves (functions of the angle only) evaluated once per distinct angle
         angle, index = d.angles
         out = np.take(src.curve(angle, psi), index)
@@ -62,7 +62,7 @@ def _source_contrib(src):
     return contrib
 
 
-def pair_values(source: "PhaseSource", d: "Distinct", psi) -> np.ndarray:
+def pair_values(source: PhaseSource, d: Distinct, psi) -> np.ndarray:
     """``source.contrib(d.sig, psi)`` at the distinct pairs ``d`` (the same numbers: every operation is
     elementwise); a simulation source's curves are evaluated once per distinct angle when the pairs
     repeat their angles (forward and reverse passes at the same targets)."""
@@ -85,8 +85,8 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     ``[effects.*]`` (those with a phase key).  A term is fittable when its
     contribution at these samples changes with its phase (a source of zero
     size, or one whose lost motion does not depend on the phase, is not)."""
-    from wormgear_cli.physics.effects import EFFECTS
     from wormgear_cli.analysis.simulate import periodic_sources
+    from wormgear_cli.physics.effects import EFFECTS
 
     out = []
     for src in periodic_sources(spec):
@@ -155,17 +155,17 @@ class FitContext:
     def n(self) -> int:
         return int(self.y.shape[0])
 
-    def subsample(self, idx: np.ndarray) -> "FitContext":
+    def subsample(self, idx: np.ndarray) -> FitContext:
         """The rows ``idx`` as one group (white-noise metric), for cheap multi-start searches."""
         one = Groups(np.zeros(idx.shape[0], dtype=int), np.array([float(idx.shape[0])]), np.zeros(1, int),
                      np.ones(1), 1, False, False, "subsample")
         return FitContext(self.y[idx], subset(self.sig, idx), one, self.base[idx], self.sources, self.spec_psi)
 
-    def replaced(self, **changes) -> "FitContext":
+    def replaced(self, **changes) -> FitContext:
         return replace(self, **changes)
 
     @cached_property
-    def distinct(self) -> "Distinct | None":
+    def distinct(self) -> Distinct | None:
         """The rows' distinct (angle, direction) pairs, when there are at most half as many as rows."""
         return distinct_pairs(self.sig)
 
@@ -308,7 +308,7 @@ def _jacobian(sources, sig, psi, h: float = 1e-5, parts=None, out=None, values=N
     return cols
 
 
-def _evaluator(ctx: "FitContext"):
+def _evaluator(ctx: FitContext):
     """(values, spread, size): how :func:`levenberg_marquardt` evaluates the sources of ``ctx``.
 
     When every source is pointwise and the rows repeat (angle, direction) pairs,

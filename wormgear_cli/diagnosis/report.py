@@ -7,11 +7,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.diagnosis.augment import augmented_params, augmented_toml, wrap_deg
-from wormgear_cli.diagnosis.candidates import (REPLICATION_REMEDY, CandidateKind, aliased_effects, candidate,
-                                               candidate_params)
-from wormgear_cli.diagnosis.residuals import (gap_summary, iso_figures, noise_floor, order_tables,
-                                              target_run_cells, versus)
+from wormgear_cli.diagnosis.candidates import (
+    REPLICATION_REMEDY,
+    CandidateKind,
+    aliased_effects,
+    candidate,
+    candidate_params,
+)
+from wormgear_cli.diagnosis.inference import augmented_params, wrap_deg
+from wormgear_cli.diagnosis.residuals import (
+    gap_summary,
+    iso_figures,
+    noise_floor,
+    order_tables,
+    target_run_cells,
+    versus,
+)
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
@@ -176,7 +187,7 @@ def _twin_text(name: str, order: float, twins: list[dict]) -> str:
 FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell them apart"
 
 
-def _effect_order(name: str, diag: "Diagnosis") -> float:
+def _effect_order(name: str, diag: Diagnosis) -> float:
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
     from wormgear_cli.physics.effects import EFFECTS
 
@@ -278,9 +289,9 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
 def data_findings(meas) -> list:
     """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
     pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
-    ``measure``'s checks (:func:`wormgear_cli.workflows.measure.structure_findings`), the one definition."""
+    ``measure``'s checks (:func:`wormgear_cli.measurement.checks.structure_findings`), the one definition."""
+    from wormgear_cli.measurement.checks import structure_findings
     from wormgear_cli.measurement.iso230 import group_targets
-    from wormgear_cli.workflows.measure import structure_findings
 
     tgt, _ = group_targets(meas.angle)
     findings, _ = structure_findings(meas, tgt)
@@ -547,3 +558,24 @@ def run_diagnose(spec, meas, *, alpha: float = 0.01, fit_phases: bool = True, ma
     doc["augmented_spec"] = None if write_spec is None else str(write_spec)
     text = augmented_toml(diag, data_name) if write_spec is not None else None
     return DiagnoseResult(diag, doc, text)
+
+
+def augmented_toml(diag: Diagnosis, data_name: str = "") -> str:
+    """The augmented spec as TOML text, with a comment header saying what changed."""
+    import tomli_w
+
+    lines = [f"# {diag.spec.drive.name}: written by wormgear diagnose from {diag.spec.source}"
+             + (f" and {data_name}" if data_name else "")]
+    if diag.fit_phases and diag.sources:
+        lines.append("# fitted phases: " + ", ".join(s.key for s in diag.sources))
+    if diag.found:
+        lines.append("# effects added: " + ", ".join(f.name for f in diag.found))
+        for f in diag.found:
+            if not f.separable and f.intervals:
+                key, (lo, hi) = next(iter(f.intervals.items()))
+                lines.append(f"# {f.name}: its size is not separable from the fitted phases of "
+                             f"{', '.join(f.indistinguishable_from)} ({key} from {lo:.3g} to {hi:.3g} fits as well)")
+    else:
+        lines.append("# no effect added (no missing effect found)")
+    lines.append(f"# the fitted zero offset ({diag.after.offset:.4f} arcsec) is not part of a drive spec")
+    return "\n".join(lines) + "\n\n" + tomli_w.dumps(diag.augmented)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.measurement.reader import time_restarts  # noqa: F401  (re-exported)
+from wormgear_cli.measurement.reader import time_restarts
 
 
 @dataclass(frozen=True)

@@ -8,13 +8,18 @@ import math
 import numpy as np
 
 from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
-from wormgear_cli.diagnosis.design import orthonormal, residualise, tolerance
+from wormgear_cli.diagnosis.design import orthonormal, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
 from wormgear_cli.diagnosis.phases import ModelFit, distinct_pairs
 from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, pass_sums
 from wormgear_cli.diagnosis.scoring import ScoreStatus
-from wormgear_cli.diagnosis.thresholds import (EXCESS_FACTOR, MIN_HELD_TOLERANCE, MIN_RUNS, MIN_SCAN_SHARE,
-                                               MIN_TEMPERATURE_RANGE)
+from wormgear_cli.diagnosis.thresholds import (
+    EXCESS_FACTOR,
+    MIN_HELD_TOLERANCE,
+    MIN_RUNS,
+    MIN_SCAN_SHARE,
+    MIN_TEMPERATURE_RANGE,
+)
 
 
 #: the catalogue effect whose signature a pattern of the residual scan is
@@ -62,8 +67,9 @@ def annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: 
         if name == "bearing_clearance" and item.get("mean_reversal_change_arcsec", 0.0) < 0.0:
             name = None  # less lost motion than modelled is not a clearance
         sc = scores.get(name) if name else None
-        if item["kind"] == "reversal" and scores.get("thermal_backlash") is not None and \
-                scores["thermal_backlash"].status is ScoreStatus.UNTESTABLE and (sc is None or sc.status is not ScoreStatus.UNTESTABLE):
+        if (item["kind"] == "reversal" and scores.get("thermal_backlash") is not None
+                and scores["thermal_backlash"].status is ScoreStatus.UNTESTABLE
+                and (sc is None or sc.status is not ScoreStatus.UNTESTABLE)):
             name, sc = "thermal_backlash", scores["thermal_backlash"]  # a warm-up changes the reversal between passes
         if sc is not None and sc.status is ScoreStatus.UNTESTABLE:
             item["untestable_candidate"] = name
@@ -109,7 +115,6 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     measurement (they depend on the angles only)."""
     from wormgear_cli.measurement.harmonics import physical_orders
     from wormgear_cli.measurement.iso230 import group_targets
-
     from wormgear_cli.physics.effects import EFFECTS
 
     catalogue_orders = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
@@ -137,7 +142,7 @@ def scan_residual(state: ModelFit, sig, groups, geometry, alpha, info: DataInfo,
     signals = [("temperature_C", sig.temperature, info.temperature_range >= MIN_TEMPERATURE_RANGE, "K"),
                ("load_Nm", sig.load, info.load_range > 0, "N m"),
                ("time_s", sig.time, info.time_range > 0, "s")]
-    for name, values, varies, unit in signals:
+    for name, values, varies, _unit in signals:
         if not varies:
             continue
         tests.append(("trend", name, "common", ("trend", values, False)))

@@ -9,9 +9,9 @@ similarity of signatures and the cluster-bootstrap stability check.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Callable
 
 import numpy as np
 
@@ -119,7 +119,8 @@ class Step:
             if name in self.scores:
                 continue
             if cand is None:
-                self.scores[name] = Score(name, ScoreStatus.UNOBSERVABLE, "its signature is not linear in its parameters")
+                self.scores[name] = Score(name, ScoreStatus.UNOBSERVABLE,
+                                          "its signature is not linear in its parameters")
                 continue
             why = needs_problem(name, cand.needs, info)
             sc = Score(name, ScoreStatus.TESTED, aliases=alias_notes.get(name, []))
@@ -195,7 +196,7 @@ class Step:
             sc.wald, sc.var = w, vf
             sc.beta = w.estimate * sc.scale
             sc.params = candidate_params(cands[name], sc.beta)
-        tested = [n for n in slices] + nonlinear_names
+        tested = list(slices) + nonlinear_names
         self.nonlinear = set(nonlinear_names)
         for n in tested:
             self.scores[n].p_adj = min(1.0, self.scores[n].wald.p * len(tested))

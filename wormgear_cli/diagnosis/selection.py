@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from enum import Enum
-from typing import Callable
 
 import numpy as np
 
@@ -17,8 +17,7 @@ from wormgear_cli.diagnosis.residuals import noise_floor_rms
 from wormgear_cli.diagnosis.runs import DataInfo, Groups, data_info, make_cells, make_groups
 from wormgear_cli.diagnosis.scan import annotate, scan_residual, unowned_order_columns
 from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test
-from wormgear_cli.diagnosis.thresholds import (INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR,
-                                               NEARLY)
+from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR, NEARLY
 from wormgear_cli.errors import DataError, UsageError
 from wormgear_cli.units import ARCSEC
 
@@ -152,8 +151,8 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
 
 def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -> Diagnosis:
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS
     from wormgear_cli.analysis.simulate import simulate
+    from wormgear_cli.physics.effects import EFFECTS
 
     if not (0.0 < alpha < 0.5):
         raise UsageError(f"--alpha: expected a number in (0, 0.5), got {alpha:g}")

@@ -11,14 +11,19 @@ DeprecationWarning naming their new home ``wormgear_cli.measurement.reader``.
 """
 
 #: names of the former module ``wormgear_cli.measurement`` (now ``wormgear_cli.measurement.reader``)
-_OLD_NAMES = frozenset(['ANGLE_UNITS', 'ARCSEC', 'BLOCK_CHARS', 'CANONICAL', 'DEFAULTS', 'ERROR_UNITS', 'MAX_FILE_BYTES', 'Measurement', 'OPTIONAL', 'PLAUSIBLE_ERROR_P2P', 'RANGES', 'REQUIRED', 'ReadOptions', 'SNIFF_LINES', 'detect_dialect', 'parse_measurement', 'plausibility', 'read_bytes_bounded', 'read_measurement', 'suggest_map', 'time_restarts'])
+_OLD_NAMES = frozenset({
+    'ANGLE_UNITS', 'ARCSEC', 'BLOCK_CHARS', 'CANONICAL', 'DEFAULTS', 'ERROR_UNITS',
+    'MAX_FILE_BYTES', 'Measurement', 'OPTIONAL', 'PLAUSIBLE_ERROR_P2P', 'RANGES', 'REQUIRED',
+    'ReadOptions', 'SNIFF_LINES', 'detect_dialect', 'parse_measurement', 'plausibility',
+    'read_bytes_bounded', 'read_measurement', 'suggest_map', 'time_restarts',
+})
 
 
 def __getattr__(name: str):
     if name in _OLD_NAMES:
         import importlib
 
-        from wormgear_cli import moved
+        from wormgear_cli.errors import moved
 
         moved(f"wormgear_cli.measurement.{name}", f"wormgear_cli.measurement.reader.{name}")
         return getattr(importlib.import_module("wormgear_cli.measurement.reader"), name)

@@ -15,15 +15,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.measurement.harmonics import _as_1d
-
-
 #: degree of the polynomial trend that stands for the orders longer than a partial span
 TREND_DEGREE = 3
 #: a circular gap counts as a sampling gap (not an uncovered arc) up to this many times the median other gap
 GAP_RATIO = 2.0
 #: passes whose span is computed one by one at most (beyond: overall span only)
 MAX_PASS_SPANS = 1000
+
+
+def as_1d(name: str, value, n: int | None = None) -> np.ndarray:
+    """``value`` as a 1-D float array of ``n`` entries (ValueError naming ``name`` otherwise)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be one-dimensional")
+    if n is not None and arr.shape[0] != n:
+        raise ValueError(f"{name} has {arr.shape[0]} entries, expected {n}")
+    return arr
 
 
 @dataclass(frozen=True)
@@ -90,7 +97,7 @@ def coverage(theta, passes=None, unique=None) -> Coverage:
         it stands out (more than :data:`GAP_RATIO` times the median of the
         other gaps); otherwise the targets sample the whole turn.
     """
-    theta = _as_1d("theta", theta)
+    theta = as_1d("theta", theta)
     if unique is not None and not (unique.size and unique[0] >= 0.0 and unique[-1] < 2.0 * math.pi):
         unique = None
     span, start, full, distinct = _arc(theta, unique)
@@ -113,7 +120,7 @@ def trend_columns(theta, cov: Coverage, degree: int = TREND_DEGREE) -> np.ndarra
     The angle is measured from ``cov.start`` along the arc and mapped onto
     [-1, 1] over ``cov.span``, so the trend does not depend on how the
     angles are written.  Empty (n x 0) for a full turn or degree 0."""
-    theta = _as_1d("theta", theta)
+    theta = as_1d("theta", theta)
     if cov.full_turn or degree <= 0 or cov.span <= 0:
         return np.zeros((theta.shape[0], 0))
     u = np.mod(theta - cov.start, 2.0 * math.pi)
@@ -128,7 +135,7 @@ def unwrap_passes(theta, passes=None) -> np.ndarray:
     (359.9 deg -> 0.1 deg is +0.2 deg), so wrapped and unwrapped writings of
     one recording give the same angles [rad]; non-integer orders depend on
     them."""
-    theta = _as_1d("theta", theta)
+    theta = as_1d("theta", theta)
     if theta.size == 0:
         return theta
     u = np.unwrap(theta)

@@ -26,10 +26,12 @@ Pure numpy, no I/O.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
+
+from wormgear_cli.measurement.coverage import as_1d as _as_1d
 
 #: default relative singular-value cutoff of the least-squares solve
 RCOND = 1e-9
@@ -100,15 +102,6 @@ class _Solve:
     identifiable: np.ndarray  # per column
     sigma: float
     rms: float
-
-
-def _as_1d(name: str, value, n: int | None = None) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be one-dimensional")
-    if n is not None and arr.shape[0] != n:
-        raise ValueError(f"{name} has {arr.shape[0]} entries, expected {n}")
-    return arr
 
 
 #: rows per block when a design is built and reduced in blocks (bounds the memory of long measurements)
@@ -786,7 +779,7 @@ def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RE
         sub = gram[np.ix_(cols, cols)] / np.outer(diag[cols], diag[cols])
         inv = np.linalg.pinv(sub + 1e-10 * np.eye(len(cols)), hermitian=True)
         d = []
-        for j, i in enumerate(alive):
+        for j in range(len(alive)):
             blk = inv[n_fixed + 2 * j:n_fixed + 2 * j + 2, n_fixed + 2 * j:n_fixed + 2 * j + 2]
             d.append(1.0 / max(float(np.linalg.eigvalsh(blk)[-1]), 1.0))
         d = np.asarray(d)
@@ -818,8 +811,3 @@ def resolvable_orders(theta, candidates: Sequence[float], min_eigenvalue: float 
     not all can be kept, the worst-determined is dropped first and the list
     order only breaks exact ties."""
     return list(select_orders(theta, candidates, min_eigenvalue, extra).kept)
-
-
-# --- re-exported: the measurement-level analysis lives in its own modules --------------------------------------
-from wormgear_cli.measurement.coverage import Coverage, coverage, trend_columns, unwrap_passes  # noqa: E402,F401
-from wormgear_cli.measurement.orders import STATUSES, OrderReport, OrdersAnalysis, analyse_orders  # noqa: E402,F401

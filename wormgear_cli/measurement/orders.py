@@ -11,18 +11,18 @@ no I/O.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 
 from wormgear_cli.measurement.coverage import TREND_DEGREE, Coverage, coverage, trend_columns, unwrap_passes
+from wormgear_cli.measurement.coverage import as_1d as _as_1d
 from wormgear_cli.measurement.harmonics import (
     ALIAS_TOL,
     BLOCK_ROWS,
     ModeFit,
     OrderFit,
-    _as_1d,
     _folded,
     _groups,
     _order_values,
@@ -186,7 +186,8 @@ def analyse_orders(theta, y, direction, orders: Sequence[float], labels: Sequenc
         if k in status:
             continue
         g = group_of.get(k)
-        if g is not None and (0.0 in g or k != min((v for v in g if v in rank), key=lambda v: (rank[v], ords.index(v)))):
+        if g is not None and (0.0 in g or k != min((v for v in g if v in rank),
+                                                     key=lambda v: (rank[v], ords.index(v)))):
             status[k] = "aliased"
             reason[k] = "the target spacing makes it indistinguishable from " + (
                 "a constant" if 0.0 in g else "order " + ", ".join(f"{v:g}" for v in g if v != k))
@@ -263,14 +264,14 @@ class _AngleSums:
     def trend_count(self) -> int:
         return self.trend.shape[1]
 
-    def with_trend(self, trend: np.ndarray) -> "_AngleSums":
+    def with_trend(self, trend: np.ndarray) -> _AngleSums:
         """The same sums with trend columns (distinct x t) at the distinct angles."""
         import dataclasses
 
         return dataclasses.replace(self, trend=trend)
 
     @classmethod
-    def build(cls, theta, y, d, unique=None) -> "_AngleSums":
+    def build(cls, theta, y, d, unique=None) -> _AngleSums:
         ut, inverse = np.unique(theta, return_inverse=True) if unique is None else unique
         inverse = inverse.ravel()
         m = ut.shape[0]

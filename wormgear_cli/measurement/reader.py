@@ -364,7 +364,8 @@ def _resolve_header(header: list[str], options: ReadOptions, name: str, line: in
         hint = suggest_map(header, index)
         fix = f"; try {' '.join(hint)}" if hint else "; name the columns with --map CANONICAL=HEADER"
         raise DataError(f"{name}:{line}: missing required column{'s' if len(missing) > 1 else ''} "
-                        f"{', '.join(missing)} (header has: {', '.join(_clipped(h) for h in header) or 'nothing'}){fix}")
+                        f"{', '.join(missing)} (header has: "
+                        f"{', '.join(_clipped(h) for h in header) or 'nothing'}){fix}")
     return index, hunit
 
 
@@ -775,7 +776,8 @@ def plausibility(angle: np.ndarray, error: np.ndarray, angle_unit: str, error_un
                     if u != error_unit and lo <= raw * RAD_PER_UNIT[u] / arc <= hi]
             if fits:
                 u = min(fits)[1]
-                fix = f"--error-unit {u}" if u in ERROR_UNITS else "convert the column (radians) to urad and use --error-unit urad"
+                fix = (f"--error-unit {u}" if u in ERROR_UNITS
+                       else "convert the column (radians) to urad and use --error-unit urad")
                 out.append(f"the errors span {p2p:.4g} arcsec peak to peak read as {error_unit}, implausible for a "
                            f"positioning error; if the column is in {u}, use {fix}")
     if angle_unit == "deg" and angle.size:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Iterable
+from collections.abc import Iterable
 
 #: significant digits of numbers in the sweep's (i, l) CSV ('%.12g'; ~1e-12 relative)
 CSV_DIGITS = 12

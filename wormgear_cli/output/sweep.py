@@ -8,14 +8,14 @@ constant however large the grid.  Angles are converted to the output unit here.
 
 from __future__ import annotations
 
-from typing import Callable, Iterator, Optional
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
-from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
-from wormgear_cli.output.tables import Cell, Column, Table
 from wormgear_cli.analysis import sweep as core
 from wormgear_cli.analysis.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
+from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
+from wormgear_cli.output.tables import Cell, Column, Table
 from wormgear_cli.units import to_unit
 
 #: heat-map size shown in the table (rows = i values, columns = l values)
@@ -27,7 +27,7 @@ CSV_PARAM_BATCH = 100
 #: cell styles of the heat map, from the lowest fifth of the values to the highest
 HEAT_STYLES = ("bold green", "green", "yellow", "dark_orange", "bold red")
 
-Progress = Optional[Callable[[int], None]]
+Progress = Callable[[int], None] | None
 
 
 # --- (i, l) CSV ------------------------------------------------------------------------------

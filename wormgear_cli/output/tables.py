@@ -7,7 +7,6 @@ within the terminal's width and never cutting a number.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Optional
 
 
 @dataclass(frozen=True)
@@ -15,7 +14,7 @@ class Cell:
     """A table cell: its text and an optional style name (e.g. "bold red", "dim")."""
 
     text: str
-    style: Optional[str] = None
+    style: str | None = None
 
 
 @dataclass(frozen=True)
@@ -37,7 +36,7 @@ class Table:
     title: str
     columns: list
     rows: list = field(default_factory=list)
-    caption: Optional[str] = None
+    caption: str | None = None
     show_header: bool = True
 
     def add_row(self, *cells) -> None:

@@ -13,14 +13,14 @@ effect's parameters in internal units, and return the error at the output
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
 UM = 1e-3  # mm per um
-from wormgear_cli.units import ARCSEC, DEG  # noqa: E402,F401  (rad per arcsec, per degree: one definition)
-from wormgear_cli.physics.geometry import DriveGeometry  # noqa: E402,F401  (re-exported: its old home)
+from wormgear_cli.physics.geometry import DriveGeometry  # noqa: E402  (re-exported: its old home)
+from wormgear_cli.units import ARCSEC, DEG  # noqa: E402  (rad per arcsec, per degree: one definition)
 
 
 @dataclass(frozen=True)
@@ -50,7 +50,7 @@ class Signals:
     time: np.ndarray
 
     @classmethod
-    def make(cls, theta, direction=1.0, load=0.0, temperature=20.0, time=0.0) -> "Signals":
+    def make(cls, theta, direction=1.0, load=0.0, temperature=20.0, time=0.0) -> Signals:
         theta = np.asarray(theta, dtype=float)
         full = lambda v: np.broadcast_to(np.asarray(v, dtype=float), theta.shape)  # noqa: E731
         return cls(theta, full(direction), full(load), full(temperature), full(time))

@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 
-
 # an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
 # ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
 class DriveGeometry(NamedTuple):

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wormgear_cli.plots import pyplot, save_figure
 from wormgear_cli.output.sweep import grid2d, subsample
+from wormgear_cli.plots import pyplot, save_figure
 from wormgear_cli.units import to_unit
 
 #: line cuts drawn per panel

@@ -20,7 +20,7 @@ def draw(doc: dict, values: dict, limits: dict, path: Path, labels: dict) -> Non
     fig, axes = plt.subplots(rows, cols, figsize=(5.5 * cols, 3.4 * rows), squeeze=False)
     flat = axes.ravel()
     unit = doc["unit"]
-    limit_of = {metric: lim for metric, lim in limits.values()}
+    limit_of = dict(limits.values())
     for ax, m in zip(flat, names):
         v = np.asarray(values[m])
         ax.hist(v, bins=80, color="0.6")

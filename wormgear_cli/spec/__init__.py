@@ -6,8 +6,19 @@ validation), :mod:`~wormgear_cli.spec.toml` (TOML parsed within bounds),
 :mod:`~wormgear_cli.spec.template` (the commented template of ``wormgear new``).
 """
 
-from wormgear_cli.spec.loader import (FIELD_BY_PATH, FIELDS, UNIT_SCALE, Field, Spec, load_spec, loads_spec,
-                                      raw_copy, spec_from_dict, value_origin, with_values)
+from wormgear_cli.spec.loader import (
+                                      FIELD_BY_PATH,
+                                      FIELDS,
+                                      UNIT_SCALE,
+                                      Field,
+                                      Spec,
+                                      load_spec,
+                                      loads_spec,
+                                      raw_copy,
+                                      spec_from_dict,
+                                      value_origin,
+                                      with_values,
+)
 
 __all__ = ["FIELD_BY_PATH", "FIELDS", "UNIT_SCALE", "Field", "Spec", "load_spec", "loads_spec", "raw_copy",
            "spec_from_dict", "value_origin", "with_values"]

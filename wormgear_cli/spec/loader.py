@@ -24,8 +24,7 @@ from typing import Any, NamedTuple
 
 from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.physics.deformation import DEFORMATION_MODELS
-
-from wormgear_cli.units import ARCSEC, DEG  # noqa: E402  (the one definition of each)
+from wormgear_cli.units import ARCSEC, DEG
 
 #: unit suffix -> factor to the internal unit
 UNIT_SCALE = {
@@ -240,7 +239,8 @@ FIELDS: tuple[Field, ...] = (
     _f("stiffness.iso_ka", "iso_ka", "-", 1.0,
        "ISO 6336 K_A (application factor) in the line load F_t K_A / b that scales c' below 100 N/mm",
        **FACTOR),
-    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0, "the paper's A1 (its calibration: docs/models.md, deformation models)",
+    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0,
+       "the paper's A1 (its calibration: docs/models.md, deformation models)",
        lo=0.0, hi=1000.0),
     _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
     _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
@@ -491,7 +491,7 @@ def _apply_grades(values: dict, bad) -> None:
                 values[f"{sec}.{key}"] = um * 1e-3
 
 
-def value_origin(spec: "Spec", path: str) -> str:
+def value_origin(spec: Spec, path: str) -> str:
     """Where the value of ``path`` came from: ``"spec"`` (written in the file),
     ``"grade"`` (derived from the part's ``accuracy_grade``) or ``"default"``."""
     node: Any = spec.raw
@@ -652,7 +652,8 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
     for name, params in table.items():
         path = f"effects.{name}"
         if name not in EFFECTS:
-            hint = did_you_mean(name, EFFECTS, show=lambda m: f"effects.{m}", otherwise=f" (known: {', '.join(EFFECTS)})")
+            hint = did_you_mean(name, EFFECTS, show=lambda m: f"effects.{m}",
+                                otherwise=f" (known: {', '.join(EFFECTS)})")
             problems.append(f"{source}: {path}: unknown effect{hint}")
             continue
         if not isinstance(params, dict):
@@ -663,7 +664,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
         ok = True
         for key in params:
             if key not in keys:
-                hint = did_you_mean(key, keys, show=lambda m: f"{path}.{m}", otherwise=f" (valid: {', '.join(keys)})")
+                hint = did_you_mean(key, keys, show=lambda m: f"{path}.{m}", otherwise=f" (valid: {', '.join(keys)})")  # noqa: B023
                 problems.append(f"{source}: {path}.{key}: unknown key{hint}")
                 ok = False
         for p in eff.params:

@@ -15,8 +15,8 @@ output gear's cumulative pitch deviation to grade 3 (17 -> 12 um): yield 91.2 % 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 from wormgear_cli.tolerance import engine
 from wormgear_cli.tolerance.statistics import Yield

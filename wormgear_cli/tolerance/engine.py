@@ -14,8 +14,8 @@ the run's byte for byte.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
-from typing import Callable, Iterator
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -205,7 +205,7 @@ class Accumulator:
         self.order = {m: stats.OrderStatistics() for m in s.metrics}
         self.bins = stats.BinSums(s.columns, s.metrics)
         self.limits = limits(s)
-        self.passing = {k: 0 for k in self.limits}
+        self.passing = dict.fromkeys(self.limits, 0)
         self.passing_all = 0
         self.plot = {m: [] for m in s.metrics}
         self.n = 0
@@ -335,7 +335,7 @@ def reference_values(s: Setup) -> tuple[dict, dict]:
         ph = _aligned(s.spec, quantity)
 
         def f(which):
-            return float(metrics_mod.evaluate(s.context, _values_at(s.varied, which), ph, (metric,))[metric][0])
+            return float(metrics_mod.evaluate(s.context, _values_at(s.varied, which), ph, (metric,))[metric][0])  # noqa: B023
 
         corner[metric] = float(to_unit(paper[metric] if metric in paper else f("all"), unit))
         f0 = f(None)
@@ -442,48 +442,3 @@ def allocation_runs(s: Setup, target: float | None, samples: int) -> tuple[int, 
     if target is None or s.options.shard is not None or metrics_for_limits(s.spec) is None:
         return None
     return min(samples, ALLOCATION_SAMPLES), 1 + len(s.varied)
-
-
-def finish(s: Setup, summary: Summary, target_yield: float | None = None, samples: int | None = None,
-           shard: str | None = None, progress: Callable[[int], None] | None = None) -> dict:
-    """The report of a tolerance run (what ``wormgear tolerance`` prints and the API returns).
-
-    The allocation runs when a target is due: ``target_yield``, else ``[requirements]
-    min_yield``; each toleranced key is tightened in turn (one ISO 1328 grade where a grade
-    sets it, else to 70 %) on :func:`allocation_runs` samples.
-
-    Parameters
-    ----------
-    s : Setup
-        The run's set-up (:func:`setup`).
-    summary : Summary
-        Its statistics (:func:`run` or :func:`summarize`).
-    target_yield : float, optional
-        Target yield in (0, 1).
-    samples : int, optional
-        Samples the run had (default ``s.options.samples``); the allocation uses at most
-        :data:`ALLOCATION_SAMPLES`.
-    shard : str, optional
-        ``K/N`` label of a sharded run, for the document.
-    progress : callable, optional
-        Called with 1 after each allocation run.
-
-    Raises
-    ------
-    UsageError
-        ``target_yield`` given but no limit in ``[requirements]`` to count the yield against.
-    """
-    from wormgear_cli.tolerance import report
-
-    spec = s.spec
-    if target_yield is not None and metrics_for_limits(spec) is None:
-        raise UsageError(f"a target yield needs a limit in [requirements] ({LIMIT_KEYS}) to count the yield "
-                         "against")
-    target = target_yield if target_yield is not None else spec.requirements.min_yield
-    plan = allocation_runs(s, target, s.options.samples if samples is None else samples)
-    allocation = None
-    if plan is not None:
-        from wormgear_cli.tolerance.allocation import allocate
-
-        allocation = allocate(spec, replace(s.options, samples=plan[0]), float(target), progress)
-    return report.document(s, summary, allocation, shard)

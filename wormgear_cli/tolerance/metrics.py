@@ -131,8 +131,8 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
     """Build the :class:`Context` of ``spec`` for test targets ``targets_rad`` [rad] (one
     run, forward pass then reverse pass, ``dwell_s`` [s] per point as ``synth``)."""
     from wormgear_cli.analysis.accuracy import deflections
-    from wormgear_cli.physics.effects import Signals
     from wormgear_cli.analysis.simulate import components
+    from wormgear_cli.physics.effects import Signals
 
     d = deflections(spec)
     theta = np.asarray(targets_rad, dtype=float)
@@ -145,7 +145,8 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
     paper = spec.gear_pair.kinematics == "paper"
     t = gear_eccentricity_tolerance if paper else 0.0  # the involute stage needs no interpolant
     return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, t, d.gear), GearTeMax(spec, t, 0.0),
-                   GearTeMax(spec, t, d.gear, "deformation"), theta, np.broadcast_to(fixed[1.0], (n,)).copy(), np.broadcast_to(fixed[-1.0], (n,)).copy())
+                   GearTeMax(spec, t, d.gear, "deformation"), theta, np.broadcast_to(fixed[1.0], (n,)).copy(),
+                   np.broadcast_to(fixed[-1.0], (n,)).copy())
 
 
 def _gear_stage(ctx: Context, v: dict):

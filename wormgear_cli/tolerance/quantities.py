@@ -25,18 +25,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import Enum
 
 from wormgear_cli.errors import SpecError, did_you_mean
-
-
-class Kind(str, Enum):
-    """Nature of a toleranced quantity (sets the default distribution and the interval)."""
-
-    radial = "radial"
-    signed = "signed"
-    unknown = "unknown"
-
+from wormgear_cli.tolerance.distributions import DISTRIBUTIONS, Kind
 
 #: default distribution per kind
 DEFAULT_DISTRIBUTION = {Kind.radial: "rayleigh", Kind.signed: "normal", Kind.unknown: "uniform"}
@@ -177,7 +168,7 @@ class Varied:
         t = self.tolerance[element]
         return (-t, t) if self.quantity.kind is Kind.signed else (0.0, t)
 
-    def with_tolerance(self, tolerance: tuple[float, ...]) -> "Varied":
+    def with_tolerance(self, tolerance: tuple[float, ...]) -> Varied:
         return Varied(self.quantity, tuple(tolerance), self.distribution, self.cp, self.cpk)
 
 
@@ -240,7 +231,6 @@ def statistics_table(spec) -> dict[str, dict]:
     positive number, ``cpk`` > ``cp``, ``cp``/``cpk`` with the uniform law.
     """
     from wormgear_cli.spec.loader import FIELD_BY_PATH
-    from wormgear_cli.tolerance.sampling import DISTRIBUTIONS
 
     table = spec.raw.get("statistics")
     if table is None:

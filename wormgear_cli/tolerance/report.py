@@ -10,15 +10,16 @@ same floats (``--summarize`` reproduces the run's report exactly).
 from __future__ import annotations
 
 import itertools
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Iterator, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
 from wormgear_cli.errors import DataError
 from wormgear_cli.tolerance.engine import Block, Setup, Summary
-from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.tolerance.metrics import METRIC_SETS
+from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.units import ANGLE_UNITS, RAD_PER_UNIT
 
 #: longest line accepted in a samples CSV (a row holds a few dozen numbers; bounds the read of
@@ -203,7 +204,8 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
         "metrics": {
             m: {**summary.described[m], "corner": summary.corner[m], "rss": summary.rss[m]} for m in s.metrics
         },
-        "yield": {k: {"value": y.value, "low": y.low, "high": y.high, "passing": y.k} for k, y in summary.yields.items()},
+        "yield": {k: {"value": y.value, "low": y.low, "high": y.high, "passing": y.k}
+                  for k, y in summary.yields.items()},
         "sensitivity": {
             m: (None if summary.sensitivity[m] is None else {**summary.sensitivity[m][0],
                                                               "remainder": summary.sensitivity[m][1]})

@@ -20,27 +20,18 @@ serious ones also in the verdict line):
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional, Sequence
 
 import numpy as np
+
+from wormgear_cli.measurement.checks import Finding, duplicate_rows, structure_findings  # noqa: F401  (re-exported)
 
 #: default orders without a drive spec
 DEFAULT_ORDERS = (1.0, 2.0, 3.0, 4.0)
 #: largest order accepted: beyond it, 1/1000 deg of angle error is a sizeable phase error
 MAX_ORDER = 100_000.0
-
-
-@dataclass(frozen=True)
-class Finding:
-    """One thing the checks found: ``kind`` (a short key), ``text`` (a sentence with the likely fix),
-    ``warning`` (True: something looks wrong; False: information), ``verdict`` (shown in the verdict line)."""
-
-    kind: str
-    text: str
-    warning: bool
-    verdict: str | None = None
 
 
 @dataclass(frozen=True)
@@ -50,14 +41,14 @@ class MeasureResult:
     ``measurement`` (:class:`~wormgear_cli.measurement.reader.Measurement`),
     ``figures`` (:class:`~wormgear_cli.measurement.iso230.Iso230Figures`, one-direction
     values withheld when the directions are mixed), ``analysis``
-    (:class:`~wormgear_cli.measurement.harmonics.OrdersAnalysis`), ``drive_name``,
+    (:class:`~wormgear_cli.measurement.orders.OrdersAnalysis`), ``drive_name``,
     ``findings`` (tuple of :class:`Finding`), ``mixed_directions``.
     """
 
     measurement: object
     figures: object
     analysis: object
-    drive_name: Optional[str]
+    drive_name: str | None
     findings: tuple
     mixed_directions: bool
 
@@ -96,117 +87,11 @@ def parse_orders(text: str) -> list[float]:
     return out
 
 
-def _label_for(order: float, physical) -> Optional[str]:
+def _label_for(order: float, physical) -> str | None:
     for k, label in physical:
         if abs(k - order) <= 1e-9 * max(abs(k), 1.0):
             return label
     return None
-
-
-def duplicate_rows(m, repeated=None) -> int:
-    """Number of rows that repeat an earlier row exactly (every canonical value equal).
-
-    Rows are sorted by a 64-bit mix of their values (one sort), and rows with
-    equal keys compared value by value.  ``repeated`` (bool per row): the
-    rows whose angle occurs more than once, the only ones that can be
-    duplicates (a dense scan then needs no sort).  No column is copied."""
-    cols = [m.angle, m.error, m.direction, m.run] + [
-        getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
-        if c in m.present]
-    n = len(m)
-    if n < 2:
-        return 0
-    sel = None if repeated is None else np.flatnonzero(repeated)
-    if sel is not None and sel.size < 2:
-        return 0
-    key = np.zeros(n, dtype=np.uint64)
-    with np.errstate(over="ignore"):
-        for i, c in enumerate(cols):
-            bits = np.ascontiguousarray(c, dtype=float).view(np.uint64)
-            key ^= bits
-            key *= np.uint64(0x9E3779B97F4A7C15 + 2 * i)
-    rows = np.arange(n) if sel is None else sel
-    if sel is not None:
-        key = key[sel]
-    order = np.argsort(key, kind="stable")
-    ks = key[order]
-    cand = np.flatnonzero(ks[1:] == ks[:-1])
-    if cand.size == 0:
-        return 0
-    first, second = rows[order[cand]], rows[order[cand + 1]]
-    same = np.ones(cand.size, dtype=bool)
-    for c in cols:
-        same &= c[first] == c[second]
-    return int(np.count_nonzero(same))
-
-
-def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list, bool]:
-    """Findings about what the file does not state, and whether the directions are mixed.
-
-    Parameters
-    ----------
-    m : Measurement
-    target_index : ndarray of int, shape (n,)
-        Target of each row (:func:`~wormgear_cli.measurement.iso230.group_targets`).
-    repeated : ndarray of bool, shape (n,), optional
-        Rows whose angle occurs more than once (see :func:`duplicate_rows`).
-    """
-    out = []
-    n = len(m)
-    for note in m.notes:
-        if note.startswith("no run column: time_s goes backwards"):
-            verdict = "passes inferred from time restarts"
-        elif "with every cell empty left out" in note:  # said in the verdict line, not only in a note
-            verdict = note.split(" (", 1)[0]
-        else:
-            verdict = None
-        out.append(Finding("reader", note, False, verdict))
-    for w in m.warnings:
-        out.append(Finding("units", w, True, "check the units (see warnings)"))
-    mixed = False
-    if "direction" not in m.present:
-        key = m.run.astype(np.int64) * (int(target_index.max()) + 1) + target_index.astype(np.int64)
-        if np.unique(key).shape[0] != n:
-            # forward and reverse visits cannot be told apart: the one-direction figures would mix them
-            mixed = True
-            read = {cell for _, cell in m.columns}
-            unread = [h for h in m.header if h and h not in read]
-            hint = (f"; columns not read: {', '.join(unread)} (map one with --map direction=HEADER or "
-                    "--map run=HEADER)") if unread else ""
-            if "run" not in m.present:
-                out.append(Finding(
-                    "repeated_targets",
-                    "no direction or run column: every row is taken as forward, yet the rows visit the same target "
-                    "more than once, so forward and reverse visits cannot be told apart: add a direction column "
-                    "(+1 forward, -1 reverse) or, for repeated one-direction runs, a run column; the one-direction "
-                    f"figures (s, R, A, E) are withheld{hint}", True,
-                    "targets repeat without direction or run column: one-direction figures withheld"))
-            else:
-                out.append(Finding(
-                    "mixed_directions",
-                    "no direction column: every row is taken as forward, yet one run visits the same target more "
-                    "than once: if some visits were made in reverse, add a direction column (+1 forward, -1 "
-                    f"reverse); the one-direction figures (s, R, A, E) are withheld{hint}",
-                    True, "targets repeat within a run without a direction column: one-direction figures withheld"))
-    dups = duplicate_rows(m, repeated)
-    if dups:
-        out.append(Finding("duplicates", f"{dups} row{'s are exact duplicates' if dups > 1 else ' is an exact duplicate'}"
-                           " of another row (pasted twice?): they count twice in every figure; remove them if they "
-                           "are copies", True, f"{dups} duplicate row{'s' if dups > 1 else ''}"))
-    if "time_s" in m.present and "run" not in m.derived:
-        back = (np.diff(m.time) < 0) & (m.run[1:] == m.run[:-1])
-        nb = int(np.count_nonzero(back))
-        if nb:
-            out.append(Finding("time_order", f"time_s goes backwards {nb} time{'s' if nb > 1 else ''} inside a run "
-                               "(rows out of order, or runs joined without a run number)", True,
-                               "time not monotonic inside a run"))
-    has_up, has_dn = bool(np.any(m.direction > 0)), bool(np.any(m.direction < 0))
-    if not (has_up and has_dn) and not mixed:
-        which = "forward" if has_up else "reverse"
-        out.append(Finding("one_direction", "", False, f"one direction only ({which})"))
-    if int(target_index.max()) == 0:
-        out.append(Finding("one_target", "", False, "one target (one-position test): A, E, M and orders n/a"))
-    return out, mixed
 
 
 def measure(data: str | Path, options=None, drive: str | Path | None = None, orders: Sequence[float] | None = None,
@@ -233,8 +118,8 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
         Bad file, bad spec, bad option.
     """
     from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
-    from wormgear_cli.measurement.orders import analyse_orders
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
+    from wormgear_cli.measurement.orders import analyse_orders
     from wormgear_cli.measurement.reader import read_measurement
 
     physical: list = []
@@ -263,7 +148,8 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
     figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
-    findings, mixed = structure_findings(m, target_index, repeated=np.bincount(unique[1].ravel())[unique[1].ravel()] > 1)
+    repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
+    findings, mixed = structure_findings(m, target_index, repeated=repeated)
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
                                        "run): one-direction figures withheld")
@@ -297,7 +183,8 @@ def _order_notes(analysis) -> list[str]:
                 if carried:
                     c = carried[0]
                     cname = f"order {c.order:g}" + (f" ({c.label})" if c.label else "")
-                    notes.append(f"{name} is aliased by the target spacing onto order{'s' if len(it.aliased_with) > 1 else ''} "
+                    plural = 's' if len(it.aliased_with) > 1 else ''
+                    notes.append(f"{name} is aliased by the target spacing onto order{plural} "
                                  f"{onto}: {name} and {cname} are indistinguishable on these targets, the amplitude "
                                  f"shown at order {c.order:g} belongs to either or both")
                 else:
@@ -329,7 +216,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
 
     m, figures, analysis = result.measurement, result.figures, result.analysis
 
-    def a(x) -> Optional[float]:
+    def a(x) -> float | None:
         x = float(x)
         return float(to_unit(x, unit)) if math.isfinite(x) else None
 
@@ -399,7 +286,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
             "forward": [int(runs_f.min()), int(runs_f.max())] if runs_f.size else None,
             "reverse": [int(runs_r.min()), int(runs_r.max())] if runs_r.size else None,
         },
-        "columns": {c: h for c, h in m.columns},
+        "columns": dict(m.columns),
         "input_units": dict(m.units),
         "derived_columns": sorted(m.derived),
         "coverage": {

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
 
 import numpy as np
 
@@ -31,7 +30,7 @@ class SimulationReport:
     curves: dict
 
 
-def phase_map(spec, which: str) -> Optional[dict]:
+def phase_map(spec, which: str) -> dict | None:
     """Source name -> phase [rad] for ``--phases`` ``which``; None keeps the spec's."""
     from wormgear_cli.analysis.simulate import aligned_phases
 
@@ -40,14 +39,14 @@ def phase_map(spec, which: str) -> Optional[dict]:
     return aligned_phases(spec, "error" if which == "aligned-error" else "reversal")
 
 
-def effect_params(spec, requested: dict) -> Optional[dict]:
+def effect_params(spec, requested: dict) -> dict | None:
     """The effects to simulate: the spec's merged with ``requested`` (name -> {key: value},
     :func:`wormgear_cli.analysis.synth.parse_effects`) as parameter records; None (the spec's own)
     when nothing is requested."""
     if not requested:
         return None
-    from wormgear_cli.physics.effects import params_from_keys
     from wormgear_cli.analysis.synth import resolve_effects
+    from wormgear_cli.physics.effects import params_from_keys
 
     return {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
 
@@ -57,13 +56,13 @@ def _summary(v) -> dict:
             "rms": float(np.sqrt(np.mean(v * v)))}
 
 
-def context(spec, unit: str, phases: Optional[dict], effects: Optional[dict]) -> dict:
+def context(spec, unit: str, phases: dict | None, effects: dict | None) -> dict:
     """Spec-level facts shared by both JSON documents: sources (order, amplitude in ``unit``,
     phase), effects, the analyze totals and the predicted thermal centre-distance change."""
     from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.simulate import periodic_sources
     from wormgear_cli.physics.effects import params_to_keys
     from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
-    from wormgear_cli.analysis.simulate import periodic_sources
 
     a = analyze(spec)
     sources = {}
@@ -82,7 +81,7 @@ def context(spec, unit: str, phases: Optional[dict], effects: Optional[dict]) ->
 
 
 def dense(spec, points: int, revs: float, unit: str, fmt: str, temperature_c: float = 20.0,
-          load_nm: float = 0.0, which: str = "spec", effects: Optional[dict] = None) -> SimulationReport:
+          load_nm: float = 0.0, which: str = "spec", effects: dict | None = None) -> SimulationReport:
     """Forward and reverse curves at ``points`` output angles over ``revs`` turns (from 0,
     end excluded).  CSV columns: angle_deg, forward_<unit>, reverse_<unit>, common_<unit>
     (mean of both), lost_motion_<unit> (reverse - forward); ``fmt`` "json" gives the
@@ -122,7 +121,7 @@ def dense(spec, points: int, revs: float, unit: str, fmt: str, temperature_c: fl
 
 
 def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm: float = 0.0,
-            which: str = "spec", effects: Optional[dict] = None) -> SimulationReport:
+            which: str = "spec", effects: dict | None = None) -> SimulationReport:
     """The model at every row of the measurement CSV ``at`` (its load_Nm and temperature_C
     columns where present, else ``load_nm`` [N m] and ``temperature_c`` [degC]).
 
@@ -132,8 +131,8 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     import csv
     import io
 
-    from wormgear_cli.measurement.reader import read_measurement
     from wormgear_cli.analysis.simulate import simulate as run
+    from wormgear_cli.measurement.reader import read_measurement
 
     data = read_measurement(at, require_error=False)
     phases = phase_map(spec, which)
