@@ -62,18 +62,19 @@ def command_help() -> dict[str, str]:
         Command name -> help text as click renders it at :data:`HELP_WIDTH`
         columns, with ``Usage: wormgear NAME``; sorted by name.
     """
-    import click
     from typer.main import get_command
 
     from wormgear_cli.cli import app
 
     group = get_command(app)
     width = dict(terminal_width=HELP_WIDTH, max_content_width=HELP_WIDTH)
-    root = click.Context(group, info_name="wormgear", **{**group.context_settings, **width})
+    # each command's own context class: typer's click (vendored as typer._click since 0.26), not
+    # a separately installed click
+    root = group.context_class(group, info_name="wormgear", **{**group.context_settings, **width})
     texts = {"": group.get_help(root) + "\n"}
     for name in sorted(group.commands):
         cmd = group.commands[name]
-        ctx = click.Context(cmd, info_name=name, parent=root, **{**cmd.context_settings, **width})
+        ctx = cmd.context_class(cmd, info_name=name, parent=root, **{**cmd.context_settings, **width})
         texts[name] = cmd.get_help(ctx) + "\n"
     return texts
 

@@ -174,16 +174,16 @@ class Angle:
 class AngleArray:
     """Many angles: a numpy array [rad] with its unit attached.
 
+    Indexing with an integer gives an :class:`Angle`, with a slice or mask an
+    :class:`AngleArray`; ``numpy.asarray(a)`` gives the values [rad].
+    ``min``, ``max``, ``mean``, ``ptp`` and ``rms`` give angles.
+
     Parameters
     ----------
     values : array_like
         The angles in ``unit``.
     unit : str
         As for :class:`Angle` (default ``rad``).
-
-    Indexing with an integer gives an :class:`Angle`, with a slice or mask an
-    :class:`AngleArray`; ``numpy.asarray(a)`` gives the values [rad].
-    ``min``, ``max``, ``mean``, ``ptp`` and ``rms`` give angles.
 
     Examples
     --------
