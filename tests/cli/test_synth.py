@@ -132,6 +132,7 @@ def test_help_has_example(runner):
     assert res.exit_code == 0 and "Example: wormgear synth" in res.stdout
 
 
+@pytest.mark.pinned  # bytes made with the current numpy
 def test_shipped_demo_is_exactly_what_its_documented_command_makes(runner, tmp_path):
     """configs/mch50-warm.csv is reproducible from the command kept in its truth file."""
     import json
