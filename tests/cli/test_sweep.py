@@ -73,7 +73,7 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     (("--i", "2:10"), '--i "2:10": expected START:STOP:N (N values from START to STOP inclusive), e.g. 2:10:9'),
     (("--i", "inf:10:3"), '--i "inf:10:3": START "inf" is not a finite number'),
     ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
-    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected 1 <= K <= N'),
+    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array'),
     (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8, or auto in a job array'),
     (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module from 0.05 to 100 [mm]"),
     (("--i", "2:4:3", "--min-pinion-teeth", "12"), "--min-pinion-teeth applies only with --module-mm"),
