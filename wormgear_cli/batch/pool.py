@@ -9,6 +9,7 @@ results come back in task order, so the output is byte-identical whatever N.
   prepared state without pickling it), otherwise ``spawn`` (the state is pickled once per
   worker).
 * At most ``2 N`` tasks are in flight: memory stays bounded however many tasks there are.
+* No thread is started: each worker has its own pipe, task i goes to worker i mod N.
 * Signals: a worker ignores SIGINT (Ctrl-C reaches the whole foreground process group; the
   parent alone decides) and dies on SIGTERM.  When the parent stops (Ctrl-C, SIGTERM, an
   error in a task), the workers are terminated at once and the exception goes on in the
@@ -22,7 +23,6 @@ from __future__ import annotations
 import os
 import signal
 import sys
-from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
@@ -30,10 +30,6 @@ from wormgear_cli.errors import UsageError
 
 #: most workers accepted by --jobs (a typo such as 1000000 would try to start that many processes)
 MAX_JOBS = 1024
-
-_STATE: Any = None
-_FUNCTION: Callable | None = None
-
 
 def available_cores() -> int:
     """Cores this process may run on (its CPU affinity; the machine's count elsewhere)."""
@@ -57,17 +53,32 @@ def _context():
     return multiprocessing.get_context("fork" if "fork" in methods and sys.platform != "darwin" else "spawn")
 
 
-def _init(function: Callable, state: Any) -> None:
-    global _STATE, _FUNCTION
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+def _worker(conn, function: Callable, state: Any) -> None:
+    """A worker's life: tasks in, results (or the task's exception) out, until told to stop."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     for name in ("SIGTERM", "SIGHUP"):
         if hasattr(signal, name):
             signal.signal(getattr(signal, name), signal.SIG_DFL)
-    _STATE, _FUNCTION = state, function
-
-
-def _call(task):
-    return _FUNCTION(_STATE, task)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_SETMASK, set())
+    while True:
+        try:
+            task = conn.recv()
+        except (EOFError, OSError):
+            break
+        if task is None:
+            break
+        try:
+            reply = (True, function(state, task))
+        except BaseException as exc:  # handed to the parent, raised there
+            reply = (False, exc)
+        try:
+            conn.send(reply)
+        except (EOFError, OSError):
+            break
+        except Exception as exc:  # a result or exception that does not pickle
+            conn.send((False, RuntimeError(f"a worker's result could not be sent back: {exc}")))
+    os._exit(0)  # no clean-up of what the parent owns (its buffers, its staged files)
 
 
 def ordered_map(function: Callable[[Any, Any], Any], state: Any, tasks: Iterable, jobs: int = 1) -> Iterator:
@@ -76,7 +87,8 @@ def ordered_map(function: Callable[[Any, Any], Any], state: Any, tasks: Iterable
     ``jobs`` <= 1, or a single task: computed here, one after the other (no process is
     started).  Otherwise in ``jobs`` worker processes (never more than there are tasks); the
     function must be a module-level function and its results picklable.  ``state`` is what
-    every task shares (the prepared run), handed to each worker once.
+    every task shares (the prepared run), handed to each worker once; a task's exception is
+    raised here.
     """
     tasks = list(tasks)
     jobs = min(int(jobs), len(tasks))
@@ -88,43 +100,52 @@ def ordered_map(function: Callable[[Any, Any], Any], state: Any, tasks: Iterable
 
 
 def _in_workers(function, state, tasks: list, jobs: int) -> Iterator:
-    from concurrent.futures import ProcessPoolExecutor
-    from concurrent.futures.process import BrokenProcessPool
-
-    pool = ProcessPoolExecutor(jobs, mp_context=_context(), initializer=_init, initargs=(function, state))
-    done = False
+    """Task i goes to worker i mod ``jobs`` (tasks are alike in size), at most two queued per
+    worker; each worker answers in the order it was asked, so results are read in task order.
+    No thread is started in this process: a stop needs no hand-shake with one."""
+    ctx = _context()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    workers, pipes = [], []
     try:
-        pending: deque = deque()
-        queue = iter(enumerate(tasks))
-        for n, task in queue:
-            pending.append((n, pool.submit(_call, task)))
-            if len(pending) >= 2 * jobs:
-                break
-        while pending:
-            n, future = pending.popleft()
+        for _ in range(jobs):
+            mine, theirs = ctx.Pipe()
+            p = ctx.Process(target=_worker, args=(theirs, function, state), daemon=True)
+            p.start()
+            theirs.close()
+            workers.append(p)
+            pipes.append(mine)
+        sent = 0
+        for n in range(len(tasks)):
+            while sent < len(tasks) and sent < n + 2 * jobs:
+                pipes[sent % jobs].send(tasks[sent])
+                sent += 1
             try:
-                result = future.result()
-            except BrokenProcessPool:
+                ok, value = pipes[n % jobs].recv()
+            except (EOFError, OSError):
                 raise RuntimeError(f"a worker process of --jobs {jobs} died (out of memory, or killed) while "
                                    f"computing part {n + 1} of {len(tasks)}; run again with fewer --jobs") from None
-            nxt = next(queue, None)
-            if nxt is not None:
-                pending.append((nxt[0], pool.submit(_call, nxt[1])))
-            yield result
-        done = True
+            if not ok:
+                raise value
+            yield value
+        for conn in pipes:
+            conn.send(None)
+        for p in workers:
+            p.join()
     finally:
-        if done:
-            pool.shutdown(wait=True)
-        else:
-            _terminate(pool)
+        _stop(workers, pipes)
 
 
-def _terminate(pool) -> None:
-    """Stop every worker now (Ctrl-C, SIGTERM, an error, or the consumer stopped reading)."""
-    processes = list(getattr(pool, "_processes", {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for p in processes:
+def _stop(workers: list, pipes: list) -> None:
+    """Stop every worker still running (Ctrl-C, SIGTERM, an error, or the consumer stopped
+    reading) and close the pipes."""
+    for p in workers:
         if p.is_alive():
             p.terminate()
-    for p in processes:
-        p.join(timeout=5)
+    for p in workers:
+        p.join(timeout=2)
+        if p.is_alive():
+            p.kill()
+            p.join()
+    for conn in pipes:
+        conn.close()
