@@ -118,7 +118,10 @@ def _in_workers(function, state, tasks: list, jobs: int) -> Iterator:
         sent = 0
         for n in range(len(tasks)):
             while sent < len(tasks) and sent < n + 2 * jobs:
-                pipes[sent % jobs].send(tasks[sent])
+                try:
+                    pipes[sent % jobs].send(tasks[sent])
+                except OSError:  # that worker is gone: the receive below says which part it had
+                    pass
                 sent += 1
             try:
                 ok, value = pipes[n % jobs].recv()
