@@ -175,6 +175,13 @@ def test_npy_parts_are_compact_and_hold_the_metrics(runner, tmp_path):
     assert np.array_equal(rows[:, -2:], np.column_stack([rec["total_transmission_error_arcsec"],
                                                          rec["total_backlash_arcsec"]]))
     assert out.stat().st_size < len(csv_text) / 5
+    whole = tmp_path / "whole.npy"
+    run(runner, "tolerance", MCH50, "-n", 5000, "--metrics", "paper", "--format", "npy", "-o", whole)
+    assert not (tmp_path / "whole.npy.manifest.json").exists()  # manifests are for parts
+    report = run(runner, "tolerance", MCH50, "-n", 5000, "--format", "json", "--summarize", whole).stdout
+    assert report == run(runner, "tolerance", MCH50, "-n", 5000, "--metrics", "paper", "--format", "json").stdout
+    r = runner.invoke(app, ["tolerance", str(MCH50), "--format", "npy"])
+    assert (r.exit_code, r.stderr) == (2, "error: --format npy writes binary columns: give -o FILE.npy\n")
     manifest = json.loads((tmp_path / "p.npy.manifest.json").read_text())
     assert manifest["part"] == {"k": 2, "n": 2, "first": 2500, "stop": 5000, "total": 5000}
     assert manifest["parameters"]["seed"] == 0 and manifest["command"] == "tolerance"
