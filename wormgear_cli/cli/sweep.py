@@ -132,8 +132,11 @@ def sweep(
         _require_matplotlib()
     total = n_i * n_l
     start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
-    parameters = {"i": i, "l_mm": l_mm, "hold": getattr(hold, "value", hold), "module_mm": module_mm,
-                  "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
+    def axis(r):  # the parsed range (2:10:1e3 and 2:10:1000 are one grid)
+        return None if r is None else [r.start, r.stop, r.n]
+
+    parameters = {"i": axis(i_range), "l_mm": axis(l_range), "hold": getattr(hold, "value", hold),
+                  "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
     out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
     if out.done():
         return
