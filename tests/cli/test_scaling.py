@@ -243,3 +243,12 @@ def test_merge_checks_the_drive(runner, tmp_path):
     r = runner.invoke(app, ["merge", str(out), "--drive", str(other)])
     assert (r.exit_code, r.stderr) == (2, f"error: {other}: not the drive the parts were computed with (its "
                                           "SHA-256 differs from their manifests'); give that file with --drive\n")
+
+
+def test_api_jobs_gives_the_same_results():
+    from wormgear_cli import api
+
+    one = api.tolerance(MCH50, samples=70_000, metrics="paper", seed=2)
+    two = api.tolerance(MCH50, samples=70_000, metrics="paper", seed=2, jobs=2)
+    assert one.metrics["total_transmission_error"].percentiles == two.metrics["total_transmission_error"].percentiles
+    assert one.metrics["total_backlash"].std == two.metrics["total_backlash"].std
