@@ -252,3 +252,30 @@ def test_api_jobs_gives_the_same_results():
     two = api.tolerance(MCH50, samples=70_000, metrics="paper", seed=2, jobs=2)
     assert one.metrics["total_transmission_error"].percentiles == two.metrics["total_transmission_error"].percentiles
     assert one.metrics["total_backlash"].std == two.metrics["total_backlash"].std
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="process groups (POSIX)")
+def test_ctrl_c_to_the_whole_foreground_group_stops_the_workers_and_writes_nothing(tmp_path):
+    """The terminal sends SIGINT to every process of the job: the workers ignore it, the command
+    stops them, exits 130 and leaves no file (and no process)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "big.npy"
+    p = subprocess.Popen([sys.executable, "-m", "wormgear_cli", "tolerance", str(MCH50), "-n", "5000000",
+                          "--metrics", "paper", "--format", "npy", "-j", "2", "-o", str(out)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, cwd=tmp_path)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and p.poll() is None:  # until the first block is written (workers busy)
+        staged = [f for f in tmp_path.iterdir() if f.name.startswith(".big.npy.wormgear-")]
+        if staged and staged[0].stat().st_size > 1000:
+            break
+        time.sleep(0.05)
+    os.killpg(p.pid, signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert (p.returncode, err.decode()) == (130, "interrupted; no output written\n")
+    assert list(tmp_path.iterdir()) == []
+    left = subprocess.run(["ps", "-o", "pid=", "-g", str(p.pid)], capture_output=True, text=True).stdout.split()
+    assert left == []
