@@ -132,10 +132,7 @@ def sweep(
         _require_matplotlib()
     total = n_i * n_l
     start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
-    def axis(r):  # the parsed range (2:10:1e3 and 2:10:1000 are one grid)
-        return None if r is None else [r.start, r.stop, r.n]
-
-    parameters = {"i": axis(i_range), "l_mm": axis(l_range), "hold": getattr(hold, "value", hold),
+    parameters = {"i": _range_key(i_range), "l_mm": _range_key(l_range), "hold": getattr(hold, "value", hold),
                   "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
     out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
     if out.done():
@@ -143,6 +140,11 @@ def sweep(
     sw = core.ratio_distance_sweep(load_spec(drive), i_range, l_range, hold=getattr(hold, "value", hold),
                                    module=module_mm, min_teeth=min_pinion_teeth)
     _ratio_distance_sweep(sw, drive, fmt, unit, out, plot, k_n, jobs)
+
+
+def _range_key(r):
+    """A parsed range in a part's manifest (2:10:1e3 and 2:10:1000 are one grid)."""
+    return None if r is None else [r.start, r.stop, r.n]
 
 
 def _require_matplotlib() -> None:
