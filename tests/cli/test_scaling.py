@@ -279,3 +279,16 @@ def test_ctrl_c_to_the_whole_foreground_group_stops_the_workers_and_writes_nothi
     assert list(tmp_path.iterdir()) == []
     left = subprocess.run(["ps", "-o", "pid=", "-g", str(p.pid)], capture_output=True, text=True).stdout.split()
     assert left == []
+
+
+def test_merge_takes_the_second_pass_of_large_runs(runner, tmp_path, monkeypatch):
+    """Beyond IN_MEMORY_SAMPLES the percentiles need a second pass over the samples: the merge
+    reads the parts again and still gives the unsharded report."""
+    from wormgear_cli.tolerance import statistics
+
+    monkeypatch.setattr(statistics, "IN_MEMORY_SAMPLES", 50_000)
+    base = ("tolerance", MCH50, "-n", 140_000, "--metrics", "paper")
+    paths = [tmp_path / f"p{k}.npy" for k in (1, 2)]
+    for k, p in enumerate(paths, 1):
+        run(runner, *base, "--format", "npy", "--shard", f"{k}/2", "-o", p)
+    assert run(runner, "merge", *paths, "--format", "json").stdout == run(runner, *base, "--format", "json").stdout
