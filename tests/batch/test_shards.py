@@ -85,3 +85,65 @@ def test_bad_parts_name_the_option(text, env, message):
 
 def test_explicit_range_overrides_the_environment():
     assert parse("auto:0-3", slurm(2, 0, 9))[:2] == (3, 4)
+
+
+@pytest.mark.parametrize("text, part", [("1/1", (1, 1)), ("3/8", (3, 8)), ("8/8", (8, 8)), (" 2/5 ", (2, 5))])
+def test_explicit_parts(text, part):
+    got = parse(text, {"SLURM_ARRAY_TASK_ID": "0"})  # an explicit part ignores the environment
+    assert (got.k, got.n, got.source, got.label) == (*part, "", f"{part[0]}/{part[1]}")
+
+
+@pytest.mark.parametrize("env, label", [
+    (slurm(6, 2, 8, step=2, with_step=False), "3/4"),  # the step from the count: (8 - 2) / (4 - 1)
+    (slurm(5, 5, 5, count=1, with_step=False), "1/1"),  # --array=5
+    ({**slurm(5, 5, 5), "SLURM_ARRAY_TASK_STEP": "1"}, "1/1"),
+])
+def test_slurm_step_from_the_count(env, label):
+    assert parse("auto", env).label == label
+
+
+def test_auto_with_a_range_says_so():
+    got = parse("auto:2-11:3", {"PBS_ARRAYID": "5"})
+    assert (got.label, got.source) == ("2/4", "Torque: PBS_ARRAYID=5, range 2-11:3 from --shard")
+    assert parse("auto:5-5", {"PBS_ARRAY_INDEX": "5"}).label == "1/1"
+
+
+@pytest.mark.parametrize("text, env, line", [
+    ("auto:a-b", {"PBS_ARRAYID": "1"},
+     '--shard "auto:a-b": expected auto:FIRST-LAST[:STEP], the job array\'s range (e.g. auto:0-9 for sbatch '
+     "--array=0-9 or qsub -J 0-9)"),
+    ("auto:3-2", {"PBS_ARRAYID": "1"}, '--shard "auto:3-2": expected FIRST <= LAST and STEP >= 1'),
+    ("auto:0-9:0", {"PBS_ARRAYID": "1"}, '--shard "auto:0-9:0": expected FIRST <= LAST and STEP >= 1'),
+    ("auto:0-9", {"PBS_ARRAYID": "10"}, "--shard auto: task index 10 is not in the array 0-9:1 (--shard auto:0-9)"),
+    ("auto:0-8:2", {"PBS_ARRAYID": "3"}, "--shard auto: task index 3 is not in the array 0-8:2 (--shard auto:0-8:2)"),
+    ("auto", {"SLURM_ARRAY_TASK_ID": "3"},
+     "--shard auto: Slurm gives the task index (SLURM_ARRAY_TASK_ID=3) but not the array's range; give it as "
+     "--shard auto:FIRST-LAST[:STEP] (the range of the array, e.g. auto:0-9)"),
+    ("auto", {"SLURM_ARRAY_TASK_ID": "3", "SLURM_ARRAY_TASK_MIN": "0"},
+     "--shard auto: Slurm gives the task index (SLURM_ARRAY_TASK_ID=3) but not the array's range; give it as "
+     "--shard auto:FIRST-LAST[:STEP] (the range of the array, e.g. auto:0-9)"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_COUNT": "3"},
+     "--shard auto: the job array is not an even range (SLURM_ARRAY_TASK_MIN=1, SLURM_ARRAY_TASK_MAX=7, "
+     "SLURM_ARRAY_TASK_STEP=1, SLURM_ARRAY_TASK_COUNT=3; a list such as --array=1,3,7?): give --shard K/N, or "
+     "--shard auto:FIRST-LAST[:STEP]"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_MIN": "one"},
+     "--shard auto: SLURM_ARRAY_TASK_MIN is 'one', expected a whole number"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_MAX": "x"},
+     "--shard auto: SLURM_ARRAY_TASK_MAX is 'x', expected a whole number"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_STEP": "x"},
+     "--shard auto: SLURM_ARRAY_TASK_STEP is 'x', expected a whole number"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_COUNT": "x"},
+     "--shard auto: SLURM_ARRAY_TASK_COUNT is 'x', expected a whole number"),
+    ("auto", {**slurm(3, 1, 7, with_step=False), "SLURM_ARRAY_TASK_COUNT": "x"},
+     "--shard auto: SLURM_ARRAY_TASK_COUNT is 'x', expected a whole number"),
+    ("auto", {"SLURM_ARRAY_TASK_ID": " ", "SGE_TASK_ID": ""},
+     "--shard auto: no job-array index in the environment (SLURM_ARRAY_TASK_ID, SGE_TASK_ID, PBS_ARRAY_INDEX, "
+     "PBS_ARRAYID are unset); run it as a task of a job array, or give --shard K/N"),
+    ("2/0", {}, '--shard "2/0": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array'),
+    ("1/0", {}, '--shard "1/0": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array'),
+    ("3", {}, '--shard "3": expected K/N with whole numbers, e.g. 2/8, or auto in a job array'),
+])
+def test_messages(text, env, line):
+    with pytest.raises(UsageError) as exc:
+        parse(text, env)
+    assert exc.value.problems == [line]
