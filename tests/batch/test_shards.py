@@ -97,6 +97,9 @@ def test_explicit_parts(text, part):
     (slurm(6, 2, 8, step=2, with_step=False), "3/4"),  # the step from the count: (8 - 2) / (4 - 1)
     (slurm(5, 5, 5, count=1, with_step=False), "1/1"),  # --array=5
     ({**slurm(5, 5, 5), "SLURM_ARRAY_TASK_STEP": "1"}, "1/1"),
+    (slurm(1, 0, 3, with_step=False), "2/4"),
+    (slurm(4, 1, 7, step=3), "2/3"),
+    ({"SGE_TASK_ID": "2", "SGE_TASK_FIRST": "1", "SGE_TASK_LAST": "3"}, "2/3"),  # no SGE_TASK_STEPSIZE: 1
 ])
 def test_slurm_step_from_the_count(env, label):
     assert parse("auto", env).label == label
@@ -126,6 +129,11 @@ def test_auto_with_a_range_says_so():
      "--shard auto: the job array is not an even range (SLURM_ARRAY_TASK_MIN=1, SLURM_ARRAY_TASK_MAX=7, "
      "SLURM_ARRAY_TASK_STEP=1, SLURM_ARRAY_TASK_COUNT=3; a list such as --array=1,3,7?): give --shard K/N, or "
      "--shard auto:FIRST-LAST[:STEP]"),
+    ("auto", slurm(12, 0, 9),
+     "--shard auto: task index 12 is not in the array 0-9:1 (SLURM_ARRAY_TASK_MIN=0, SLURM_ARRAY_TASK_MAX=9, "
+     "SLURM_ARRAY_TASK_STEP=1, SLURM_ARRAY_TASK_COUNT=10)"),
+    ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_STEP": "0"},
+     "--shard auto: SLURM_ARRAY_TASK_STEP=0, expected a step of 1 or more"),
     ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_MIN": "one"},
      "--shard auto: SLURM_ARRAY_TASK_MIN is 'one', expected a whole number"),
     ("auto", {**slurm(3, 1, 7), "SLURM_ARRAY_TASK_MAX": "x"},

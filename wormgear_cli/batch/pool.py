@@ -31,6 +31,7 @@ from wormgear_cli.errors import UsageError
 #: most workers accepted by --jobs (a typo such as 1000000 would try to start that many processes)
 MAX_JOBS = 1024
 
+
 def available_cores() -> int:
     """Cores this process may run on (its CPU affinity; the machine's count elsewhere)."""
     try:

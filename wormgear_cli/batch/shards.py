@@ -105,6 +105,8 @@ def _scheduler_range(env: Mapping, names) -> tuple[tuple[int, int, int], str] | 
     if step is not None:
         s = _int(step, step_v)
         used.append(f"{step_v}={s}")
+        if s < 1:
+            raise UsageError(f"--shard auto: {step_v}={s}, expected a step of 1 or more")
     elif count is not None and _int(count, count_v) > 1:
         s = max(1, (b - a) // (_int(count, count_v) - 1))
     else:
@@ -112,7 +114,7 @@ def _scheduler_range(env: Mapping, names) -> tuple[tuple[int, int, int], str] | 
     if count is not None:
         c = _int(count, count_v)
         used.append(f"{count_v}={c}")
-        if s < 1 or (b - a) % s or (b - a) // s + 1 != c:
+        if (b - a) % s or (b - a) // s + 1 != c:
             raise UsageError(f"--shard auto: the job array is not an even range ({', '.join(used)}; a list such "
                              "as --array=1,3,7?): give --shard K/N, or --shard auto:FIRST-LAST[:STEP]")
     return (a, b, s), ", ".join(used)
