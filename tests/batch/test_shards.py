@@ -98,6 +98,7 @@ def test_explicit_parts(text, part):
     (slurm(5, 5, 5, count=1, with_step=False), "1/1"),  # --array=5
     ({**slurm(5, 5, 5), "SLURM_ARRAY_TASK_STEP": "1"}, "1/1"),
     (slurm(1, 0, 3, with_step=False), "2/4"),
+    (slurm(4, 0, 4, step=4, with_step=False), "2/2"),  # --array=0-4:4, two tasks
     (slurm(4, 1, 7, step=3), "2/3"),
     ({"SGE_TASK_ID": "2", "SGE_TASK_FIRST": "1", "SGE_TASK_LAST": "3"}, "2/3"),  # no SGE_TASK_STEPSIZE: 1
 ])
