@@ -87,6 +87,8 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                            ("tests/tolerance/test_sampling.py",), None),
     "tolerance-statistics": (("wormgear_cli/tolerance/statistics.py",),
                              ("tests/tolerance/test_statistics.py",), None),
+    # --shard K/N and --shard auto (the schedulers' array variables)
+    "batch-shards": (("wormgear_cli/batch/shards.py",), ("tests/batch/test_shards.py",), None),
     # the gear functions that compute values (the maximiser is scored with them; the location of
     # its maximum is checked against scipy's bounded minimiser in test_hand_worked.py)
     "gear-values": (("wormgear_cli/physics/spur.py",),

@@ -633,7 +633,7 @@ class Diagnosis:
 
 
 def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_effects: int = 4,
-             resamples: int = 50) -> Diagnosis:
+             resamples: int = 50, jobs: int = 1) -> Diagnosis:
     """Where the model and a measurement disagree, and which catalogue effect is missing.
 
     Parameters
@@ -650,6 +650,8 @@ def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_
         Name at most this many effects (0 to 20).
     resamples : int
         Resamples of whole runs for the stability check (0: skip).
+    jobs : int
+        Worker processes (0: every core); the result is the same whatever the count.
 
     Raises
     ------
@@ -668,7 +670,7 @@ def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_
     spec = _spec(spec)
     meas = data if isinstance(data, Measurement) else read_measurement(data)
     result = run_diagnose(spec, meas.core, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
-                          resamples=resamples)
+                          resamples=resamples, jobs=_jobs(jobs))
     core, doc = result.diagnosis, result.document
     found = tuple(doc["effects_found"])
     floor = doc.get("noise", {}).get("floor_arcsec")
@@ -705,6 +707,13 @@ class Sweep:
         return _plain(_sweep_report(self.core, self._data, unit))
 
 
+def _jobs(jobs: int) -> int:
+    """``jobs`` as a worker count (0: every core); UsageError outside 0..MAX_JOBS."""
+    from wormgear_cli.batch.pool import resolve_jobs
+
+    return resolve_jobs(jobs)
+
+
 def _axis(value, option: str):
     import numpy as np
 
@@ -721,7 +730,7 @@ def _axis(value, option: str):
 
 
 def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | None = None,
-          min_pinion_teeth: int | None = None) -> Sweep:
+          min_pinion_teeth: int | None = None, jobs: int = 1) -> Sweep:
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
     Parameters
@@ -739,6 +748,8 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
         Snap every point to whole tooth counts at this module.
     min_pinion_teeth : int or None
         With ``module_mm``: skip designs whose smaller gear has fewer teeth.
+    jobs : int
+        Worker processes (0: every core); the result is the same whatever the count.
 
     Raises
     ------
@@ -764,7 +775,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth
                                                                              + gp.pinion.teeth) / 2.0]
     sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth)
-    data = sw.collect(0, sw.size)
+    data = sw.collect(0, sw.size, jobs=_jobs(jobs))
     doc = _sweep_report(sw, data, "rad")  # the CLI's document in radians
     points = {c: (AngleArray(data[c]) if c in core.ANGLE_COLUMNS else data[c]) for c in sw.columns}
 
@@ -829,7 +840,7 @@ def _tolerance_doc(spec, options, target_yield):
 
 
 def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "all", plan: str = "iso",
-              targets: int = 24, points: int = 360, target_yield: float | None = None) -> Tolerance:
+              targets: int = 24, points: int = 360, target_yield: float | None = None, jobs: int = 1) -> Tolerance:
     """Statistical tolerance analysis: Monte Carlo over built drives.
 
     Parameters
@@ -850,6 +861,8 @@ def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "al
     target_yield : float or None
         Yield to aim at (0 < P < 1; default ``[requirements] min_yield``):
         rank the tolerances by the yield one step of tightening gains.
+    jobs : int
+        Worker processes (0: every core); the result is the same whatever the count.
 
     Raises
     ------
@@ -871,7 +884,7 @@ def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "al
     if target_yield is not None and not 0.0 < target_yield < 1.0:
         raise UsageError(f"target_yield: expected a number in (0, 1), got {target_yield:g}")
     options = engine.Options(samples=samples, seed=seed, metrics=metrics, plan=plan, targets=targets,
-                             points=points, unit="rad")
+                             points=points, unit="rad", jobs=_jobs(jobs))
 
     def run(unit: str) -> dict:
         return _tolerance_doc(spec, replace(options, unit=unit), target_yield)

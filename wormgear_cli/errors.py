@@ -20,6 +20,9 @@ class WormgearError(Exception):
         self.problems = list(problems)
         super().__init__("\n".join(self.problems))
 
+    def __reduce__(self):  # pickled with its problems (raised in a worker of --jobs, reported by the parent)
+        return self.__class__, (self.problems,)
+
 
 class SpecError(WormgearError):
     """A drive spec (TOML) that cannot be loaded or is invalid."""

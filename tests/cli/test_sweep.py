@@ -73,8 +73,8 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     (("--i", "2:10"), '--i "2:10": expected START:STOP:N (N values from START to STOP inclusive), e.g. 2:10:9'),
     (("--i", "inf:10:3"), '--i "inf:10:3": START "inf" is not a finite number'),
     ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
-    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected 1 <= K <= N'),
-    (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8'),
+    (("--i", "2:4:3", "--shard", "3/2"), '--shard "3/2": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array'),
+    (("--i", "2:4:3", "--shard", "x"), '--shard "x": expected K/N with whole numbers, e.g. 2/8, or auto in a job array'),
     (("--i", "2:4:3", "--module-mm", "-1"), "--module-mm -1: expected a module from 0.05 to 100 [mm]"),
     (("--i", "2:4:3", "--min-pinion-teeth", "12"), "--min-pinion-teeth applies only with --module-mm"),
     (("--i", "2:4:3", "--l-mm", "10:20:3", "--module-mm", "2.5"),
@@ -280,9 +280,9 @@ def test_huge_n_exits_2_naming_the_option(runner, mch50_path, args, message, fmt
     (("--i", "2:10:1000", "--l-mm", "100:300:101", "--format", "json"),
      "--i x --l-mm: 1000 x 101 = 101000 points are more than the limit of 100000 for --format json (it holds "
      "every point as an object); use --format csv, fewer values or --shard K/N"),
-    (("--i", "2:10:1e6", "--l-mm", "100:300:3", "--format", "csv", "-o", "OUT"),
-     "--i x --l-mm: 1000000 x 3 = 3000000 points are more than the limit of 2000000 for --format csv with -o "
-     "(the file is written at once); write to stdout instead (it is streamed: > FILE) or use --shard K/N"),
+    (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv", "-o", "OUT"),
+     "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points are more than the limit of 1000000000 for "
+     "--format csv (about 2.5 us per point); split it with --shard K/N"),
     (("--i", "2:10:1e7", "--l-mm", "100:300:1e7", "--format", "csv"),
      "--i x --l-mm: 10000000 x 10000000 = 100000000000000 points are more than the limit of 1000000000 for "
      "--format csv (about 2.5 us per point); split it with --shard K/N"),

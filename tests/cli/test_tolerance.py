@@ -188,9 +188,9 @@ def test_bad_statistics_table(runner, tmp_path, entry, message):
 
 @pytest.mark.parametrize("args,message", [
     (["-n", "0"], "error: --samples: expected an integer in [1, 10000000000], got 0\n"),
-    (["--shard", "0/3"], 'error: --shard "0/3": expected K/N with 1 <= K <= N, e.g. 2/8\n'),
-    (["--shard", "4/3"], 'error: --shard "4/3": expected K/N with 1 <= K <= N, e.g. 2/8\n'),
-    (["--shard", "a/3"], 'error: --shard "a/3": expected K/N with whole numbers, e.g. 2/8\n'),
+    (["--shard", "0/3"], 'error: --shard "0/3": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array\n'),
+    (["--shard", "4/3"], 'error: --shard "4/3": expected K/N with 1 <= K <= N, e.g. 2/8, or auto in a job array\n'),
+    (["--shard", "a/3"], 'error: --shard "a/3": expected K/N with whole numbers, e.g. 2/8, or auto in a job array\n'),
     (["-n", "2", "--shard", "1/3"], "error: --shard 1/3: expected 1 <= K <= N <= --samples (2)\n"),
     (["--target-yield", "1.5"], "error: --target-yield: expected a number in (0, 1), got 1.5\n"),
 ])

@@ -38,6 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.batch import shards
+from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.errors import UsageError, did_you_mean
 
 #: the columns of the (i, l) sweep, in order; the first five are the stable interface
@@ -153,21 +155,13 @@ def _check_whole(values: np.ndarray, where: str) -> None:
 
 def parse_shard(text: str) -> tuple[int, int]:
     """``K/N`` (1 <= K <= N) -> (K, N); :class:`UsageError` naming ``--shard`` otherwise."""
-    parts = text.split("/")
-    try:
-        k, n = (int(p) for p in parts)
-        if len(parts) != 2:
-            raise ValueError
-    except ValueError:
-        raise UsageError(f'--shard "{text}": expected K/N with whole numbers, e.g. 2/8') from None
-    if n < 1 or not 1 <= k <= n:
-        raise UsageError(f'--shard "{text}": expected 1 <= K <= N')
-    return k, n
+    part = shards.parse(text)
+    return part.k, part.n
 
 
 def shard_bounds(total: int, k: int, n: int) -> tuple[int, int]:
     """Point indices [start, stop) of part ``k`` (1-based) of ``n`` contiguous parts of ``total``."""
-    return (k - 1) * total // n, k * total // n
+    return shards.bounds(total, k, n)
 
 
 # --- the (i, l) sweep ------------------------------------------------------------------------
@@ -416,45 +410,52 @@ class RatioDistanceSweep:
                 o[sel] = p[li[sel] - b * size]
         return tuple(out)
 
+    def chunk(self, a: int, b: int) -> dict:
+        """Column arrays for grid points [a, b) (see :meth:`chunks`)."""
+        from wormgear_cli.physics import spur as gear
+
+        ii, li = self.grid_index(a, b)
+        i_nom, l_nom = self.i_values[ii], self.l_values[li]
+        point = np.arange(a, b, dtype=np.int64)
+        if self.module is None:
+            peak = self._peak_at(li) if self._paper else None
+            metrics = self.evaluate(i_nom, l_nom, peak=peak)
+            return {"i": i_nom, "l_mm": l_nom, **metrics, "_point": point}
+        z1, z2, keep = self.snap(i_nom, l_nom)
+        z1, z2, i_nom, l_nom, point = z1[keep], z2[keep], i_nom[keep], l_nom[keep], point[keep]
+        i_used, l_used = z1 / z2, self.module * (z1 + z2) / 2.0
+        peak = None
+        if self._paper:
+            uniq, inverse = np.unique(l_used, return_inverse=True)
+            peak = tuple(p[inverse] for p in gear.kinematic_peak(uniq, self.eccentricity, self.alpha))
+        metrics = self.evaluate(i_used, l_used, peak=peak, teeth=(z1, z2))
+        return {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64), "z2": z2.astype(np.int64),
+                "i_used": i_used, "l_used_mm": l_used, "_point": point}
+
+    def spans(self, start: int = 0, stop: int | None = None, chunk: int = CHUNK_POINTS) -> list[tuple[int, int]]:
+        """The chunks [a, b) of grid points [start, stop), as :meth:`chunks` computes them."""
+        stop = self.size if stop is None else stop
+        return [(a, min(stop, a + chunk)) for a in range(start, stop, chunk)]
+
     def chunks(self, start: int = 0, stop: int | None = None, chunk: int = CHUNK_POINTS,
-               progress: Callable[[int], None] | None = None) -> Iterator[dict]:
+               progress: Callable[[int], None] | None = None, jobs: int = 1) -> Iterator[dict]:
         """Column arrays for grid points [start, stop), in blocks of ``chunk`` points.
 
         Each block is a dict column -> array (see :attr:`columns`) plus ``"_point"``, the grid
         index of each row.  With a module, skipped designs are left out.  ``progress(n)`` is
-        called after each block with the number of grid points it covered.
+        called after each block with the number of grid points it covered.  ``jobs`` > 1:
+        the blocks are computed by that many worker processes (same blocks, same values).
         """
-        from wormgear_cli.physics import spur as gear
-
-        stop = self.size if stop is None else stop
-        for a in range(start, stop, chunk):
-            b = min(stop, a + chunk)
-            ii, li = self.grid_index(a, b)
-            i_nom, l_nom = self.i_values[ii], self.l_values[li]
-            point = np.arange(a, b, dtype=np.int64)
-            if self.module is None:
-                peak = self._peak_at(li) if self._paper else None
-                metrics = self.evaluate(i_nom, l_nom, peak=peak)
-                block = {"i": i_nom, "l_mm": l_nom, **metrics, "_point": point}
-            else:
-                z1, z2, keep = self.snap(i_nom, l_nom)
-                z1, z2, i_nom, l_nom, point = z1[keep], z2[keep], i_nom[keep], l_nom[keep], point[keep]
-                i_used, l_used = z1 / z2, self.module * (z1 + z2) / 2.0
-                peak = None
-                if self._paper:
-                    uniq, inverse = np.unique(l_used, return_inverse=True)
-                    peak = tuple(p[inverse] for p in gear.kinematic_peak(uniq, self.eccentricity, self.alpha))
-                metrics = self.evaluate(i_used, l_used, peak=peak, teeth=(z1, z2))
-                block = {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64),
-                         "z2": z2.astype(np.int64), "i_used": i_used, "l_used_mm": l_used, "_point": point}
+        spans = self.spans(start, stop, chunk)
+        for block, (a, b) in zip(ordered_map(_chunk, self, spans, jobs), spans):
             if progress is not None:
                 progress(b - a)
             yield block
 
     def collect(self, start: int = 0, stop: int | None = None,
-                progress: Callable[[int], None] | None = None) -> dict:
+                progress: Callable[[int], None] | None = None, jobs: int = 1) -> dict:
         """All of :meth:`chunks` concatenated into one dict of arrays."""
-        blocks = list(self.chunks(start, stop, progress=progress))
+        blocks = list(self.chunks(start, stop, progress=progress, jobs=jobs))
         keys = self.columns + ("_point",)
         if not blocks:
             return {k: np.empty(0) for k in keys}
@@ -471,6 +472,11 @@ class RatioDistanceSweep:
     def gear_te(self, i, l) -> np.ndarray:
         """Gear-stage TE [rad] of the continuous model at arbitrary (i, l)."""
         return self.continuous().evaluate(i, l)["gear_transmission_error"]
+
+
+def _chunk(sweep: RatioDistanceSweep, span: tuple[int, int]) -> dict:
+    """One chunk of a sweep (a worker's task: :func:`~wormgear_cli.batch.pool.ordered_map`)."""
+    return sweep.chunk(*span)
 
 
 def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | None,

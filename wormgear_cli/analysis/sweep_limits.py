@@ -35,30 +35,25 @@ def check_options(*, params: list, i: str | None, l_mm: str | None, module_mm: f
 #: most points of one (i, l) run (the whole grid, or this shard's part), by output; checked
 #: from the axes' N before any array is built.  A table and a plot hold the whole grid as
 #: arrays (~160 bytes per point); JSON holds every point as a Python object and its text
-#: (~3 KB per point); CSV to a file holds the file text for the atomic write (~115 bytes per
-#: point); CSV on stdout is streamed in blocks (memory constant, ~2.5 us per point).
+#: (~3 KB per point); CSV, on stdout or to a file (through a staged file renamed at the end),
+#: is streamed in blocks (memory constant, ~2.5 us per point).
 MAX_COLLECTED_POINTS = 2_000_000
 MAX_JSON_POINTS = 100_000
-MAX_CSV_FILE_POINTS = 2_000_000
 MAX_CSV_STREAM_POINTS = 1_000_000_000
 #: most points of one --param run with JSON output (~9 KB per point: 30 columns); every
 #: --param grid is also limited to MAX_PARAM_POINTS points
 MAX_PARAM_JSON_POINTS = 50_000
 
 
-def ratio_distance_limits(fmt: str, plot: bool, to_file: bool) -> list:
+def ratio_distance_limits(fmt: str, plot: bool) -> list:
     """(limit, what it is for, what to do instead) for an (i, l) run writing ``fmt``
-    ("table", "json" or "csv"; ``to_file``: CSV held for a file rather than streamed)
-    and, with ``plot``, a plot."""
+    ("table", "json" or "csv") and, with ``plot``, a plot."""
     if fmt == "table":
         out = [(MAX_COLLECTED_POINTS, "--format table (it holds the whole grid)",
                 "use --format csv or fewer values")]
     elif fmt == "json":
         out = [(MAX_JSON_POINTS, "--format json (it holds every point as an object)",
                 "use --format csv, fewer values or --shard K/N")]
-    elif to_file:
-        out = [(MAX_CSV_FILE_POINTS, "--format csv with -o (the file is written at once)",
-                "write to stdout instead (it is streamed: > FILE) or use --shard K/N")]
     else:
         out = [(MAX_CSV_STREAM_POINTS, "--format csv (about 2.5 us per point)", "split it with --shard K/N")]
     if plot:
@@ -66,7 +61,7 @@ def ratio_distance_limits(fmt: str, plot: bool, to_file: bool) -> list:
     return out
 
 
-def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool, to_file: bool,
+def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool,
                               shard: tuple[int, int] | None = None) -> None:
     """Refuse (UsageError) a run whose point count exceeds the limit of its output (see
     :func:`ratio_distance_limits`), from the axes' sizes alone: nothing is built."""
@@ -74,7 +69,7 @@ def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool, to_file:
     start, stop = shard_bounds(total, *shard) if shard else (0, total)
     points = stop - start
     where = f"--i x --l-mm: {n_i} x {n_l} = {total} points" + (f" ({points} in this shard)" if shard else "")
-    for limit, what, instead in ratio_distance_limits(fmt, plot, to_file):
+    for limit, what, instead in ratio_distance_limits(fmt, plot):
         if points > limit:
             raise UsageError(f"{where} are more than the limit of {limit} for {what}; {instead}")
     if fmt == "json" and n_i + n_l > MAX_JSON_POINTS:

@@ -69,6 +69,14 @@ def _check_output(value: Path | None) -> Path | None:
 OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
                                                       callback=_check_output)]
+JobsOption = Annotated[int, typer.Option(
+    "--jobs", "-j", metavar="N", help="Worker processes (0: every core). The output is the same, byte for byte, "
+    "whatever N.")]
+ShardOption = Annotated[str | None, typer.Option(
+    "--shard", metavar="K/N|auto", help="Compute only part K of N contiguous parts of the run; auto: the part "
+    "from a Slurm, Grid Engine or PBS job array (auto:FIRST-LAST[:STEP] gives the array's range). With -o, a "
+    "manifest is written beside the part, a complete part is skipped on a re-run, and wormgear merge joins "
+    "the parts.", show_default=False)]
 DriveArgument = Annotated[Path, typer.Argument(help="Drive spec (TOML).", show_default=False,
                                                                metavar="DRIVE.toml")]
 
@@ -110,6 +118,75 @@ def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
 
     atomic_write(output, data, tuple(inputs))
     announce_written(output)
+
+
+# --- --jobs and --shard ------------------------------------------------------------------
+
+
+def jobs_count(jobs: int) -> int:
+    """``--jobs`` as a number of worker processes (0: every core this process may use)."""
+    from wormgear_cli.batch.pool import resolve_jobs
+
+    return resolve_jobs(jobs)
+
+
+def shard_part(text: str | None):
+    """``--shard`` as a :class:`~wormgear_cli.batch.shards.Part` (None without the option); for
+    ``auto`` says on stderr which part it took and from which variables."""
+    if text is None:
+        return None
+    from wormgear_cli.batch import shards
+
+    part = shards.parse(text, os.environ)
+    if part.source:
+        typer.echo(f"shard {part.label} (--shard {text}) from {part.source}", err=True)
+    return part
+
+
+class PartOutput:
+    """The manifest of a part written with ``--shard`` and ``-o`` (nothing for other runs).
+
+    ``key`` identifies the run (:func:`~wormgear_cli.batch.manifest.run_key`); :meth:`done`
+    says on stderr and returns True when the part is already complete (skip the work);
+    :meth:`hashing` wraps the output's writes; :meth:`finish` stages the manifest beside the
+    output (after it, in the same transaction)."""
+
+    def __init__(self, command: str, drive: Path, output: Path | None, part, parameters: dict, first: int,
+                 stop: int, total: int):
+        from wormgear_cli import __version__
+        from wormgear_cli.batch import manifest
+
+        special = output is not None and Path(output).exists() and not Path(output).is_file()
+        self.active = part is not None and not is_stdout(output) and not special  # /dev/null: no manifest
+        self.output, self.drive = output, drive
+        self.hash = manifest.Hashing()
+        if self.active:
+            part_info = {"k": part.k, "n": part.n, "first": int(first), "stop": int(stop), "total": int(total)}
+            self.key = manifest.run_key(command, __version__, manifest.file_sha256(drive), parameters, part_info)
+
+    def done(self) -> bool:
+        if not self.active:
+            return False
+        from wormgear_cli.batch.manifest import resume_note
+
+        note = resume_note(self.output, self.key)
+        if note is not None:
+            typer.echo(f"part {self.key['part']['k']}/{self.key['part']['n']}: {note}", err=True)
+        return note is not None
+
+    def emit(self, data: str | bytes, inputs: Iterable = ()) -> None:
+        """:func:`emit` of the whole output, hashed for the manifest, then the manifest."""
+        emit(self.hash.add(data) if self.active else data, self.output, inputs)
+        self.finish(inputs)
+
+    def finish(self, inputs: Iterable = ()) -> None:
+        if not self.active:
+            return
+        from wormgear_cli.batch import manifest
+        from wormgear_cli.files import atomic_write
+
+        text = manifest.document(self.key, self.drive, self.hash.file, Path(self.output).name)
+        atomic_write(manifest.manifest_path(self.output), text, tuple(inputs))
 
 
 # --- terminals -------------------------------------------------------------------------------

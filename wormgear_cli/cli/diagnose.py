@@ -11,11 +11,13 @@ from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
     AngleUnit,
     DriveArgument,
+    JobsOption,
     OutputOption,
     TableJsonFormat,
     announce_written,
     emit,
     fmt_angle,
+    jobs_count,
     json_text,
     no_color,
     render,
@@ -64,6 +66,7 @@ def diagnose(
     resamples: Annotated[int, typer.Option(
         "--resamples", help="Resamples of whole runs for the stability check (0: skip it).", min=0,
         max=10_000)] = 50,
+    jobs: JobsOption = 1,
 ):
     """Find where the model and a measurement disagree and name the missing effect.
 
@@ -108,6 +111,7 @@ def diagnose(
     spec = load_spec(drive)
     meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit))
     options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
+                   jobs=jobs_count(jobs),
                    data_name=str(data), write_spec=None if write_spec is None else str(write_spec))
     if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
         console = terminal_console(stderr=True)

@@ -12,10 +12,12 @@ from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
     CsvJsonFormat,
     DriveArgument,
+    JobsOption,
     OutputOption,
     UnitOption,
     announce_written,
     emit,
+    jobs_count,
     json_text,
 )
 
@@ -70,6 +72,7 @@ def simulate(
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
     plot: PlotOption = None,
+    jobs: JobsOption = 1,
 ):
     """The drive's predicted error over the output angle, forward and reverse.
 
@@ -111,7 +114,7 @@ def simulate(
 
     refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if at is not None:
-        result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
+        result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects, jobs_count(jobs))
     else:
         result = report.dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
     if plot is not None:

@@ -16,14 +16,19 @@ from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
     DriveArgument,
     FormatOption,
+    JobsOption,
     OutputOption,
+    PartOutput,
     Progress,
+    ShardOption,
     UnitOption,
     announce_written,
     emit,
     is_stdout,
+    jobs_count,
     json_text,
     render,
+    shard_part,
 )
 
 #: estimated seconds per point, for deciding whether to show a progress bar
@@ -61,9 +66,8 @@ def sweep(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
         show_default=False)] = None,
-    shard: Annotated[str | None, typer.Option(
-        "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the point list "
-                                       "(csv/json); parts concatenate to the full CSV.", show_default=False)] = None,
+    shard: ShardOption = None,
+    jobs: JobsOption = 1,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs the 'plot' "
                        "extra).", show_default=False)] = None,
@@ -96,7 +100,9 @@ def sweep(
         from wormgear_cli.files import refuse_same_outputs
 
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    k_n = core.parse_shard(shard) if shard is not None else None
+    part = shard_part(shard)
+    k_n = (part.k, part.n) if part is not None else None
+    jobs = jobs_count(jobs)
     if params:
         axes = [core.parse_param(p) for p in params]
         limits.check_param_size(axes, fmt, k_n)
@@ -105,7 +111,12 @@ def sweep(
 
             check_param_plot([len(ax.values) for ax in axes])
             _require_matplotlib()
-        _param_sweep(load_spec(drive), drive, axes, fmt, unit, output, plot, k_n)
+        total = core.param_size(axes)
+        start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
+        parameters = {"param": [[ax.key, list(ax.values)] for ax in axes], "format": fmt, "unit": unit}
+        out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
+        if not out.done():
+            _param_sweep(load_spec(drive), drive, axes, fmt, unit, out, plot, k_n, jobs)
         return
     # sizes first: nothing is built, loaded or printed before the grid is known to be feasible
     i_range = core.parse_range_spec(i, "--i", positive=True) if i is not None else None
@@ -113,15 +124,27 @@ def sweep(
     if module_mm is not None:
         core.check_module(module_mm)
     n_i, n_l = (i_range.n if i_range is not None else 1), (l_range.n if l_range is not None else 1)
-    limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, not is_stdout(output), k_n)
+    limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, k_n)
     if plot is not None:
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
 
         check_ratio_distance_plot(n_i, n_l)
         _require_matplotlib()
+    total = n_i * n_l
+    start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
+    parameters = {"i": _range_key(i_range), "l_mm": _range_key(l_range), "hold": getattr(hold, "value", hold),
+                  "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
+    out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
+    if out.done():
+        return
     sw = core.ratio_distance_sweep(load_spec(drive), i_range, l_range, hold=getattr(hold, "value", hold),
                                    module=module_mm, min_teeth=min_pinion_teeth)
-    _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n)
+    _ratio_distance_sweep(sw, drive, fmt, unit, out, plot, k_n, jobs)
+
+
+def _range_key(r):
+    """A parsed range in a part's manifest (2:10:1e3 and 2:10:1000 are one grid)."""
+    return None if r is None else [r.start, r.stop, r.n]
 
 
 def _require_matplotlib() -> None:
@@ -131,24 +154,32 @@ def _require_matplotlib() -> None:
     pyplot()
 
 
-def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
+def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
     from wormgear_cli.output import sweep as report
 
+    output = out.output
     start, stop = sw.run_bounds(k_n)
     with Progress(stop - start, (stop - start) * _SECONDS_PER_RL_POINT, "sweep") as bar:
         if fmt == "csv" and plot is None:
-            chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance)
+            chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance, jobs)
             if is_stdout(output):
                 for data in chunks:  # streamed block by block: memory stays constant
                     emit(data, None)
-            else:
-                emit(report.joined(chunks), output, [drive])
+                return
+            from wormgear_cli.files import atomic_stream
+
+            with atomic_stream(output, (drive,)) as write:  # streamed to a staged file, renamed at the end
+                write_part = out.hash.wrap(write)
+                for data in chunks:
+                    write_part(data)
+            announce_written(output)
+            out.finish([drive])
             return
-        data = sw.collect(start, stop, progress=bar.advance)
+        data = sw.collect(start, stop, progress=bar.advance, jobs=jobs)
     if fmt == "csv":
-        emit(report.collected_csv(sw, data, unit), output, [drive])
+        out.emit(report.collected_csv(sw, data, unit), [drive])
     elif fmt == "json":
-        emit(json_text(report.ratio_distance_json(sw, data, unit, k_n, start, stop)), output, [drive])
+        out.emit(json_text(report.ratio_distance_json(sw, data, unit, k_n, start, stop)), [drive])
     else:
         render(report.ratio_distance_tables(sw, data, unit), output, [drive])
     if plot is not None:
@@ -158,22 +189,23 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
         announce_written(plot)
 
 
-def _param_sweep(spec, drive, axes, fmt, unit, output, plot, k_n):
+def _param_sweep(spec, drive, axes, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
     from wormgear_cli.analysis.sweep import param_size, shard_bounds
     from wormgear_cli.output import sweep as report
     from wormgear_cli.output.formats import csv_text
 
+    output = out.output
     start, stop = shard_bounds(param_size(axes), *k_n) if k_n else (0, param_size(axes))
     with Progress(stop - start, (stop - start) * _SECONDS_PER_PARAM_POINT, "sweep") as bar:
         if fmt == "csv" and is_stdout(output) and plot is None:
-            for text in report.param_csv(spec, axes, start, stop, unit, bar.advance):  # rows as computed
+            for text in report.param_csv(spec, axes, start, stop, unit, bar.advance, jobs):  # rows as computed
                 emit(text, None)
             return
-        rows = list(report.param_table_rows(spec, axes, start, stop, unit, bar.advance))
+        rows = list(report.param_table_rows(spec, axes, start, stop, unit, bar.advance, jobs))
     if fmt == "csv":
-        emit(csv_text(report.param_columns(axes), rows), output, [drive])
+        out.emit(csv_text(report.param_columns(axes), rows), [drive])
     elif fmt == "json":
-        emit(json_text(report.param_json(spec, axes, rows, unit, k_n, start, stop)), output, [drive])
+        out.emit(json_text(report.param_json(spec, axes, rows, unit, k_n, start, stop)), [drive])
     else:
         render(report.param_tables(spec, axes, rows, unit), output, [drive])
     if plot is not None:

@@ -11,15 +11,18 @@ import typer
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
     DriveArgument,
-    FormatOption,
+    JobsOption,
     OutputOption,
+    PartOutput,
     Progress,
+    ShardOption,
     UnitOption,
     announce_written,
-    emit,
     is_stdout,
+    jobs_count,
     json_text,
     render,
+    shard_part,
     write_stdout,
 )
 
@@ -39,6 +42,13 @@ class MetricSet(str, Enum):
     paper_budget = "paper+budget"
     iso = "iso"
     all = "all"
+
+
+class ToleranceFormat(str, Enum):
+    table = "table"
+    json = "json"
+    csv = "csv"
+    npy = "npy"
 
 
 class PlanKind(str, Enum):
@@ -64,14 +74,15 @@ def tolerance(
     target_yield: Annotated[float | None, typer.Option(
         "--target-yield", help="Yield to aim at (0 < P < 1; default: [requirements] min_yield): rank the "
         "tolerances by the yield one step of tightening gains.", show_default=False)] = None,
-    shard: Annotated[str | None, typer.Option(
-        "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the samples (CSV parts "
-        "concatenate, header once, to the whole run's CSV).", show_default=False)] = None,
+    shard: ShardOption = None,
+    jobs: JobsOption = 1,
     summarize: Annotated[Path | None, typer.Option(
-        "--summarize", help="Report on the samples of this CSV (concatenated --format csv parts) instead of "
-        "drawing; give the run's --seed, --plan, --targets and --unit.",
+        "--summarize", help="Report on the samples of this CSV (concatenated --format csv parts) or .npy file "
+        "instead of drawing; give the run's --samples, --seed, --plan, --targets and --unit.",
         show_default=False)] = None,
-    format: FormatOption = "table",
+    format: Annotated[ToleranceFormat, typer.Option(
+        "--format", "-f", help="Output format: the report (table, json) or the samples (csv, or npy: the metrics "
+        "as binary columns, with -o).", case_sensitive=False)] = ToleranceFormat.table,
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
@@ -99,11 +110,14 @@ def tolerance(
     fmt = getattr(format, "value", format)
     unit = getattr(unit, "value", unit)
     metric_set = getattr(metrics, "value", metrics)
-    k_n = engine.parse_shard(shard) if shard is not None else None
+    part = shard_part(shard)
+    k_n = (part.k, part.n) if part is not None else None
     if summarize is not None and k_n is not None:
-        raise UsageError("--summarize cannot be combined with --shard (summarize the concatenated parts)")
-    if summarize is not None and fmt == "csv":
+        raise UsageError("--summarize cannot be combined with --shard (merge the parts: wormgear merge)")
+    if summarize is not None and fmt in ("csv", "npy"):
         raise UsageError("--summarize reports on samples: use --format table or json")
+    if fmt == "npy" and is_stdout(output):
+        raise UsageError("--format npy writes binary columns: give -o FILE.npy")
     if plot is not None:
         from wormgear_cli.files import refuse_input, refuse_same_outputs
         from wormgear_cli.plots import check_plot_path
@@ -115,21 +129,26 @@ def tolerance(
         raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
     spec = load_spec(drive)
     n_rows = None
+    npy_input = summarize is not None and report.is_npy(summarize)
     if summarize is not None:
-        metric_set = report.read_header(summarize).metric_set
+        metric_set = (report.read_npy_header if npy_input else report.read_header)(summarize).metric_set
     options = engine.Options(samples=samples, seed=seed, metrics=metric_set, plan=getattr(plan, "value", plan),
-                             targets=targets, points=points, unit=unit, shard=k_n)
+                             targets=targets, points=points, unit=unit, shard=k_n, jobs=jobs_count(jobs))
     if summarize is not None:
         options = replace(options, samples=max(samples, 1), shard=None)
     s = engine.setup(spec, options)
     target = target_yield if target_yield is not None else spec.requirements.min_yield
     inputs = [drive] + ([summarize] if summarize is not None else [])
 
+    out = PartOutput("tolerance", drive, output, part, part_parameters(options, fmt), s.start, s.stop,
+                     options.samples) if fmt != "table" else PartOutput("tolerance", drive, output, None, {}, 0, 0, 0)
+    if out.done():
+        return
     if summarize is not None:
-        summary = engine.summarize(s, lambda: report.read_samples(summarize, s))
+        summary = engine.summarize(s, lambda: (report.read_npy if npy_input else report.read_samples)(summarize, s))
         n_rows = summary.samples
-    elif fmt == "csv":
-        summary = _csv_run(s, output, inputs)
+    elif fmt in ("csv", "npy"):
+        summary = _samples_run(s, out, inputs, fmt)
     else:
         seconds = (s.stop - s.start) * _SECONDS_PER_SAMPLE[metric_set]
         with Progress(s.stop - s.start, seconds, "tolerance") as bar:
@@ -140,36 +159,49 @@ def tolerance(
     plan = engine.allocation_runs(s, target, n_rows if n_rows is not None else samples)
     cost = (plan[0] * plan[1] * _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]) if plan else 0.0
     with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
-        doc = study.finish(s, summary, target_yield, n_rows if n_rows is not None else samples, shard, bar.advance)
+        doc = study.finish(s, summary, target_yield, n_rows if n_rows is not None else samples,
+                           part.label if part is not None else None, bar.advance)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
 
         draw(doc, summary.plot_values, engine.limits(s), plot, LABELS)
         announce_written(plot)
     if fmt == "json":
-        emit(json_text(doc), output, inputs)
+        out.emit(json_text(doc), inputs)
     elif fmt == "table":
         render(_tables(doc, target), output, inputs)
 
 
-def _csv_run(s, output, inputs):
-    """Stream the samples CSV block by block (stdout, or -o through a staged file renamed at
-    the end) and return the summary; memory stays constant whatever the sample count."""
+def part_parameters(options, fmt: str) -> dict:
+    """The options that make a part's bytes (its manifest's parameters; not --jobs, not the part)."""
+    return {"samples": int(options.samples), "seed": int(options.seed), "metrics": options.metrics,
+            "plan": options.plan, "targets": int(options.targets), "points": int(options.points),
+            "unit": options.unit, "format": fmt}
+
+
+def _samples_run(s, out: PartOutput, inputs, fmt: str):
+    """Stream the samples (CSV, or the .npy records) block by block (stdout, or -o through a
+    staged file renamed at the end) and return the summary; memory stays constant whatever the
+    sample count.  A part written with -o gets its manifest."""
     from wormgear_cli.tolerance import engine, report
 
+    output = out.output
     seconds = (s.stop - s.start) * (_SECONDS_PER_SAMPLE[s.options.metrics] + 4e-6)
-    header = report.csv_header(s)  # every part carries the header; concatenate with it once (tail -n +2)
+    # every CSV part carries the header; concatenate with it once (tail -n +2)
+    header, rows = (report.csv_header(s), report.csv_rows) if fmt == "csv" else (report.npy_header(s),
+                                                                                report.npy_rows)
     with Progress(s.stop - s.start, seconds, "tolerance") as bar:
         if is_stdout(output):
             write_stdout(header)  # checked: a full disk is exit 2, a closed pipe a quiet stop
-            return engine.run(s, on_block=lambda block: write_stdout(report.csv_rows(s, block)),
-                              progress=bar.advance)
+            return engine.run(s, on_block=write_stdout, progress=bar.advance, render=rows)
         from wormgear_cli.files import atomic_stream
 
         with atomic_stream(output, tuple(inputs)) as write:
+            write = out.hash.wrap(write)
             write(header)
-            summary = engine.run(s, on_block=lambda block: write(report.csv_rows(s, block)), progress=bar.advance)
+            summary = engine.run(s, on_block=write, progress=bar.advance, render=rows)
     announce_written(output)
+    out.finish(inputs)
     return summary
 
 

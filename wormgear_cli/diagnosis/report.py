@@ -544,16 +544,17 @@ class DiagnoseResult:
 
 def run_diagnose(spec, meas, *, alpha: float = 0.01, fit_phases: bool = True, max_effects: int = 4,
                  resamples: int = 50, progress=None, data_name: str = "",
-                 write_spec: str | None = None) -> DiagnoseResult:
+                 write_spec: str | None = None, jobs: int = 1) -> DiagnoseResult:
     """Diagnose ``meas`` against ``spec`` and assemble the report.
 
     Parameters as :func:`wormgear_cli.diagnosis.diagnose`; ``data_name``
     names the measurement in the augmented spec's header; ``write_spec``: the
     file the augmented spec will be written to (recorded in the report's
-    ``augmented_spec``; None: no spec text is made).  Raises UsageError and
+    ``augmented_spec``; None: no spec text is made); ``jobs``: worker processes for the
+    stability check's resamples.  Raises UsageError and
     DataError as :func:`~wormgear_cli.diagnosis.diagnose`."""
     diag = diagnose(spec, meas, alpha=alpha, fit_phases=fit_phases, max_effects=max_effects, resamples=resamples,
-                    progress=progress)
+                    progress=progress, jobs=jobs)
     doc = report(diag)
     doc["augmented_spec"] = None if write_spec is None else str(write_spec)
     text = augmented_toml(diag, data_name) if write_spec is not None else None

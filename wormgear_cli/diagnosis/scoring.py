@@ -15,6 +15,7 @@ from enum import Enum
 
 import numpy as np
 
+from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.diagnosis.candidates import Candidate, candidate_params, needs_problem, replication_problem
 from wormgear_cli.diagnosis.design import canonical_q, orthonormal, r2, residualise, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, VarFit, Wald, containment_df, f_sf, reml, wald
@@ -216,8 +217,11 @@ class Step:
             for b in tested[i + 1:]:
                 self.similar[(a, b)] = self.similar[(b, a)] = canonical_q(q_factors[a], q_factors[b])
 
-    def stability(self, resamples: int, alpha: float, seed: int = 0) -> dict[str, float]:
-        """Share of cluster-bootstrap resamples (whole runs) in which each tested candidate scores best."""
+    def stability(self, resamples: int, alpha: float, seed: int = 0, jobs: int = 1) -> dict[str, float]:
+        """Share of cluster-bootstrap resamples (whole runs) in which each tested candidate scores best.
+
+        ``jobs`` > 1: the resamples are scored by that many worker processes (the same
+        resamples, drawn here, and the same arithmetic: the same shares)."""
         g = self.groups
         names = [n for n in self.tested if n in self.slices]
         if g.runs < 3 or not names or resamples <= 0:
@@ -234,41 +238,77 @@ class Step:
         rng = np.random.default_rng(seed)
         counts = rng.multinomial(g.runs, np.full(g.runs, 1.0 / g.runs), size=resamples).astype(float)
         kb = self.basis.shape[1]
+        tests = []
+        for name in names:
+            sc, sl = self.scores[name], self.slices[name]
+            tests.append((np.r_[np.arange(kb), np.arange(sl.start, sl.stop)], sl.stop - sl.start, sc.var.gp,
+                          sc.var.gr, sc.wald.df))
+        state = _Resampling(grams, sums, counts, g, k, kb, tests)
+        size = max(1, -(-resamples // (4 * max(1, jobs))))
+        spans = [(a, min(resamples, a + size)) for a in range(0, resamples, size)]
         pvals = np.full((resamples, len(names)), 1.0)
         chi2 = np.zeros((resamples, len(names)))
-        for j, name in enumerate(names):
-            sc = self.scores[name]
-            sl = self.slices[name]
-            idx = np.r_[np.arange(kb), np.arange(sl.start, sl.stop)]
-            q = sl.stop - sl.start
-            for b in range(resamples):
-                rc = counts[b]
-                pc = rc[g.pass_run]
-                gram = np.einsum("p,pij->ij", pc, grams)
-                cr = Cross(gram[np.ix_(idx, idx)], gram[idx, k - 1], gram[k - 1, k - 1], sums[:, idx],
-                           sums[:, k - 1], g, pc, rc)
-                if cr.n - cr.k < 2:
-                    continue
-                A, bb, c, _ = cr.weighted([sc.var.gp], [sc.var.gr])
-                try:
-                    beta = np.linalg.solve(A[0], bb[0])
-                    inv = np.linalg.inv(A[0])
-                except np.linalg.LinAlgError:
-                    continue
-                s2 = max(float(c[0] - bb[0] @ beta), 1e-300) / (cr.n - cr.k)
-                est = beta[kb:]
-                cov = s2 * inv[kb:, kb:]
-                try:
-                    F = float(est @ np.linalg.solve(cov, est)) / q
-                except np.linalg.LinAlgError:
-                    continue
-                chi2[b, j] = F * q
-                pvals[b, j] = f_sf(F, q, sc.wald.df)
+        for (c2, pv), (a, b) in zip(ordered_map(_score_resamples, state, spans, jobs), spans):
+            chi2[a:b], pvals[a:b] = c2, pv
         # best in a resample: the largest chi^2 among the candidates significant there (else the smallest p)
         sig_ = pvals * len(names) < alpha
         score = np.where(sig_, chi2, -pvals)
         best = np.argmax(np.where(np.any(sig_, axis=1, keepdims=True), np.where(sig_, chi2, -np.inf), score), axis=1)
         return {name: float(np.mean(best == j)) for j, name in enumerate(names)}
+
+
+@dataclass(frozen=True)
+class _Resampling:
+    """What scoring the resamples of :meth:`Step.stability` needs: per-pass Gram matrices and
+    sums of [design, residual], the resamples' run counts, the groups, the widths, and per
+    tested candidate (its columns with the basis, q, variance ratios, denominator df)."""
+
+    grams: np.ndarray
+    sums: np.ndarray
+    counts: np.ndarray
+    groups: Groups
+    k: int
+    kb: int
+    tests: list
+
+
+def _score_resamples(r: _Resampling, span: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Wald chi^2 and p of every tested candidate in resamples [a, b) (a worker's task)."""
+    a, b = span
+    chi2 = np.zeros((b - a, len(r.tests)))
+    pvals = np.full((b - a, len(r.tests)), 1.0)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        for row in range(b - a):
+            _score_one(r, a + row, chi2[row], pvals[row])
+    return chi2, pvals
+
+
+def _score_one(r: _Resampling, b: int, chi2: np.ndarray, pvals: np.ndarray) -> None:
+    """Fill one resample's row of chi^2 and p (see :func:`_score_resamples`)."""
+    g, k, kb = r.groups, r.k, r.kb
+    rc = r.counts[b]
+    pc = rc[g.pass_run]
+    gram = np.einsum("p,pij->ij", pc, r.grams)
+    for j, (idx, q, gp, gr, df) in enumerate(r.tests):
+        cr = Cross(gram[np.ix_(idx, idx)], gram[idx, k - 1], gram[k - 1, k - 1], r.sums[:, idx],
+                   r.sums[:, k - 1], g, pc, rc)
+        if cr.n - cr.k < 2:
+            continue
+        A, bb, c, _ = cr.weighted([gp], [gr])
+        try:
+            beta = np.linalg.solve(A[0], bb[0])
+            inv = np.linalg.inv(A[0])
+        except np.linalg.LinAlgError:
+            continue
+        s2 = max(float(c[0] - bb[0] @ beta), 1e-300) / (cr.n - cr.k)
+        est = beta[kb:]
+        cov = s2 * inv[kb:, kb:]
+        try:
+            F = float(est @ np.linalg.solve(cov, est)) / q
+        except np.linalg.LinAlgError:
+            continue
+        chi2[j] = F * q
+        pvals[j] = f_sf(F, q, df)
 
 
 @dataclass(frozen=True)

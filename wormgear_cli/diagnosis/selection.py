@@ -128,7 +128,7 @@ def _reported_only(fit: ModelFit) -> ModelFit:
 
 
 def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effects: int = 4,
-             resamples: int = 50, progress: Callable | None = None) -> Diagnosis:
+             resamples: int = 50, progress: Callable | None = None, jobs: int = 1) -> Diagnosis:
     """Fit the spec to a measurement, name the missing catalogue effects, refit.
 
     Parameters
@@ -141,15 +141,16 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
     max_effects : most effects to name (>= 0)
     resamples : cluster-bootstrap resamples of whole runs for the stability check
     progress : optional callable(str) told about each stage
+    jobs : worker processes for the stability check's resamples (the same result whatever the count)
 
     See the module docstring for the model and the selection rules.  Raises
     UsageError for bad options and DataError for data it cannot use.
     """
     with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-        return _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress)
+        return _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress, jobs)
 
 
-def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -> Diagnosis:
+def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress, jobs=1) -> Diagnosis:
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
     from wormgear_cli.analysis.simulate import simulate
     from wormgear_cli.physics.effects import EFFECTS
@@ -282,7 +283,7 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
                          f"runs needs at least {MIN_RUNS}")
         else:
             say(f"checking {best} on {resamples} resamples of whole runs")
-            stab = step.stability(resamples, alpha)
+            stab = step.stability(resamples, alpha, jobs=jobs)
         frac = stab.get(best) if stab else None
         if frac is not None:  # a folded twin scoring best is the same content
             frac += sum(v for k, v in stab.items() if k != best and remaining[k].order in folded)

@@ -14,6 +14,7 @@ import numpy as np
 
 from wormgear_cli.analysis import sweep as core
 from wormgear_cli.analysis.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COLUMNS, best_points, findings
+from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
 from wormgear_cli.output.tables import Cell, Column, Table
 from wormgear_cli.units import to_unit
@@ -47,13 +48,28 @@ def csv_rows(columns, block: dict, unit: str) -> bytes:
     return csv_block([column_values(c, block[c], unit) for c in columns])
 
 
-def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress = None) -> Iterator[bytes]:
+def _csv_chunk(state, span: tuple[int, int]) -> bytes:
+    """CSV rows of one chunk of grid points, computed and formatted (a worker's task)."""
+    sw, unit = state
+    return csv_rows(sw.columns, sw.chunk(*span), unit)
+
+
+def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress = None,
+                       jobs: int = 1) -> Iterator[bytes]:
     """CSV bytes of grid points [start, stop) of ``sw``: the header, then each block in order
-    (computed here, formatted by two worker threads, at most three blocks in flight)."""
+    (computed here, formatted by two worker threads, at most three blocks in flight; with
+    ``jobs`` > 1 computed and formatted by that many worker processes)."""
     from collections import deque
     from concurrent.futures import ThreadPoolExecutor
 
     yield csv_header(sw.columns)
+    if jobs > 1:
+        spans = sw.spans(start, stop)
+        for text, (a, b) in zip(ordered_map(_csv_chunk, (sw, unit), spans, jobs), spans):
+            if progress is not None:
+                progress(b - a)
+            yield text
+        return
     with ThreadPoolExecutor(max_workers=2) as pool:
         pending = deque()
         for block in sw.chunks(start, stop, progress=progress):
@@ -224,8 +240,23 @@ def param_columns(axes) -> list:
     return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
 
 
-def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Progress = None) -> Iterator[list]:
-    """One row per point [start, stop): the key values, then the metrics in ``unit``."""
+def _param_batch(state, span: tuple[int, int]) -> list:
+    """The rows of points [a, b) of a --param sweep (a worker's task)."""
+    spec, axes, unit = state
+    return list(param_table_rows(spec, axes, *span, unit))
+
+
+def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Progress = None,
+                     jobs: int = 1) -> Iterator[list]:
+    """One row per point [start, stop): the key values, then the metrics in ``unit``; with
+    ``jobs`` > 1 batches of :data:`CSV_PARAM_BATCH` points are computed by worker processes."""
+    if jobs > 1:
+        spans = [(a, min(stop, a + CSV_PARAM_BATCH)) for a in range(start, stop, CSV_PARAM_BATCH)]
+        for rows, (a, b) in zip(ordered_map(_param_batch, (spec, axes, unit), spans, jobs), spans):
+            if progress is not None:
+                progress(b - a)
+            yield from rows
+        return
     columns = param_columns(axes)
     n = len(axes)
     for values, result in core.param_rows(spec, axes, start, stop, progress=progress):
@@ -233,13 +264,14 @@ def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Pro
         yield list(values) + [m[c] for c in columns[n:]]
 
 
-def param_csv(spec, axes, start: int, stop: int, unit: str, progress: Progress = None) -> Iterator[str]:
+def param_csv(spec, axes, start: int, stop: int, unit: str, progress: Progress = None,
+              jobs: int = 1) -> Iterator[str]:
     """CSV text of points [start, stop): the header, then batches of :data:`CSV_PARAM_BATCH`
     rows as they are computed (no rows held)."""
     columns = param_columns(axes)
     yield csv_text(columns, [])
     batch = []
-    for row in param_table_rows(spec, axes, start, stop, unit, progress):
+    for row in param_table_rows(spec, axes, start, stop, unit, progress, jobs):
         batch.append(row)
         if len(batch) >= CSV_PARAM_BATCH:
             yield csv_text(columns, batch, header=False)

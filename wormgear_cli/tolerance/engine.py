@@ -14,11 +14,13 @@ the run's byte for byte.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from wormgear_cli.batch import shards
+from wormgear_cli.batch.pool import MAX_JOBS, ordered_map
 from wormgear_cli.errors import UsageError
 from wormgear_cli.tolerance import metrics as metrics_mod
 from wormgear_cli.tolerance import statistics as stats
@@ -49,7 +51,8 @@ class Options:
     ``samples`` N (>= 1); ``seed`` (>= 0); ``metrics``: "paper", "iso" or "all";
     ``plan``: "iso" (``targets`` irregular targets, as ``synth`` plans them with
     this seed) or "dense" (``points`` even angles); ``unit``: angle unit of the
-    outputs; ``shard``: (K, N) or None.
+    outputs; ``shard``: (K, N) or None; ``jobs``: worker processes (the samples are the
+    same whatever the count: the blocks of the random streams are computed in parallel).
     """
 
     samples: int = 100_000
@@ -60,6 +63,7 @@ class Options:
     points: int = 360
     unit: str = "arcsec"
     shard: tuple[int, int] | None = None
+    jobs: int = 1
 
     def check(self) -> None:
         if isinstance(self.samples, bool) or not 1 <= int(self.samples) <= MAX_SAMPLES:
@@ -80,26 +84,19 @@ class Options:
             k, n = self.shard
             if not (1 <= n <= self.samples and 1 <= k <= n):
                 raise UsageError(f"--shard {k}/{n}: expected 1 <= K <= N <= --samples ({self.samples})")
+        if not 1 <= int(self.jobs) <= MAX_JOBS:
+            raise UsageError(f"--jobs: expected a whole number from 1 to {MAX_JOBS}, got {self.jobs}")
 
 
 def parse_shard(text: str) -> tuple[int, int]:
     """``K/N`` -> (K, N); :class:`UsageError` naming ``--shard`` when malformed or K outside 1..N."""
-    k, sep, n = text.strip().partition("/")
-    try:
-        k_i, n_i = int(k), int(n)
-    except ValueError:
-        raise UsageError(f'--shard "{text}": expected K/N with whole numbers, e.g. 2/8') from None
-    if not sep or n_i < 1 or not 1 <= k_i <= n_i:
-        raise UsageError(f'--shard "{text}": expected K/N with 1 <= K <= N, e.g. 2/8')
-    return k_i, n_i
+    part = shards.parse(text)
+    return part.k, part.n
 
 
 def shard_range(samples: int, shard: tuple[int, int] | None) -> tuple[int, int]:
     """Samples [start, stop) of shard K of N: contiguous parts, floor((K-1) S / N) .. floor(K S / N)."""
-    if shard is None:
-        return 0, samples
-    k, n = shard
-    return (k - 1) * samples // n, k * samples // n
+    return (0, samples) if shard is None else shards.bounds(samples, *shard)
 
 
 def plan_targets(options: Options) -> np.ndarray:
@@ -167,17 +164,71 @@ class Block:
     metrics: dict
 
 
-def blocks(s: Setup, progress: Callable[[int], None] | None = None) -> Iterator[Block]:
-    """The run's samples, one random-stream block (or the part of it in the shard) at a time."""
-    unit = s.options.unit
-    for b in range(s.start // BLOCK, (s.stop - 1) // BLOCK + 1):
-        lo, hi = max(s.start, b * BLOCK), min(s.stop, (b + 1) * BLOCK)
-        d = draw(s.varied, s.options.seed, lo, hi)
-        m = metrics_mod.evaluate(s.context, d.values, d.phases, s.metrics)
-        cols = {c: (np.degrees(d.phases[c]) if c in d.phases else d.values[c]) for c in s.columns}
-        yield Block(lo, hi, cols, {k: to_unit(v, unit) for k, v in m.items()})
+def _columns(s: Setup, d) -> dict:
+    """The output columns of a draw: values [mm], phases [deg]."""
+    return {c: (np.degrees(d.phases[c]) if c in d.phases else d.values[c]) for c in s.columns}
+
+
+def drawn_columns(s: Setup, start: int, stop: int) -> dict:
+    """The varied columns of samples [start, stop) as the run draws them (no metric evaluated):
+    the compact samples file keeps only the metrics, these come again from the seed."""
+    return _columns(s, draw(s.varied, s.options.seed, start, stop))
+
+
+def block(s: Setup, b: int) -> Block:
+    """Random-stream block ``b`` of the run (the part of it in the run's samples), drawn and evaluated."""
+    lo, hi = max(s.start, b * BLOCK), min(s.stop, (b + 1) * BLOCK)
+    d = draw(s.varied, s.options.seed, lo, hi)
+    m = metrics_mod.evaluate(s.context, d.values, d.phases, s.metrics)
+    return Block(lo, hi, _columns(s, d), {k: to_unit(v, s.options.unit) for k, v in m.items()})
+
+
+def rebatch(parts: Iterable[Block]) -> Iterator[Block]:
+    """Consecutive blocks joined at the random-stream block boundaries (a part of a sharded run
+    may end inside a block): the summary of the joined blocks is the unsharded run's, to the bit."""
+    pending: list[Block] = []
+    for blk in parts:
+        pending.append(blk)
+        if blk.stop % BLOCK == 0:
+            yield _join(pending)
+            pending = []
+    if pending:
+        yield _join(pending)
+
+
+def _join(blocks: list[Block]) -> Block:
+    if len(blocks) == 1:
+        return blocks[0]
+    for a, b in zip(blocks, blocks[1:]):
+        if a.stop != b.start:
+            raise UsageError(f"samples {a.stop} to {b.start - 1} are missing between two parts")
+    first = blocks[0]
+    return Block(first.start, blocks[-1].stop,
+                 {c: np.concatenate([b.columns[c] for b in blocks]) for c in first.columns},
+                 {m: np.concatenate([b.metrics[m] for b in blocks]) for m in first.metrics})
+
+
+def _rendered_block(state, b: int) -> tuple[Block, object]:
+    s, render = state
+    blk = block(s, b)
+    return blk, render(s, blk)
+
+
+def blocks(s: Setup, progress: Callable[[int], None] | None = None,
+           render: Callable[[Setup, Block], object] | None = None) -> Iterator:
+    """The run's samples, one random-stream block (or the part of it in the shard) at a time, in
+    order; with ``options.jobs`` > 1 the blocks are computed by that many worker processes
+    (:func:`~wormgear_cli.batch.pool.ordered_map`: the same blocks, the same bytes).  With
+    ``render`` (a module-level function, e.g. the CSV rows of a block) the items are
+    (block, ``render(s, block)``), rendered where the block was computed."""
+    ids = range(s.start // BLOCK, (s.stop - 1) // BLOCK + 1)
+    items = ordered_map(block, s, ids, s.options.jobs) if render is None else \
+        ordered_map(_rendered_block, (s, render), ids, s.options.jobs)
+    for item in items:
+        yield item
         if progress is not None:
-            progress(hi - lo)
+            blk = item if render is None else item[0]
+            progress(blk.stop - blk.start)
 
 
 def limits(s: Setup) -> dict[str, tuple[str, float]]:
@@ -272,19 +323,21 @@ def summarize(s: Setup, source: Callable[[], Iterator[Block]]) -> Summary:
     return Summary(acc.n, described, corner, rss, yields, sens, plot)
 
 
-def run(s: Setup, on_block: Callable[[Block], None] | None = None,
-        progress: Callable[[int], None] | None = None) -> Summary:
+def run(s: Setup, on_block: Callable | None = None, progress: Callable[[int], None] | None = None,
+        render: Callable[[Setup, Block], object] | None = None) -> Summary:
     """Draw and evaluate every sample of the setup; ``on_block`` sees each block of the first
-    pass (CSV writing); a second pass (large runs) recomputes the same samples silently."""
+    pass (CSV writing), or with ``render`` what ``render(s, block)`` made of it (in the worker
+    processes of ``--jobs``); a second pass (large runs) recomputes the same samples silently."""
     first = [True]
 
     def source():
         if first[0]:
             first[0] = False
-            for block in blocks(s, progress):
+            for item in blocks(s, progress, render):
+                blk, shown = (item, item) if render is None else item
                 if on_block is not None:
-                    on_block(block)
-                yield block
+                    on_block(shown)
+                yield blk
         else:
             yield from blocks(s)
 

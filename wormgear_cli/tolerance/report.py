@@ -1,4 +1,4 @@
-"""The documents of ``wormgear tolerance``: the JSON report and the samples CSV (written and read).
+"""The documents of ``wormgear tolerance``: the JSON report and the samples CSV and NPY (written and read).
 
 CSV: a header ``sample,<varied columns>,<metrics>`` then one row per sample;
 varied keys by TOML path in the key's unit ([mm]; elements of an array key as
@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from wormgear_cli.errors import DataError
-from wormgear_cli.tolerance.engine import Block, Setup, Summary
+from wormgear_cli.tolerance.engine import Block, Setup, Summary, drawn_columns
 from wormgear_cli.tolerance.metrics import METRIC_SETS
 from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.units import ANGLE_UNITS, RAD_PER_UNIT
@@ -182,6 +182,98 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
             raise DataError(f"{name}: {expected_next - first} samples ({first} to {expected_next - 1}), expected "
                             f"{s.stop - s.start} (--samples {s.stop - s.start}): a part is missing at the end, or "
                             "give the run's --samples")
+
+
+# --- the compact samples file (.npy) ------------------------------------------------------------
+
+#: the first bytes of every .npy file (NumPy's format, version 1.0)
+NPY_MAGIC = b"\x93NUMPY"
+
+
+def npy_dtype(s: Setup) -> np.dtype:
+    """One record per sample: ``sample`` (int64), then each metric named with its unit (float64,
+    little-endian), as the CSV's metric columns.  The varied columns are not stored: they
+    come again, bit for bit, from the seed (:func:`~.engine.drawn_columns`)."""
+    return np.dtype([("sample", "<i8")] + [(f"{m}_{s.options.unit}", "<f8") for m in s.metrics])
+
+
+def npy_header(s: Setup) -> bytes:
+    """The .npy header of the run's samples (a structured array of :func:`npy_dtype`, one
+    record per sample of [start, stop)), written before the rows."""
+    import io
+
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(buf, {"descr": np.lib.format.dtype_to_descr(npy_dtype(s)),
+                                               "fortran_order": False, "shape": (s.stop - s.start,)})
+    return buf.getvalue()
+
+
+def npy_rows(s: Setup, block: Block) -> bytes:
+    """The records of one block (raw bytes after :func:`npy_header`)."""
+    rec = np.empty(block.stop - block.start, npy_dtype(s))
+    rec["sample"] = np.arange(block.start, block.stop)
+    for m in s.metrics:
+        rec[f"{m}_{s.options.unit}"] = block.metrics[m]
+    return rec.tobytes()
+
+
+def is_npy(path: Path) -> bool:
+    """True when ``path`` starts like a .npy file."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(len(NPY_MAGIC)) == NPY_MAGIC
+    except OSError:
+        return False
+
+
+def _open_npy(path: Path) -> np.ndarray:
+    name = str(path)
+    try:
+        data = np.load(path, mmap_mode="r", allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise DataError(f"{name}: not a samples file of wormgear tolerance --format npy ({exc})") from None
+    if data.ndim != 1 or data.dtype.names is None or data.dtype.names[0] != "sample":
+        raise DataError(f"{name}: not a samples file of wormgear tolerance --format npy (expected one record per "
+                        "sample starting with the field sample)")
+    return data
+
+
+def read_npy_header(path: Path) -> SamplesHeader:
+    """The metric set and unit of a .npy samples file (its varied columns are not stored: ``()``)."""
+    names = _open_npy(path).dtype.names[1:]
+    for unit in ANGLE_UNITS:
+        for key, metric_names in sorted(METRIC_SETS.items(), key=lambda kv: -len(kv[1])):
+            if names == tuple(f"{n}_{unit}" for n in metric_names):
+                return SamplesHeader((), key, unit)
+    raise DataError(f"{path}: fields {', '.join(names)}: expected the metrics of wormgear tolerance, in one unit")
+
+
+def read_npy(path: Path, s: Setup) -> Iterator[Block]:
+    """Blocks of a .npy samples file written for ``s`` (samples [s.start, s.stop)), the varied
+    columns drawn again from the seed.  Raises :class:`DataError` for other metrics or sample
+    numbers that are not those of ``s``."""
+    name = str(path)
+    data = _open_npy(path)
+    header = read_npy_header(path)
+    if header.metric_set != s.options.metrics:
+        raise DataError(f"{name}: holds the {header.metric_set} metrics, expected {s.options.metrics}")
+    scale = 1.0 if header.unit == s.options.unit else RAD_PER_UNIT[header.unit] / RAD_PER_UNIT[s.options.unit]
+    if data.shape[0] != s.stop - s.start:
+        raise DataError(f"{name}: {data.shape[0]} samples, expected {s.stop - s.start} (samples {s.start} to "
+                        f"{s.stop - 1})")
+    lo = s.start
+    while lo < s.stop:
+        hi = min(s.stop, (lo // BLOCK + 1) * BLOCK)
+        rec = np.array(data[lo - s.start:hi - s.start])
+        if not np.array_equal(rec["sample"], np.arange(lo, hi)):
+            bad = int(np.argmax(rec["sample"] != np.arange(lo, hi)))
+            raise DataError(f"{name}: record {lo - s.start + bad}: sample {int(rec['sample'][bad])}, expected "
+                            f"{lo + bad}")
+        mets = {m: rec[f"{m}_{header.unit}"].astype(float) for m in s.metrics}
+        if scale != 1.0:
+            mets = {m: v * scale for m, v in mets.items()}
+        yield Block(lo, hi, drawn_columns(s, lo, hi), mets)
+        lo = hi
 
 
 def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: str | None = None) -> dict:

@@ -120,18 +120,44 @@ def dense(spec, points: int, revs: float, unit: str, fmt: str, temperature_c: fl
     return SimulationReport(csv_text(cols, rows), curves)
 
 
+#: rows of the --at CSV formatted per task (by the worker processes of ``--jobs``)
+AT_ROWS_PER_TASK = 50_000
+
+
+def _at_lines(state, span: tuple[int, int]) -> str:
+    """CSV lines of rows [a, b) of the --at file with their simulated value (``j``: the index of
+    the simulated column when the file has it already, else None: appended)."""
+    import csv
+    import io
+
+    rows, sim, j = state
+    a, b = span
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    values = [fmt_number(v) for v in sim[a:b].tolist()]
+    if j is None:
+        for row, v in zip(rows[a:b], values):
+            w.writerow([*row, v])
+    else:
+        for row, v in zip(rows[a:b], values):
+            w.writerow([*row[:j], v, *row[j + 1:]])
+    return buf.getvalue()
+
+
 def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm: float = 0.0,
-            which: str = "spec", effects: dict | None = None) -> SimulationReport:
+            which: str = "spec", effects: dict | None = None, jobs: int = 1) -> SimulationReport:
     """The model at every row of the measurement CSV ``at`` (its load_Nm and temperature_C
     columns where present, else ``load_nm`` [N m] and ``temperature_c`` [degC]).
 
     CSV: the file's comments, header and rows as they are, plus (or replacing) the column
     simulated_error_<unit>; JSON: the simulated errors and, when the file has errors, the
-    mean and RMS of measured - simulated.  Raises the reader's errors for a bad file."""
+    mean and RMS of measured - simulated.  ``jobs`` > 1: the CSV rows are formatted by that many
+    worker processes (the same text).  Raises the reader's errors for a bad file."""
     import csv
     import io
 
     from wormgear_cli.analysis.simulate import simulate as run
+    from wormgear_cli.batch.pool import ordered_map
     from wormgear_cli.measurement.reader import read_measurement
 
     data = read_measurement(at, require_error=False)
@@ -154,18 +180,13 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
                                                "rms": float(np.sqrt(np.mean(resid * resid)))}
         return SimulationReport(json_text(doc), curves)
     header = list(data.header)
-    values = [fmt_number(v) for v in sim.tolist()]
     buf = io.StringIO()
     for line in data.comments:
         buf.write(line + "\n")
     w = csv.writer(buf, lineterminator="\n")
-    if column in header:  # re-simulating a file that already has the column: replace it
-        j = header.index(column)
-        w.writerow(header)
-        for row, v in zip(data.rows, values):
-            w.writerow([*row[:j], v, *row[j + 1:]])
-    else:
-        w.writerow(header + [column])
-        for row, v in zip(data.rows, values):
-            w.writerow([*row, v])
+    j = header.index(column) if column in header else None  # re-simulating a file that has the column: replaced
+    w.writerow(header if j is not None else header + [column])
+    spans = [(a, min(len(sim), a + AT_ROWS_PER_TASK)) for a in range(0, len(sim), AT_ROWS_PER_TASK)]
+    for text in ordered_map(_at_lines, (data.rows, sim, j), spans, jobs):
+        buf.write(text)
     return SimulationReport(buf.getvalue(), curves)
