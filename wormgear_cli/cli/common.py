@@ -94,10 +94,22 @@ def is_stdout(output: Path | None) -> bool:
 def announce_written(path: str | Path) -> None:
     """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
-    and only once the run's outputs are committed (a failed run claims no file)."""
-    from wormgear_cli.files import after_commit
+    and only once the run's outputs are committed (a failed run claims no file).  A path
+    naming a descriptor (``-o /dev/stdout``) is written like ``-``: nothing to announce."""
+    from wormgear_cli.errors import quote
+    from wormgear_cli.files import after_commit, names_a_descriptor
 
-    after_commit(lambda: typer.echo(f"wrote {path}", err=True))
+    if names_a_descriptor(path):
+        return
+    after_commit(lambda: say(f"wrote {quote(path)}"))
+
+
+def say(line: str) -> None:
+    """One message line on stderr (a stderr that is gone is not an error of its own)."""
+    try:
+        typer.echo(line, err=True)
+    except (OSError, ValueError):
+        pass
 
 
 def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
