@@ -89,14 +89,15 @@ def _escaped(c: str, quotes: bool) -> str:
     return f"\\u{n:04X}" if n <= 0xFFFF else f"\\U{n:08X}"
 
 
-def escape(text: str) -> str:
+def escape(text: str, keep: str = "") -> str:
     """``text`` with every character that is not printable written as an escape (``\\n``,
-    ``\\u001B``, ``\\u202E``); printable text, quotes and backslashes unchanged.  The last
-    guard on a whole message line: whatever a message holds, it stays one line and sends no
-    control sequence to a terminal or a log."""
+    ``\\u001B``, ``\\u202E``); printable text, quotes and backslashes unchanged, and the
+    characters of ``keep`` too (``"\\n"`` for text of several lines).  The last guard on a
+    whole message line: whatever a message holds, it stays one line and sends no control
+    sequence to a terminal or a log."""
     if text.isprintable():
         return text
-    return "".join(_escaped(c, False) for c in text)
+    return "".join(c if c in keep else _escaped(c, False) for c in text)
 
 
 def quote(name: object) -> str:

@@ -1257,7 +1257,7 @@ def check_memory(need: float, what: str, fix: str) -> None:
     """
     room, source = available_memory()
     if need > room:
-        raise UsageError(f"{what} needs about {size_text(need)} of memory, more than the {size_text(room)} "
+        raise UsageError(f"{what}: about {size_text(need)} of memory needed, more than the {size_text(room)} "
                          f"{source}; {fix} (or set "
                          f"{MEMORY_ENV}=SIZE if the machine can give more)")
 

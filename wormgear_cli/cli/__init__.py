@@ -45,11 +45,11 @@ def main() -> None:
     are replaced and the stop signals handled (:func:`wormgear_cli.files.start_cli`), so
     Ctrl-C, SIGTERM and SIGHUP are one line and exit 128 + N from the first instruction on;
     once the exit code is known, a late signal ends the process at once with it, quietly."""
-    from wormgear_cli import files
-
-    files.start_cli()
     code = 0
     try:
+        from wormgear_cli import files
+
+        files.start_cli()
         code = _run(sys.argv[1:])
     except SystemExit as exc:
         code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
@@ -57,14 +57,18 @@ def main() -> None:
             _say(str(exc.code))
     except KeyboardInterrupt:
         code = _stopped(2)
-    except files.RunStopped as exc:
-        code = _stopped(exc.signum)
-    except MemoryError:
-        code = 2
-        from wormgear_cli.files import OUT_OF_MEMORY
+    except BaseException as exc:
+        if type(exc).__name__ == "RunStopped":
+            code = _stopped(exc.signum)
+        elif isinstance(exc, MemoryError):
+            del exc  # release what the failed step held before saying so
+            code = 2
+            from wormgear_cli.files import OUT_OF_MEMORY
 
-        _say(f"error: {OUT_OF_MEMORY}")
-    files.settle(code)
+            _say(f"error: {OUT_OF_MEMORY}")
+        else:
+            raise
+    _settle(code)
     sys.exit(code)
 
 
@@ -81,14 +85,18 @@ def _run(args: list[str]) -> int:
     return 0
 
 
+def _settle(code: int) -> None:
+    files = sys.modules.get("wormgear_cli.files")
+    if files is not None and hasattr(files, "settle"):
+        files.settle(code)
+
+
 def _stopped(signum: int) -> int:
     """A stop signal outside a command's run (while the program loads): nothing was written."""
-    from wormgear_cli import files
-
-    code = 128 + signum
-    files.settle(code)
     import signal
 
+    code = 128 + signum
+    _settle(code)
     name = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
     _say(f"{name}; no output written")
     return code

@@ -17,6 +17,7 @@ from wormgear_cli.cli.common import (
     announce_written,
     emit,
     json_text,
+    warn_if_absurd,
 )
 
 
@@ -35,6 +36,13 @@ class RunNoiseKind(str, Enum):
     offset = "offset"
     drift = "drift"
 
+
+#: peak memory per row of ``synth`` (arrays of every column, the rounded copies and the CSV
+#: text; 7.1 GB for 10^7 rows, bench/bench_limits.py) [bytes]
+SYNTH_BYTES_PER_ROW = 750
+#: peak memory per output angle of ``simulate`` (both curves, their sources and the CSV text;
+#: 1.08 GB for 3 x 10^6 angles) [bytes]
+SIMULATE_BYTES_PER_POINT = 400
 
 PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
@@ -110,10 +118,17 @@ def simulate(
     from wormgear_cli.files import refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (plot, "--plot")])
+    if at is None:
+        from wormgear_cli.files import check_memory
+
+        check_memory(points * SIMULATE_BYTES_PER_POINT, f"simulate --points {points}", "lower --points")
     if at is not None:
         result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
     else:
         result = report.dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
+    c = result.curves
+    warn_if_absurd({"forward error": c["forward"], "reverse error": c["reverse"]} if c["kind"] == "dense"
+                   else {"simulated error": c["simulated"]}, drive, unit)
     if plot is not None:
         from wormgear_cli.files import refuse_input
         from wormgear_cli.plots.simulate import plot_simulation
@@ -219,10 +234,12 @@ def synth(
     for p in outs:
         refuse_input(p, [drive], "name")
     spec = load_spec(drive)
+    the_plan = Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
+                    dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s)
+    _check_synth_memory(the_plan)
     result = synthesize(
         spec,
-        plan=Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
-                  dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s),
+        plan=the_plan,
         effects=effects,
         noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
         seed=seed,
@@ -232,6 +249,7 @@ def synth(
         include_spec_effects=spec_effects,
         offset_arcsec=offset_arcsec,
     )
+    warn_if_absurd({"error": result.columns["error_arcsec"]}, drive, "arcsec")
     text = format_csv(result)
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_synthesis
@@ -241,3 +259,15 @@ def synth(
     emit(text, output, [drive])
     if truth is not None:
         emit(json_text(result.truth), truth, [drive] + ([output] if output is not None else []))
+
+
+def _check_synth_memory(plan) -> None:
+    """Refuse, before drawing, a plan whose rows the machine cannot hold (one line naming the options)."""
+    from wormgear_cli.files import check_memory
+
+    dense = plan.kind == "dense"
+    per_pass, option = (plan.points, "--points") if dense else (plan.targets, "--targets")
+    rows = per_pass * 2 * plan.runs * plan.cycles
+    sizes = f"{option} {per_pass} x --runs {plan.runs}" + (f" x --cycles {plan.cycles}" if plan.cycles > 1 else "")
+    check_memory(rows * SYNTH_BYTES_PER_ROW, f"synth: {sizes} x 2 directions ({rows:,} rows)",
+                 f"lower {option}, --runs or --cycles")

@@ -28,6 +28,9 @@ from wormgear_cli.cli.common import (
 
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
+#: peak memory per grid point of an (i, l) run that holds its grid (the size policy's figures,
+#: :mod:`wormgear_cli.analysis.sweep_limits`); CSV on stdout is streamed (constant) [bytes]
+_BYTES_PER_POINT = {"table": 160, "json": 3000, "csv": 115, "plot": 160}
 _SECONDS_PER_PARAM_POINT = 5e-3
 
 
@@ -114,6 +117,7 @@ def sweep(
         core.check_module(module_mm)
     n_i, n_l = (i_range.n if i_range is not None else 1), (l_range.n if l_range is not None else 1)
     limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, not is_stdout(output), k_n)
+    _check_memory(n_i * n_l, k_n, fmt, plot is not None, is_stdout(output))
     if plot is not None:
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
 
@@ -122,6 +126,18 @@ def sweep(
     sw = core.ratio_distance_sweep(load_spec(drive), i_range, l_range, hold=getattr(hold, "value", hold),
                                    module=module_mm, min_teeth=min_pinion_teeth)
     _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n)
+
+
+def _check_memory(total: int, k_n, fmt: str, plot: bool, to_stdout: bool) -> None:
+    """Refuse, before the grid is built, an (i, l) run that holds more points than the machine can."""
+    from wormgear_cli.analysis.sweep import shard_bounds
+    from wormgear_cli.files import check_memory
+
+    start, stop = shard_bounds(total, *k_n) if k_n else (0, total)
+    streamed = fmt == "csv" and to_stdout and not plot
+    per = max(0 if streamed else _BYTES_PER_POINT[fmt], _BYTES_PER_POINT["plot"] if plot else 0)
+    check_memory((stop - start) * per, f"sweep: {stop - start:,} grid points held for --format {fmt}"
+                 + (" and --plot" if plot else ""), "use fewer values or --shard K/N")
 
 
 def _require_matplotlib() -> None:
