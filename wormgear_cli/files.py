@@ -660,6 +660,18 @@ def settle(code: int | None) -> None:
         _EXIT_ON_STOP = code
 
 
+def ignore_stop_signals() -> None:
+    """Ignore :data:`STOP_SIGNALS` from now on: the last step of the command line's process
+    (an ``atexit`` hook, after the interpreter has joined its threads), so a signal while the
+    interpreter tears itself down neither prints nor changes the settled exit code (Python
+    resets handlers, not ignored signals, to the default action at that point)."""
+    for signum in STOP_SIGNALS:
+        try:
+            signal.signal(signum, signal.SIG_IGN)
+        except (OSError, ValueError):  # pragma: no cover - not the main thread
+            pass
+
+
 def start_cli() -> None:
     """What the command line does before anything else (cheap: no import beyond this module):
     :func:`guard_standard_streams`, then :func:`install_stop_handlers` for the whole process."""
@@ -816,7 +828,7 @@ def _undo(done: list, plan: list, exc: OSError) -> str:
     if lost:
         return line + "; already replaced, could not be put back: " + ", ".join(quote(p) for p in lost)
     if done:
-        return line + "; no output written (" + ", ".join(quote(r.dest) for r in done) + " put back as it was)"
+        return line + "; no output written (" + ", ".join(quote(r.dest) for r in done) + " restored)"
     return line
 
 

@@ -69,6 +69,11 @@ def main() -> None:
         else:
             raise
     _settle(code)
+    import atexit
+
+    files = sys.modules.get("wormgear_cli.files")
+    if files is not None and hasattr(files, "ignore_stop_signals"):
+        atexit.register(files.ignore_stop_signals)  # the interpreter's last steps: nothing to stop
     sys.exit(code)
 
 
