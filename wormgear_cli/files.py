@@ -1241,11 +1241,11 @@ def available_memory() -> tuple[int, str]:
 
 def size_text(n: float) -> str:
     """Bytes as people read them: ``1.2 GiB``, ``340 MiB``."""
-    for unit, scale in (("TiB", 1 << 40), ("GiB", 1 << 30), ("MiB", 1 << 20)):
+    for unit, scale in (("TiB", 1 << 40), ("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)):
         if n >= scale:
             value = n / scale
             return f"{value:.1f} {unit}" if value < 10 else f"{value:.0f} {unit}"
-    return f"{max(n, 0) / 1024:.0f} KiB"
+    return f"{max(n, 0):.0f} bytes"
 
 
 def check_memory(need: float, what: str, fix: str) -> None:

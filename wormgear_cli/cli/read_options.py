@@ -70,5 +70,5 @@ def check_rows_memory(data, bytes_per_row: int, command: str) -> None:
 
     rows = count_lines(data, MAX_FILE_BYTES)
     if rows:
-        check_memory(rows * bytes_per_row, f"{command}: {quote(data)} ({rows:,} rows)",
+        check_memory(rows * bytes_per_row, f"{command}: {quote(data)} ({rows:,} lines)",
                      "split the recording (by run or by time) and read the parts one by one")
