@@ -178,3 +178,16 @@ def test_settle_makes_a_late_signal_end_the_process_with_the_outcome(monkeypatch
     files._stop(signal.SIGTERM, None)
     files.settle(None)
     assert exits == [1]
+
+
+def test_an_exclusive_output_never_replaces_a_file_that_appeared_meanwhile(tmp_path):
+    """``wormgear new`` never overwrites: a file created between its check and its commit stays."""
+    path = tmp_path / "new.toml"
+    with pytest.raises(UsageError) as exc:
+        with output_transaction():
+            atomic_write(path, "template\n", exclusive=True)
+            path.write_text("someone else's\n")  # appears while the run goes on
+    assert exc.value.problems == [f"{path}: cannot write (File exists)"]
+    assert path.read_text() == "someone else's\n" and _names(tmp_path) == ["new.toml"]
+    atomic_write(tmp_path / "other.toml", "template\n", exclusive=True)  # alone, a new name: written
+    assert (tmp_path / "other.toml").read_text() == "template\n"
