@@ -12,13 +12,10 @@ import subprocess
 import tomllib
 
 import pytest
-from hypothesis import given
-from hypothesis import strategies as st
 
 from tests.support.paths import CONFIGS, MCH50
 from tests.support.processes import command, env
 from wormgear_cli.cli import app
-from wormgear_cli.errors import csv_cell, escape, quote, toml_key
 
 #: an OSC title, a colour and a bell, written as TOML escapes inside a quoted key
 HOSTILE_TOML = "\\u001b]0;PWNED\\u0007\\u001b[31m"
@@ -101,40 +98,6 @@ def test_a_formula_drive_name_is_not_a_formula_in_csv(tmp_path, runner):
     assert r.stdout.splitlines()[1].startswith("\"'=HYPERLINK(\"\"x\"\")\",arcsec,")
     r = runner.invoke(app, ["analyze", str(spec), "-f", "json"])
     assert '"drive": "=HYPERLINK(\\"x\\")"' in r.stdout  # JSON is data, not a spreadsheet: kept as it is
-
-
-@pytest.mark.parametrize("cell", ["=1+1", "+1+1", "-1+1", "@SUM(A1)", "\t=1", "\r=1"])
-def test_formula_prefixes_are_neutralised(cell):
-    out = csv_cell(cell)
-    assert out.startswith("'") and out.isprintable()
-
-
-@pytest.mark.parametrize("number", ["-3.5", "+1e3", "-0", "-inf", ".5e-3"])
-def test_numbers_in_text_cells_stay_numbers(number):
-    assert csv_cell(number) == number
-
-
-@given(st.text())
-def test_a_quoted_name_is_one_printable_line_and_a_toml_string(name):
-    q = quote(name)
-    assert q.isprintable()
-    if q != name:  # quoted: a TOML basic string holding exactly the name
-        assert tomllib.loads(f"k = {q}")["k"] == name
-    assert tomllib.loads(f"{toml_key(name)} = 1") == {name: 1}
-
-
-@given(st.text())
-def test_escape_keeps_printable_text_and_writes_out_the_rest(text):
-    out = escape(text)
-    assert out.isprintable()
-    if text.isprintable():
-        assert out == text
-
-
-def test_ordinary_names_are_left_alone():
-    assert quote("configs/mch50.toml") == "configs/mch50.toml"
-    assert quote("MCH50 rotary table") == "MCH50 rotary table"
-    assert quote(" padded") == '" padded"'
 
 
 def test_write_spec_header_cannot_carry_toml(tmp_path, runner):
