@@ -279,16 +279,23 @@ def check_output_path(path: str | Path | None, option: str = "-o") -> None:
     _destination(Path(path), option)
 
 
-def names_a_descriptor(path: str | Path | None) -> bool:
-    """True when ``path`` names one of this process's open descriptors (``/dev/stdout``,
-    ``/dev/fd/N``, ``/proc/self/fd/N``, or a symlink to one): it is written through that
-    descriptor at once, exactly like ``-``, and no "wrote" line is due."""
+def descriptor_of(path: str | Path | None) -> int | None:
+    """N when ``path`` names this process's descriptor N (``/dev/stdout``, ``/dev/fd/N``,
+    ``/proc/self/fd/N``, or a symlink to one), else None.  Such a path is written through the
+    descriptor at once, exactly like ``-`` (``/dev/stdout``: 1, so it *is* stdout)."""
     if path is None or str(path) == "-":
-        return False
+        return None
     try:
-        return _follow(Path(path), None)[1] is not None
+        fd = _follow(Path(path), None)[1]
     except UsageError:
-        return False
+        return None
+    return fd if fd is not None and fd >= 0 else None
+
+
+def names_a_descriptor(path: str | Path | None) -> bool:
+    """True when ``path`` names one of this process's descriptors (:func:`descriptor_of`):
+    written like ``-``, no "wrote" line is due."""
+    return descriptor_of(path) is not None
 
 
 def _destination(path: Path, option: str | None = None) -> tuple[str, Path, int | None]:

@@ -87,8 +87,13 @@ def write_stdout(data: str | bytes) -> None:
 
 
 def is_stdout(output: Path | None) -> bool:
-    """True when ``-o`` means stdout (not given, or ``-``)."""
-    return output is None or str(output) == "-"
+    """True when ``-o`` means stdout: not given, ``-``, or a path naming descriptor 1
+    (``/dev/stdout``, ``/proc/self/fd/1``: written exactly like ``-``, streamed where ``-`` is)."""
+    if output is None or str(output) == "-":
+        return True
+    from wormgear_cli.files import descriptor_of
+
+    return descriptor_of(output) == 1
 
 
 def announce_written(path: str | Path) -> None:

@@ -24,6 +24,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     json_text,
     render,
+    warn_if_absurd,
 )
 
 #: estimated seconds per point, for deciding whether to show a progress bar
@@ -161,6 +162,9 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, output, plot, k_n):
                 emit(report.joined(chunks), output, [drive])
             return
         data = sw.collect(start, stop, progress=bar.advance)
+    from wormgear_cli.analysis.sweep import ANGLE_COLUMNS
+
+    warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)
     if fmt == "csv":
         emit(report.collected_csv(sw, data, unit), output, [drive])
     elif fmt == "json":
