@@ -52,6 +52,7 @@ def test_ordinary_names_are_left_alone():
     ("tab\there\\", '"tab\\there\\\\"'),
     ("\u202eevil", '"\\u202Eevil"'),  # a bidirectional override
     ("tag\U000e0041", '"tag\\U000E0041"'),  # beyond the BMP: eight hex digits
+    ("last\uffff", '"last\\uFFFF"'),  # the BMP's last code point: still four
     ("\b\f\r", '"\\b\\f\\r"'),
 ])
 def test_names_with_control_characters_are_quoted_with_toml_escapes(name, shown):

@@ -81,7 +81,7 @@ _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?
 def _escaped(c: str, quotes: bool) -> str:
     if c in ('"', "\\"):
         return _SHORT[c] if quotes else c
-    if c.isprintable() or c == " ":
+    if c.isprintable():
         return c
     if c in _SHORT:
         return _SHORT[c]

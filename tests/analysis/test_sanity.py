@@ -80,3 +80,19 @@ def test_check_angles_counts_bad_values_and_ranks_the_largest():
     line = check_angles({"a": 2 * FULL_TURN, "b": -3 * FULL_TURN, "c": 0.1})
     assert line.startswith("b 1080 deg, a 720 deg: more than a full turn")
     assert check_angles({"none": np.array([])}) is None
+
+
+def test_check_angles_message_edges():
+    """The edges of the message: three names shown, the rest counted; a quantity after an empty
+    one still checked; a pair with one bad value counted; a missing value (None) is not finite."""
+    five = {name: (k + 2) * FULL_TURN for k, name in enumerate("abcde")}
+    assert check_angles(five).startswith("e 2160 deg, d 1800 deg, c 1440 deg and 2 more: ")
+    three = {name: (k + 2) * FULL_TURN for k, name in enumerate("abc")}
+    assert check_angles(three).startswith("c 1440 deg, b 1080 deg, a 720 deg: ")
+    assert check_angles({"empty": [], "big": [2 * FULL_TURN]}).startswith("big 720 deg: ")
+    with pytest.raises(SpecError, match=r"no finite pair \(1 of 2 values\) for"):
+        check_angles({"pair": [1.0, np.nan]})
+    with pytest.raises(SpecError, match=r"no finite one for"):
+        check_angles({"one": [np.nan]})
+    with pytest.raises(SpecError, match="no finite missing"):
+        check_angles({"missing": [1.0, None]})
