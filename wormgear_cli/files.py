@@ -29,6 +29,17 @@ Promises kept here (docs/reliability.md states them for users, and names the tes
   run (:class:`RunStopped`) from the first instruction; once a run's outcome is
   settled (its outputs committed), a late signal ends it at once with that
   outcome's exit code, quietly.
+* What the machine can hold (:func:`check_memory`): sizes are checked against the memory a
+  run may use before the work (``WORMGEAR_MEMORY`` overrides what the system says).
+
+Writing outputs from other modules (a stable API): inside a command run (the CLI wraps each
+in :func:`output_transaction`) write every file with :func:`atomic_write` or
+:func:`atomic_stream` -- it is staged at once (write errors surface early) and committed with
+every other output at the end; announce it with :func:`after_commit`.  ``exclusive=True``
+never replaces an existing file; ``alone=True`` commits that one file at once (a finished
+part of a resumable run), untouched by a later failure of the run.  Outside a transaction
+each call commits at once.  Inputs read with :func:`read_text_file` are protected from
+being overwritten by any output of the same run.
 """
 
 from __future__ import annotations
@@ -716,12 +727,13 @@ class _Transaction:
         self.committed: list = []  # callbacks run once every output is in place
         self.done: int | None = None
 
-    def commit(self, exit_code: int = 0) -> None:
+    def commit(self, exit_code: int | None = 0) -> None:
         """Write the special files, then put every staged file in place: each one is
         complete and synced before the first rename; a rename that fails puts back the
         files already replaced and raises UsageError (naming any file it could not put
         back).  Once in place the run is settled with ``exit_code`` (:func:`settle`): a
-        signal after that does not turn it into a failure."""
+        signal after that does not turn it into a failure (None: a file committed alone,
+        the run goes on)."""
         dest = None
         try:
             # special files first, interruptible (opening a FIFO waits for its reader)
@@ -730,7 +742,8 @@ class _Transaction:
             with signals_deferred():  # the renames are quick and never cut in half
                 self._replace_all()
                 self.done = exit_code
-                settle(exit_code)
+                if exit_code is not None:  # a run's outputs: its outcome is settled
+                    settle(exit_code)
         except BaseException as exc:
             self.discard()
             if isinstance(exc, OSError):
@@ -982,7 +995,7 @@ def _sweep_once(folder: Path) -> None:
 
 
 def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option: str | None = None,
-                 exclusive: bool = False) -> None:
+                 exclusive: bool = False, alone: bool = False) -> None:
     """Write ``data`` to ``path`` so that readers never see a half-written file and a
     failed run leaves nothing behind.
 
@@ -1009,6 +1022,10 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
     exclusive : bool
         ``path`` must not exist: the commit fails rather than replace a file that
         appeared meanwhile (``wormgear new``).
+    alone : bool
+        Commit this file at once, even inside the run's :func:`output_transaction`
+        (a finished part of a resumable run must survive a later failure); still
+        staged, synced and renamed, but not undone if the run fails later.
 
     Raises
     ------
@@ -1019,18 +1036,19 @@ def atomic_write(path: str | Path, data: str | bytes, inputs: tuple = (), option
     StdoutClosed
         ``path`` is a pipe whose reader went away.
     """
-    with atomic_stream(path, inputs, option, exclusive) as write:
+    with atomic_stream(path, inputs, option, exclusive, alone) as write:
         write(data)
 
 
 @contextmanager
-def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = None, exclusive: bool = False):
+def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = None, exclusive: bool = False,
+                  alone: bool = False):
     """:func:`atomic_write` for content produced piece by piece: yields ``write(chunk)``
     (str or bytes) that appends to the staged file, so a large output is never held in
     memory whole.  The staged file becomes ``path`` when the block ends without an error
     (inside :func:`output_transaction`: at commit); on any error it is removed.  A special
     file is written at commit (its content is held until then); a descriptor at once.
-    Raises as :func:`atomic_write`.
+    ``exclusive`` and ``alone`` as for :func:`atomic_write`.  Raises as :func:`atomic_write`.
     """
     path = Path(path)
     kind, dest, fd = _destination(path, option)
@@ -1042,7 +1060,7 @@ def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = Non
         pieces: list[bytes] = []
         yield lambda chunk: pieces.append(_as_bytes(chunk))
         blob = b"".join(pieces)
-        if _CURRENT is not None:
+        if _CURRENT is not None and not alone:
             _CURRENT.direct.append((path, blob))
             return
         try:
@@ -1052,11 +1070,11 @@ def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = Non
                 raise StdoutClosed() from None
             raise UsageError(f"{quote(path)}: cannot write ({exc.strerror})") from None
         return
-    tx = _CURRENT if _CURRENT is not None else _Transaction()  # alone: committed at the end of the block
+    tx = _CURRENT if _CURRENT is not None and not alone else _Transaction()  # else: committed at the block's end
     with _staged(path, dest, tx, exclusive) as write:
         yield write
     if tx is not _CURRENT:
-        tx.commit()
+        tx.commit(None)
 
 
 @contextmanager

@@ -191,3 +191,15 @@ def test_an_exclusive_output_never_replaces_a_file_that_appeared_meanwhile(tmp_p
     assert path.read_text() == "someone else's\n" and _names(tmp_path) == ["new.toml"]
     atomic_write(tmp_path / "other.toml", "template\n", exclusive=True)  # alone, a new name: written
     assert (tmp_path / "other.toml").read_text() == "template\n"
+
+
+def test_a_file_committed_alone_survives_a_later_failure_of_the_run(tmp_path):
+    """For resumable runs: a finished part is committed at once (still staged, synced and
+    renamed) and stays when the run fails afterwards; the run's other outputs do not."""
+    with pytest.raises(RuntimeError):
+        with output_transaction():
+            atomic_write(tmp_path / "part-1.csv", "1\n", alone=True)
+            assert (tmp_path / "part-1.csv").read_text() == "1\n"  # in place before the run ends
+            atomic_write(tmp_path / "summary.json", "{}\n")
+            raise RuntimeError("the run fails later")
+    assert _names(tmp_path) == ["part-1.csv"]

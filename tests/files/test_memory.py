@@ -49,6 +49,14 @@ def test_a_measurement_with_more_rows_than_memory_is_refused_naming_them(tmp_pat
                              "give more)\n")
 
 
+def test_simulate_at_counts_the_rows_of_its_file(runner, monkeypatch):
+    monkeypatch.setenv("WORMGEAR_MEMORY", "100K")
+    data = CONFIGS / "mch50-warm.csv"
+    r = runner.invoke(app, ["simulate", str(MCH50), "--at", str(data)])
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: simulate --at: {data} (725 lines): about 460 KiB of memory needed")
+
+
 def test_the_sweep_grid_is_checked_too(runner, monkeypatch):
     monkeypatch.setenv("WORMGEAR_MEMORY", "10M")
     r = runner.invoke(app, ["sweep", str(MCH50), "--i", "2:10:300", "--l-mm", "100:300:300", "-f", "json"])

@@ -43,6 +43,9 @@ SYNTH_BYTES_PER_ROW = 750
 #: peak memory per output angle of ``simulate`` (both curves, their sources and the CSV text;
 #: 1.08 GB for 3 x 10^6 angles) [bytes]
 SIMULATE_BYTES_PER_POINT = 400
+#: peak memory per line of a ``simulate --at`` file (its rows read, simulated and written back
+#: with their cells; 590 MB for 10^6 rows) [bytes]
+SIMULATE_AT_BYTES_PER_ROW = 650
 
 PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
@@ -122,6 +125,10 @@ def simulate(
         from wormgear_cli.files import check_memory
 
         check_memory(points * SIMULATE_BYTES_PER_POINT, f"simulate --points {points}", "lower --points")
+    else:
+        from wormgear_cli.cli.read_options import check_rows_memory
+
+        check_rows_memory(at, SIMULATE_AT_BYTES_PER_ROW, "simulate --at")
     if at is not None:
         result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects)
     else:
