@@ -87,6 +87,8 @@ def test_check_angles_message_edges():
     one still checked; a pair with one bad value counted; a missing value (None) is not finite."""
     five = {name: (k + 2) * FULL_TURN for k, name in enumerate("abcde")}
     assert check_angles(five).startswith("e 2160 deg, d 1800 deg, c 1440 deg and 2 more: ")
+    four = {name: (k + 2) * FULL_TURN for k, name in enumerate("abcd")}
+    assert check_angles(four).startswith("d 1800 deg, c 1440 deg, b 1080 deg and 1 more: ")
     three = {name: (k + 2) * FULL_TURN for k, name in enumerate("abc")}
     assert check_angles(three).startswith("c 1440 deg, b 1080 deg, a 720 deg: ")
     assert check_angles({"empty": [], "big": [2 * FULL_TURN]}).startswith("big 720 deg: ")
