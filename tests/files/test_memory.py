@@ -73,10 +73,10 @@ def _address_space(limit: int):
 
 
 def test_a_memory_error_is_one_line_and_exit_2(tmp_path):
-    """Under ``ulimit -v`` (1.2 GB) with the estimate overridden (WORMGEAR_MEMORY), numpy runs
+    """Under ``ulimit -v`` (700 MiB) with the estimate overridden (WORMGEAR_MEMORY), numpy runs
     out of memory: one line, exit 2, no file."""
     r = run(["synth", MCH50, "--plan", "dense", "--points", "2000000", "--runs", "2", "-o", "d.csv"], tmp_path,
-            env=env(WORMGEAR_MEMORY="1T"), preexec_fn=_address_space(1200 * 1024 * 1024))
+            env=env(WORMGEAR_MEMORY="1T"), preexec_fn=_address_space(700 * 1024 * 1024))
     assert r.returncode == 2, r.stderr.decode()[-2000:]
     assert r.stderr.decode() == f"error: {files.OUT_OF_MEMORY}\n"
     assert list(tmp_path.iterdir()) == []
@@ -86,7 +86,7 @@ def test_the_address_space_limit_is_seen_and_named(tmp_path):
     """A variant: without the override, the same run under ``ulimit -v`` is refused before the
     work, naming that limit."""
     r = run(["synth", MCH50, "--plan", "dense", "--points", "2000000", "--runs", "2", "-o", "d.csv"], tmp_path,
-            preexec_fn=_address_space(1200 * 1024 * 1024))
+            preexec_fn=_address_space(700 * 1024 * 1024))
     assert r.returncode == 2
     err = r.stderr.decode()
     assert err.startswith("error: synth: --points 2000000 x --runs 2 x 2 directions (8,000,000 rows): about 5.6 GiB")
