@@ -97,6 +97,13 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                      "gear_deformation_te", "gear_te", "gear_te_max", "gear_backlash", "gear_backlash_max",
                      "pitch_arc_to_angle", "_bracket_constants", "kinematic_bracket_derivatives",
                      "load_factor_derivatives", "kinematic_peak", "gear_te_max_fast", "involute_stage")),
+    # the one quoting of names (issue 23, item 9): escapes, TOML quoting, CSV formula cells
+    "quoting": (("wormgear_cli/errors.py",),
+                ("tests/test_errors.py",),
+                ("_escaped", "escape", "quote", "toml_key", "csv_cell")),
+    # the guard on the model's results (issue 23, item 11)
+    "sanity": (("wormgear_cli/analysis/sanity.py",),
+               ("tests/analysis/test_sanity.py",), None),
 }
 
 

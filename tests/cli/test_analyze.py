@@ -187,6 +187,18 @@ def test_new_writes_a_valid_template_and_never_overwrites(runner, tmp_path):
     assert path.read_bytes() == before
 
 
+def test_new_dash_writes_the_template_to_stdout(runner, tmp_path, monkeypatch):
+    """Issue 23, also noted: ``new -`` created a file named "-"; - is stdout everywhere."""
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["new", "-", "--name", "bench table"])
+    assert r.exit_code == 0 and r.stderr == ""
+    assert r.stdout.startswith("# wormgear drive spec.") and 'name = "bench table"' in r.stdout
+    assert list(tmp_path.iterdir()) == []
+    spec = tmp_path / "from-stdout.toml"
+    spec.write_text(r.stdout)
+    assert run_json(runner, "analyze", str(spec), "-f", "json")["drive"] == "bench table"
+
+
 # --- help and entry points ------------------------------------------------------------------------------
 
 

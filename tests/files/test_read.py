@@ -36,7 +36,9 @@ def test_a_regular_file_over_the_limit_is_refused_from_its_size_without_reading(
 
 def test_the_default_limit_is_the_documented_constant():
     assert MAX_INPUT_BYTES == 16 * 1024 * 1024
-    assert read_text_file.__defaults__[-1] == MAX_INPUT_BYTES
+    import inspect
+
+    assert inspect.signature(read_text_file).parameters["max_bytes"].default == MAX_INPUT_BYTES
 
 
 @pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom"])

@@ -28,7 +28,15 @@ def _env():
     return env
 
 
+def _default_stop_signals():
+    """In the child: SIGHUP and SIGINT as a terminal session has them, whatever this test run
+    inherited (under ``nohup`` SIGHUP is ignored, and an ignored signal stays ignored)."""
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start(args, cwd, **kw):
+    kw.setdefault("preexec_fn", _default_stop_signals)
     return subprocess.Popen([sys.executable, "-m", "wormgear_cli", *args], cwd=cwd, env=_env(),
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, **kw)
 

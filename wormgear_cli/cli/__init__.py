@@ -42,9 +42,45 @@ def __getattr__(name: str):
 
 
 def main() -> None:
+    """The ``wormgear`` command.  Before anything heavy is imported: closed standard streams
+    are replaced and the stop signals handled (:func:`wormgear_cli.files.start_cli`), so
+    Ctrl-C, SIGTERM and SIGHUP are one line and exit 128 + N from the first instruction on;
+    once the exit code is known, a late signal ends the process at once with it, quietly."""
+    code = 0
+    try:
+        from wormgear_cli import files
+
+        files.start_cli()
+        code = _run(sys.argv[1:])
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        if not isinstance(exc.code, (int, type(None))):
+            _say(str(exc.code))
+    except KeyboardInterrupt:
+        code = _stopped(2)
+    except BaseException as exc:
+        if type(exc).__name__ == "RunStopped":
+            code = _stopped(exc.signum)
+        elif isinstance(exc, MemoryError):
+            del exc  # release what the failed step held before saying so
+            code = 2
+            from wormgear_cli.files import OUT_OF_MEMORY
+
+            _say(f"error: {OUT_OF_MEMORY}")
+        else:
+            raise
+    _settle(code)
+    import atexit
+
+    files = sys.modules.get("wormgear_cli.files")
+    if files is not None and hasattr(files, "ignore_stop_signals"):
+        atexit.register(files.ignore_stop_signals)  # the interpreter's last steps: nothing to stop
+    sys.exit(code)
+
+
+def _run(args: list[str]) -> int:
     from wormgear_cli.cli._app import single_command_app
 
-    args = sys.argv[1:]
     name = args[0] if args and not args[0].startswith("-") else None
     if name in COMMAND_MODULES:
         _register([COMMAND_MODULES[name]])
@@ -52,6 +88,32 @@ def main() -> None:
     else:
         single = None
     (single or __getattr__("app"))(prog_name="wormgear")
+    return 0
+
+
+def _settle(code: int) -> None:
+    files = sys.modules.get("wormgear_cli.files")
+    if files is not None and hasattr(files, "settle"):
+        files.settle(code)
+
+
+def _stopped(signum: int) -> int:
+    """A stop signal outside a command's run (while the program loads): nothing was written."""
+    import signal
+
+    code = 128 + signum
+    _settle(code)
+    name = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
+    _say(f"{name}; no output written")
+    return code
+
+
+def _say(line: str) -> None:
+    try:
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 __all__ = ["app", "main", "COMMAND_MODULES"]

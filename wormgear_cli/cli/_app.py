@@ -10,54 +10,19 @@ import typer
 from typer.core import TyperGroup
 
 from wormgear_cli.errors import WormgearError
-
-
-class RunStopped(BaseException):
-    """SIGTERM or SIGHUP arrived: the run stops like Ctrl-C (outputs discarded).
-
-    A BaseException, so ``except Exception`` in command code cannot swallow it."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
-
-
-def _raise_stopped(signum, frame):
-    raise RunStopped(signum)
-
-
-def _install_stop_handlers():
-    """Make SIGTERM and SIGHUP raise :class:`RunStopped` (main thread only; a signal the
-    parent set to be ignored, as ``nohup`` does for SIGHUP, stays ignored).  Returns a
-    function restoring the previous handlers."""
-    import signal
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        return lambda: None
-    old = {}
-    for name in ("SIGTERM", "SIGHUP"):
-        signum = getattr(signal, name, None)
-        if signum is None:
-            continue
-        previous = signal.getsignal(signum)
-        if previous == signal.SIG_IGN:
-            continue
-        old[signum] = previous
-        signal.signal(signum, _raise_stopped)
-
-    def restore():
-        for signum, handler in old.items():
-            signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
-
-    return restore
+from wormgear_cli.files import (
+    OUT_OF_MEMORY,
+    RunStopped,  # re-exported: the class lives with the signal handlers
+)
 
 
 def _say(line: str) -> None:
     """One line on stderr; a stderr that is gone (the terminal closed: SIGHUP) is not an error
     of its own, the exit code still tells."""
+    from wormgear_cli.errors import escape
+
     try:
-        typer.echo(line, err=True)
+        typer.echo(escape(line), err=True)
     except (OSError, ValueError):
         pass
 
@@ -98,13 +63,25 @@ class WormgearGroup(TyperGroup):
             raise
         except UsageError as exc:  # an option of the program itself (wormgear --bogus)
             raise _usage_error_exit(exc) from None
+        except KeyboardInterrupt:  # Ctrl-C while the options are read: nothing was written
+            raise _stopped_exit(2) from None
+        except RunStopped as exc:
+            raise _stopped_exit(exc.signum) from None
 
     def invoke(self, ctx):
         from typer._click.exceptions import NoArgsIsHelpError, UsageError
 
-        from wormgear_cli.files import BROKEN_PIPE_EXIT, StdoutClosed, flush_stdout, output_transaction
+        from wormgear_cli.files import (
+            BROKEN_PIPE_EXIT,
+            StdoutClosed,
+            flush_stdout,
+            install_stop_handlers,
+            output_transaction,
+        )
 
-        restore = _install_stop_handlers()
+        restore = install_stop_handlers()
+        tx = None
+        out_of_memory = False
         try:
             # every file a command writes is committed together at its end: a failed
             # run (user error, bug, Ctrl-C, SIGTERM, SIGHUP, closed stdout) leaves no
@@ -117,7 +94,7 @@ class WormgearGroup(TyperGroup):
                 except typer.Exit as stop:
                     flush_stdout()
                     if stop.exit_code in (0, 1):  # done, or a check that ran and failed: its report stands
-                        tx.commit()
+                        tx.commit(stop.exit_code)
                     raise  # exit 2 (bad input): no output file, as for an error raised
         except WormgearError as exc:
             for line in exc.problems:
@@ -129,12 +106,12 @@ class WormgearGroup(TyperGroup):
             raise _usage_error_exit(exc) from None
         except StdoutClosed:
             raise typer.Exit(BROKEN_PIPE_EXIT) from None
-        except KeyboardInterrupt:
-            _say("interrupted; no output written")
-            raise typer.Exit(130) from None
-        except RunStopped as exc:
-            _say(f"stopped by {_signal_name(exc.signum)}; no output written")
-            raise typer.Exit(128 + exc.signum) from None
+        except (KeyboardInterrupt, RunStopped) as exc:
+            if tx is not None and tx.done is not None:  # after the commit: the outputs stand
+                raise typer.Exit(tx.done) from None
+            raise _stopped_exit(getattr(exc, "signum", 2)) from None
+        except MemoryError:
+            out_of_memory = True  # said below, once this frame's arrays are released
         except OSError as exc:  # stdout written outside write_stdout (help text, a terminal)
             code = _output_error_exit(exc)
             if code is None:
@@ -142,6 +119,9 @@ class WormgearGroup(TyperGroup):
             raise typer.Exit(code) from None
         finally:
             restore()
+        if out_of_memory:
+            _say(f"error: {OUT_OF_MEMORY}")
+            raise typer.Exit(2)
 
     def main(self, *args, **kwargs):
         try:
@@ -153,6 +133,20 @@ class WormgearGroup(TyperGroup):
             raise SystemExit(code) from None
 
 
+def _stopped_exit(signum: int) -> typer.Exit:
+    """Ctrl-C (SIGINT), SIGTERM or SIGHUP stopped the run before its outputs were committed:
+    one line, exit 128 + N; a further signal while it exits ends the process at once."""
+    from wormgear_cli.files import settle
+
+    code = 128 + signum
+    settle(code)
+    if signum == 2:
+        _say("interrupted; no output written")
+    else:
+        _say(f"stopped by {_signal_name(signum)}; no output written")
+    return typer.Exit(code)
+
+
 def _output_error_exit(exc: OSError):
     """Exit code for a failed write to stdout (after one stderr line), None if ``exc`` is
     not an output error."""
@@ -160,7 +154,7 @@ def _output_error_exit(exc: OSError):
 
     from wormgear_cli.files import BROKEN_PIPE_EXIT, StdoutClosed, UsageError, _stdout_failed
 
-    if exc.errno not in (errno.EPIPE, errno.ENOSPC, errno.EIO, errno.EFBIG,
+    if exc.errno not in (errno.EPIPE, errno.ENOSPC, errno.EIO, errno.EFBIG, errno.EBADF,
                          getattr(errno, "EDQUOT", -1)):
         return None
     try:

@@ -19,7 +19,9 @@ from wormgear_cli.cli.common import (
     fmt_angle,
     json_text,
     render,
+    say,
     stdout_is_terminal,
+    warn_if_absurd,
 )
 
 
@@ -44,6 +46,7 @@ def analyze(
 
     spec = load_spec(drive)
     result = run(spec)
+    warn_if_absurd(result.angles, drive)
     unit = getattr(unit, "value", unit)
     fmt = getattr(format, "value", format)
     if fmt == "csv":
@@ -153,7 +156,9 @@ def check(
     checks = [check_file(path) for path in drives]
     for c in checks:
         for p in c.problems:
-            typer.echo(f"error: {p}", err=True)
+            say(f"error: {p}")
+        for w in c.warnings:
+            say(f"warning: {w}")
     invalid = any(not c.valid for c in checks)
     failed = any(c.valid and not c.passed for c in checks)
     results = [c.to_dict() for c in checks]
@@ -168,7 +173,9 @@ def check(
             width = shutil.get_terminal_size((80, 24)).columns
             lines = [textwrap.fill(ln, width, subsequent_indent="    ", break_long_words=False,
                                    break_on_hyphens=False) for ln in lines]
-        emit("\n".join(lines) + "\n", output, drives)
+        from wormgear_cli.errors import escape  # a file name is shown, never run by the terminal
+
+        emit("\n".join(escape(ln, "\n") for ln in lines) + "\n", output, drives)
     if invalid:
         raise typer.Exit(2)
     if failed:
@@ -177,29 +184,34 @@ def check(
 
 @app.command()
 def new(
-    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
-                                           metavar="NEW.toml")],
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist); - writes the template to "
+                                         "stdout.", show_default=False, metavar="NEW.toml")],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
     """Write a complete, commented drive template to start from.
 
     The template is the paper's MCH50 drive (the values of configs/mch50.toml:
     Table 1, the paper's loads, and that file's assumptions); derived keys are
-    comments holding their derived value.  It never overwrites an existing file.
+    comments holding their derived value.  It never overwrites an existing file
+    (not even one that appears while it is written).  - (or /dev/stdout) writes
+    it to stdout, as everywhere else.
 
     Example: wormgear new my-table.toml && wormgear analyze my-table.toml
     """
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.files import atomic_write
+    from wormgear_cli.errors import UsageError, quote
+    from wormgear_cli.files import atomic_write, names_a_descriptor
     from wormgear_cli.spec.template import template
 
-    if path.exists() or path.is_symlink():
-        raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    if str(path) == "-" or names_a_descriptor(path):
+        emit(template(name or "my drive"), path)
+        return
+    if path.exists() or path.is_symlink():
+        raise UsageError(f"{quote(path)}: already exists; wormgear new never overwrites a file")
     from wormgear_cli.cli.common import announce_written
     from wormgear_cli.files import after_commit
 
-    atomic_write(path, template(name or path.stem))
+    atomic_write(path, template(name or quote(path.stem)), exclusive=True)
     announce_written(path)
-    after_commit(lambda: typer.echo(f"edit it, then run: wormgear check {path}", err=True))
+    after_commit(lambda: say(f"edit it, then run: wormgear check {quote(path)}"))

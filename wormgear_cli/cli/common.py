@@ -95,17 +95,56 @@ def write_stdout(data: str | bytes) -> None:
 
 
 def is_stdout(output: Path | None) -> bool:
-    """True when ``-o`` means stdout (not given, or ``-``)."""
-    return output is None or str(output) == "-"
+    """True when ``-o`` means stdout: not given, ``-``, or a path naming descriptor 1
+    (``/dev/stdout``, ``/proc/self/fd/1``: written exactly like ``-``, streamed where ``-`` is)."""
+    if output is None or str(output) == "-":
+        return True
+    from wormgear_cli.files import descriptor_of
+
+    return descriptor_of(output) == 1
 
 
 def announce_written(path: str | Path) -> None:
     """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
-    and only once the run's outputs are committed (a failed run claims no file)."""
-    from wormgear_cli.files import after_commit
+    and only once the run's outputs are committed (a failed run claims no file).  A path
+    naming a descriptor (``-o /dev/stdout``) is written like ``-``: nothing to announce."""
+    from wormgear_cli.errors import quote
+    from wormgear_cli.files import after_commit, names_a_descriptor
 
-    after_commit(lambda: typer.echo(f"wrote {path}", err=True))
+    if names_a_descriptor(path):
+        return
+    after_commit(lambda: say(f"wrote {quote(path)}"))
+
+
+def say(line: str) -> None:
+    """One message line on stderr, control characters written out
+    (:func:`wormgear_cli.errors.escape`); a stderr that is gone is not an error of its own."""
+    from wormgear_cli.errors import escape
+
+    try:
+        typer.echo(escape(line), err=True)
+    except (OSError, ValueError):
+        pass
+
+
+def warn_if_absurd(angles: dict, source, unit: str = "rad") -> None:
+    """The guard on every result: angles (name -> value or array, in ``unit``) that are not
+    finite stop the run (one error line, exit 2); magnitudes beyond a full turn are one
+    warning line (:func:`wormgear_cli.analysis.sanity.check_angles`)."""
+    from wormgear_cli.analysis.sanity import check_angles
+    from wormgear_cli.units import RAD_PER_UNIT
+
+    scale = RAD_PER_UNIT[unit]
+    warning = check_angles({k: v if scale == 1.0 else _scaled(v, scale) for k, v in angles.items()}, str(source))
+    if warning is not None:
+        say(f"warning: {warning}")
+
+
+def _scaled(v, scale: float):
+    import numpy as np
+
+    return np.asarray(v, dtype=float) * scale
 
 
 def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
@@ -215,14 +254,36 @@ def no_color() -> bool:
     return bool(os.environ.get("NO_COLOR"))
 
 
+_SAFE_CONSOLE = None
+
+
+def console(**kwargs):
+    """A rich Console (same arguments) that never sends a control character of its text: every
+    text segment passes :func:`wormgear_cli.errors.escape` (line ends kept), so a name holding
+    an escape sequence shows as ``\\u001B[31m`` instead of recolouring or retitling the
+    terminal; rich's own styles (its segments' styles) are drawn as usual."""
+    global _SAFE_CONSOLE
+    if _SAFE_CONSOLE is None:
+        from rich.console import Console
+        from rich.segment import Segment
+
+        from wormgear_cli.errors import escape
+
+        class SafeConsole(Console):
+            def _render_buffer(self, buffer):
+                return super()._render_buffer(s if s.control else Segment(escape(s.text, "\n"), s.style, s.control)
+                                              for s in buffer)
+
+        _SAFE_CONSOLE = SafeConsole
+    return _SAFE_CONSOLE(**kwargs)
+
+
 def terminal_console(stderr: bool = False, width: int | None = None):
     """A rich console for a terminal: styled unless NO_COLOR is set, in which case it writes
     no escape code at all (``color_system=None`` drops bold, italic and dim too)."""
-    from rich.console import Console
-
     if no_color():
-        return Console(stderr=stderr, highlight=False, width=width, color_system=None, no_color=True)
-    return Console(stderr=stderr, highlight=False, width=width)
+        return console(stderr=stderr, highlight=False, width=width, color_system=None, no_color=True)
+    return console(stderr=stderr, highlight=False, width=width)
 
 
 class Progress:
@@ -258,17 +319,22 @@ class Progress:
 
 def _rich_table(t):
     """A :class:`wormgear_cli.output.tables.Table` as a rich Table (text is never read as markup)."""
-    from rich.markup import escape
+    from rich.markup import escape as markup
     from rich.table import Table
     from rich.text import Text
 
+    from wormgear_cli.errors import escape as printable
     from wormgear_cli.output.tables import Cell
+
+    def escape(text):  # rich markup escaped, control characters written out (before the layout)
+        return markup(printable(text, "\n"))
 
     out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header)
     for c in t.columns:
         out.add_column(escape(c.header), justify=c.justify)
     for row in t.rows:
-        out.add_row(*(Text(c.text, style=c.style or "") if isinstance(c, Cell) else escape(str(c)) for c in row))
+        out.add_row(*(Text(printable(c.text, "\n"), style=c.style or "") if isinstance(c, Cell) else escape(str(c))
+                      for c in row))
     if t.caption:
         out.caption = escape(t.caption)
         out.caption_justify = "left"
@@ -352,20 +418,18 @@ def render(renderables: list, output: Path | None, inputs: Iterable = ()) -> Non
     (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
     import io
 
-    from rich.console import Console
-
     if output is None and stdout_is_terminal():
         probe = terminal_console(width=text_width() if "COLUMNS" in os.environ else None)
         buf = io.StringIO()
-        console = Console(file=buf, width=probe.width, force_terminal=True, highlight=False,
-                          color_system=None if no_color() else probe.color_system, no_color=no_color())
-        _draw(console, renderables, console.width)
+        out = console(file=buf, width=probe.width, force_terminal=True, highlight=False,
+                      color_system=None if no_color() else probe.color_system, no_color=no_color())
+        _draw(out, renderables, out.width)
         write_stdout(buf.getvalue())
         return
     buf = io.StringIO()
     width = text_width()
-    console = Console(file=buf, width=width, no_color=True, color_system=None,
-                      highlight=False, force_terminal=False, soft_wrap=False)
-    _draw(console, renderables, width)
+    out = console(file=buf, width=width, no_color=True, color_system=None,
+                  highlight=False, force_terminal=False, soft_wrap=False)
+    _draw(out, renderables, width)
     text = "\n".join(line.rstrip() for line in buf.getvalue().splitlines()) + "\n"  # no padding spaces
     emit(text, output, inputs)

@@ -24,10 +24,19 @@ from wormgear_cli.cli.common import (
     stderr_is_terminal,
     terminal_console,
 )
-from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
+from wormgear_cli.cli.read_options import (
+    AngleUnitOption,
+    ErrorUnitOption,
+    MapOption,
+    check_rows_memory,
+    read_options,
+)
 
 #: rows above which a progress display is shown (when stderr is a terminal)
 PROGRESS_ROWS = 20_000
+#: peak memory per row of a measurement file in ``diagnose`` (the model's columns, the fits and
+#: their resamples; 1.4 GB for 10^6 rows, bench/bench_limits.py) [bytes]
+DIAGNOSE_BYTES_PER_ROW = 1500
 
 #: --unit of diagnose: the table and the plot follow it; the JSON report keeps arcsec (keys end in _arcsec)
 DiagnoseUnitOption = Annotated[AngleUnit, typer.Option(
@@ -109,6 +118,7 @@ def diagnose(
         raise UsageError(f"{write_spec}: --write-spec writes a drive spec; expected a file name ending in .toml")
 
     spec = load_spec(drive)
+    check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
     meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit))
     options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
                    jobs=jobs_count(jobs),

@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import OutputOption, TableJsonFormat, emit, json_text, render
+from wormgear_cli.cli.common import OutputOption, TableJsonFormat, emit, json_text, render, say
 
 
 @app.command()
@@ -55,9 +55,9 @@ def grade(
             opt = f"--diameter-mm/--module-mm (z = d/m = {diameter_mm:g}/{module_mm:g} = {z})"
         raise UsageError(f"{opt}: {text}") from None
     if teeth is not None and abs(teeth * module_mm - diameter_mm) > 0.5 * module_mm:
-        typer.echo(f"warning: --teeth {teeth} with --module-mm {module_mm:g} gives d = z m = {teeth * module_mm:g} "
+        say(f"warning: --teeth {teeth} with --module-mm {module_mm:g} gives d = z m = {teeth * module_mm:g} "
                    f"mm, not the --diameter-mm {diameter_mm:g} (helical gears: d = z m_n / cos(beta)); the "
-                   "tolerances use the given diameter", err=True)
+                   "tolerances use the given diameter")
     doc = {"standard": "ISO 1328-1:2013", "grade": grade, "module_mm": module_mm, "diameter_mm": diameter_mm,
            "face_width_mm": face_width_mm, "teeth": z,
            "f_pT_um": tol.f_pT, "F_pT_um": tol.F_pT, "f_HalphaT_um": tol.f_HalphaT, "f_falphaT_um": tol.f_falphaT,
@@ -66,10 +66,10 @@ def grade(
     if PART2_GRADES[0] <= grade <= PART2_GRADES[1]:
         rc = radial_composite(grade, module_mm, diameter_mm)
         for w in rc.warnings:
-            typer.echo(f"warning: {w}", err=True)
+            say(f"warning: {w}")
         doc.update({"F_i2T_um": rc.F_i2T, "f_i2T_um": rc.f_i2T})
     else:
-        typer.echo(f"note: ISO 1328-2:1997 has no radial composite grade {grade} (grades 4..12)", err=True)
+        say(f"note: ISO 1328-2:1997 has no radial composite grade {grade} (grades 4..12)")
         doc.update({"F_i2T_um": None, "f_i2T_um": None})
     fmt = getattr(format, "value", format)
     if fmt == "json":

@@ -19,8 +19,19 @@ from wormgear_cli.cli.common import (
     fmt_angle,
     json_text,
     render,
+    say,
 )
-from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
+from wormgear_cli.cli.read_options import (
+    AngleUnitOption,
+    ErrorUnitOption,
+    MapOption,
+    check_rows_memory,
+    read_options,
+)
+
+#: peak memory per row of a measurement file in ``measure`` (reading, figures, orders; about
+#: 240 bytes per row at 10^6 rows, bench/bench_limits.py) [bytes]
+MEASURE_BYTES_PER_ROW = 300
 
 #: per-target rows shown in the table format before it is left to --format csv
 MAX_TABLE_TARGETS = 100
@@ -86,12 +97,13 @@ def measure(
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     options = read_options(column_map, error_unit, angle_unit)
+    check_rows_memory(data, MEASURE_BYTES_PER_ROW, "measure")
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
     few = len(result.figures.targets) <= MAX_TABLE_TARGETS
     doc = report(result, unit, per_target=fmt != "table" or few)
     for w in doc["warnings"]:
-        typer.echo(f"warning: {w}", err=True)
+        say(f"warning: {w}")
 
     if plot is not None:
         from wormgear_cli.plots.measure import deviation_chart
@@ -101,9 +113,9 @@ def measure(
     if fmt == "json":
         emit(_json(doc), output, inputs)
     elif fmt == "csv":
-        typer.echo(f"note: {doc['verdict']}", err=True)
+        say(f"note: {doc['verdict']}")
         for note in doc["notes"]:
-            typer.echo(f"note: {note}", err=True)
+            say(f"note: {note}")
         cols = [c if c.startswith(("target_deg", "n_")) else f"{c}_{unit}" for c in TARGET_COLUMNS]
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:

@@ -58,3 +58,17 @@ def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None)
         raise UsageError(problems)
     return ReadOptions(column_map=tuple(pairs), error_unit=getattr(error_unit, "value", error_unit),
                        angle_unit=getattr(angle_unit, "value", angle_unit))
+
+
+def check_rows_memory(data, bytes_per_row: int, command: str) -> None:
+    """Refuse, before it is parsed, a measurement file whose rows the machine cannot hold: its
+    line ends are counted in one fast pass (a regular file; a pipe is bounded by the size limit
+    alone) and priced at ``bytes_per_row`` (:func:`wormgear_cli.files.check_memory`)."""
+    from wormgear_cli.errors import quote
+    from wormgear_cli.files import check_memory, count_lines
+    from wormgear_cli.measurement.reader import MAX_FILE_BYTES
+
+    rows = count_lines(data, MAX_FILE_BYTES)
+    if rows:
+        check_memory(rows * bytes_per_row, f"{command}: {quote(data)} ({rows:,} lines)",
+                     "split the recording (by run or by time) and read the parts one by one")

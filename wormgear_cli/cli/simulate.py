@@ -19,6 +19,7 @@ from wormgear_cli.cli.common import (
     emit,
     jobs_count,
     json_text,
+    warn_if_absurd,
 )
 
 
@@ -37,6 +38,16 @@ class RunNoiseKind(str, Enum):
     offset = "offset"
     drift = "drift"
 
+
+#: peak memory per row of ``synth`` (arrays of every column, the rounded copies and the CSV
+#: text; 7.1 GB for 10^7 rows, bench/bench_limits.py) [bytes]
+SYNTH_BYTES_PER_ROW = 750
+#: peak memory per output angle of ``simulate`` (both curves, their sources and the CSV text;
+#: 1.08 GB for 3 x 10^6 angles) [bytes]
+SIMULATE_BYTES_PER_POINT = 400
+#: peak memory per line of a ``simulate --at`` file (its rows read, simulated and written back
+#: with their cells; 590 MB for 10^6 rows) [bytes]
+SIMULATE_AT_BYTES_PER_ROW = 650
 
 PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
@@ -113,10 +124,21 @@ def simulate(
     from wormgear_cli.files import refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (plot, "--plot")])
+    if at is None:
+        from wormgear_cli.files import check_memory
+
+        check_memory(points * SIMULATE_BYTES_PER_POINT, f"simulate --points {points}", "lower --points")
+    else:
+        from wormgear_cli.cli.read_options import check_rows_memory
+
+        check_rows_memory(at, SIMULATE_AT_BYTES_PER_ROW, "simulate --at")
     if at is not None:
         result = report.at_rows(spec, at, unit, fmt, temperature_c, load_nm, phases, effects, jobs_count(jobs))
     else:
         result = report.dense(spec, points, revs, unit, fmt, temperature_c, load_nm, phases, effects)
+    c = result.curves
+    warn_if_absurd({"forward error": c["forward"], "reverse error": c["reverse"]} if c["kind"] == "dense"
+                   else {"simulated error": c["simulated"]}, drive, unit)
     if plot is not None:
         from wormgear_cli.files import refuse_input
         from wormgear_cli.plots.simulate import plot_simulation
@@ -222,10 +244,12 @@ def synth(
     for p in outs:
         refuse_input(p, [drive], "name")
     spec = load_spec(drive)
+    the_plan = Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
+                    dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s)
+    _check_synth_memory(the_plan)
     result = synthesize(
         spec,
-        plan=Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
-                  dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s),
+        plan=the_plan,
         effects=effects,
         noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
         seed=seed,
@@ -235,6 +259,7 @@ def synth(
         include_spec_effects=spec_effects,
         offset_arcsec=offset_arcsec,
     )
+    warn_if_absurd({"error": result.columns["error_arcsec"]}, drive, "arcsec")
     text = format_csv(result)
     if plot is not None:
         from wormgear_cli.plots.simulate import plot_synthesis
@@ -244,3 +269,15 @@ def synth(
     emit(text, output, [drive])
     if truth is not None:
         emit(json_text(result.truth), truth, [drive] + ([output] if output is not None else []))
+
+
+def _check_synth_memory(plan) -> None:
+    """Refuse, before drawing, a plan whose rows the machine cannot hold (one line naming the options)."""
+    from wormgear_cli.files import check_memory
+
+    dense = plan.kind == "dense"
+    per_pass, option = (plan.points, "--points") if dense else (plan.targets, "--targets")
+    rows = per_pass * 2 * plan.runs * plan.cycles
+    sizes = f"{option} {per_pass} x --runs {plan.runs}" + (f" x --cycles {plan.cycles}" if plan.cycles > 1 else "")
+    check_memory(rows * SYNTH_BYTES_PER_ROW, f"synth: {sizes} x 2 directions ({rows:,} rows)",
+                 f"lower {option}, --runs or --cycles")

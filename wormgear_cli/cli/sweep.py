@@ -29,10 +29,14 @@ from wormgear_cli.cli.common import (
     json_text,
     render,
     shard_part,
+    warn_if_absurd,
 )
 
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
+#: peak memory per grid point of an (i, l) run that holds its grid (the size policy's figures,
+#: :mod:`wormgear_cli.analysis.sweep_limits`); CSV on stdout is streamed (constant) [bytes]
+_BYTES_PER_POINT = {"table": 160, "json": 3000, "csv": 115, "plot": 160}
 _SECONDS_PER_PARAM_POINT = 5e-3
 
 
@@ -125,6 +129,7 @@ def sweep(
         core.check_module(module_mm)
     n_i, n_l = (i_range.n if i_range is not None else 1), (l_range.n if l_range is not None else 1)
     limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, k_n)
+    _check_memory(n_i * n_l, k_n, fmt, plot is not None)
     if plot is not None:
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
 
@@ -145,6 +150,18 @@ def sweep(
 def _range_key(r):
     """A parsed range in a part's manifest (2:10:1e3 and 2:10:1000 are one grid)."""
     return None if r is None else [r.start, r.stop, r.n]
+
+
+def _check_memory(total: int, k_n, fmt: str, plot: bool) -> None:
+    """Refuse, before the grid is built, an (i, l) run that holds more points than the machine can."""
+    from wormgear_cli.analysis.sweep import shard_bounds
+    from wormgear_cli.files import check_memory
+
+    start, stop = shard_bounds(total, *k_n) if k_n else (0, total)
+    streamed = fmt == "csv" and not plot  # to stdout or through a staged file, block by block
+    per = max(0 if streamed else _BYTES_PER_POINT[fmt], _BYTES_PER_POINT["plot"] if plot else 0)
+    check_memory((stop - start) * per, f"sweep: {stop - start:,} grid points held for --format {fmt}"
+                 + (" and --plot" if plot else ""), "use fewer values or --shard K/N")
 
 
 def _require_matplotlib() -> None:
@@ -176,6 +193,9 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
             out.finish([drive])
             return
         data = sw.collect(start, stop, progress=bar.advance, jobs=jobs)
+    from wormgear_cli.analysis.sweep import ANGLE_COLUMNS
+
+    warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)
     if fmt == "csv":
         out.emit(report.collected_csv(sw, data, unit), [drive])
     elif fmt == "json":

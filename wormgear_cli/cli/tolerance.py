@@ -22,7 +22,9 @@ from wormgear_cli.cli.common import (
     jobs_count,
     json_text,
     render,
+    say,
     shard_part,
+    warn_if_absurd,
     write_stdout,
 )
 
@@ -137,6 +139,8 @@ def tolerance(
     if summarize is not None:
         options = replace(options, samples=max(samples, 1), shard=None)
     s = engine.setup(spec, options)
+    if summarize is None:
+        _say_long_run(s.stop - s.start, metric_set)
     target = target_yield if target_yield is not None else spec.requirements.min_yield
     inputs = [drive] + ([summarize] if summarize is not None else [])
 
@@ -161,6 +165,8 @@ def tolerance(
     with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
         doc = study.finish(s, summary, target_yield, n_rows if n_rows is not None else samples,
                            part.label if part is not None else None, bar.advance)
+    warn_if_absurd({LABELS.get(m, m): [x for x in (r["mean"], r["percentiles"]["max"]) if x is not None]
+                    for m, r in doc["metrics"].items()}, drive, unit)
     if plot is not None:
         from wormgear_cli.plots.tolerance import draw
 
@@ -170,6 +176,23 @@ def tolerance(
         out.emit(json_text(doc), inputs)
     elif fmt == "table":
         render(_tables(doc, target), output, inputs)
+
+
+#: sample counts above this say their expected time on stderr before they start
+LONG_RUN_SAMPLES = 10**8
+
+
+def _say_long_run(n: int, metric_set: str) -> None:
+    """A run of more than :data:`LONG_RUN_SAMPLES` samples asks for no confirmation, but says
+    on stderr how long it is expected to take (from :data:`_SECONDS_PER_SAMPLE`)."""
+    if n <= LONG_RUN_SAMPLES:
+        return
+    seconds = n * _SECONDS_PER_SAMPLE[metric_set]
+    hours, minutes = divmod(round(seconds / 60.0), 60)
+    took = f"{hours} h {minutes:02d} min" if hours else f"{max(minutes, 1)} min"
+    say(f"note: {n} samples are expected to take about {took} ({_SECONDS_PER_SAMPLE[metric_set] * 1e6:.3g} us "
+        f"each with --metrics {metric_set} on a 2-core machine); --samples sets the count, --shard K/N splits "
+        "the run")
 
 
 def part_parameters(options, fmt: str) -> dict:

@@ -565,8 +565,10 @@ def augmented_toml(diag: Diagnosis, data_name: str = "") -> str:
     """The augmented spec as TOML text, with a comment header saying what changed."""
     import tomli_w
 
-    lines = [f"# {diag.spec.drive.name}: written by wormgear diagnose from {diag.spec.source}"
-             + (f" and {data_name}" if data_name else "")]
+    from wormgear_cli.errors import quote  # names on one comment line: a line break cannot start TOML
+
+    lines = [f"# {quote(diag.spec.drive.name)}: written by wormgear diagnose from {quote(diag.spec.source)}"
+             + (f" and {quote(data_name)}" if data_name else "")]
     if diag.fit_phases and diag.sources:
         lines.append("# fitted phases: " + ", ".join(s.key for s in diag.sources))
     if diag.found:

@@ -63,6 +63,9 @@ ANGLE_UNITS = ("deg", "rad")
 
 #: largest measurement file read [bytes] (256 MiB: 7 to 11 million rows of four columns)
 MAX_FILE_BYTES = 256 * 1024 * 1024
+#: longest line read [bytes]: no header or row of a measurement is this long; a file of one
+#: endless line is refused after this many bytes, not parsed
+MAX_LINE_BYTES = 1024 * 1024
 #: first block inspected for binary content before the rest is read [bytes]
 #: data lines sampled for the delimiter and decimal-comma detection
 SNIFF_LINES = 50
@@ -188,12 +191,13 @@ def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: in
     ------
     DataError
         Missing file, directory, unreadable, binary (a NUL byte, refused at the first
-        chunk), not UTF-8, or larger than ``limit`` (endless inputs such as ``/dev/zero``
-        stop at the first chunk or at the limit).
+        chunk), not UTF-8, larger than ``limit`` (endless inputs such as ``/dev/zero``
+        stop at the first chunk or at the limit), or a line longer than :data:`MAX_LINE_BYTES`.
     """
     from wormgear_cli.files import read_text_file
 
-    return read_text_file(path, expected, DataError, encoding="utf-8-sig", max_bytes=limit)
+    return read_text_file(path, expected, DataError, encoding="utf-8-sig", max_bytes=limit,
+                          max_line_bytes=MAX_LINE_BYTES)
 
 
 def time_restarts(time) -> np.ndarray | None:

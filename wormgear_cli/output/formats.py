@@ -50,7 +50,8 @@ def _clean(obj):
 
 
 def fmt_number(x) -> str:
-    """CSV number: shortest repr that round-trips; integers as integers; None (undefined) empty."""
+    """CSV number: shortest repr that round-trips; integers as integers; None (undefined) empty;
+    text through :func:`wormgear_cli.errors.csv_cell` (a leading ``= + - @`` neutralised)."""
     if x is None:
         return ""
     if isinstance(x, bool):
@@ -63,7 +64,9 @@ def fmt_number(x) -> str:
         return repr(float(x))  # float(): numpy's float64 is a float whose repr names its type
     if hasattr(x, "item"):
         return fmt_number(x.item())
-    return str(x)
+    from wormgear_cli.errors import csv_cell  # text: never a spreadsheet formula or a control character
+
+    return csv_cell(str(x))
 
 
 def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) -> str:

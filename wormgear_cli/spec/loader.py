@@ -399,7 +399,9 @@ def load_spec(path: str | Path) -> Spec:
                           max_bytes=MAX_SPEC_BYTES)
     if not text.strip():
         raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
-    return loads_spec(text, name, default_name=path.stem)
+    from wormgear_cli.errors import quote  # a file name holding control characters is shown, never run
+
+    return loads_spec(text, name, default_name=quote(path.stem))
 
 
 def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:

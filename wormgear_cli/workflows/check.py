@@ -16,7 +16,8 @@ class FileCheck:
     ``problems``: the spec's errors, one line each; ``requirements``: one dict per requirement
     (``key``, ``limit_arcsec``, ``value_arcsec``, ``passed``: None when the limit is judged by
     the yield); ``yield_check``: the Monte Carlo yield (:func:`wormgear_cli.tolerance.engine.check_yield`)
-    or None; ``findings``: the text lines ``check`` prints for this file.
+    or None; ``findings``: the text lines ``check`` prints for this file; ``warnings``: lines for
+    stderr (results beyond a full turn, :func:`wormgear_cli.analysis.sanity.check_angles`).
     """
 
     file: str
@@ -26,6 +27,7 @@ class FileCheck:
     requirements: tuple = ()
     yield_check: object = None
     findings: tuple = ()
+    warnings: tuple = ()
 
     def to_dict(self) -> dict:
         """The file's entry of ``check --format json``."""
@@ -43,13 +45,16 @@ def check_file(path) -> FileCheck:
     error's lines as ``problems``.
     """
     from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.sanity import check_angles
     from wormgear_cli.errors import WormgearError
     from wormgear_cli.spec.loader import load_spec
 
     name = str(path)
     try:
         spec = load_spec(path)
-        verdicts = evaluate(spec, analyze(spec))
+        result = analyze(spec)
+        absurd = check_angles(result.angles, name)  # not finite: a problem; beyond a full turn: a warning
+        verdicts = evaluate(spec, result)
         yc, by_yield = None, set()
         if spec.requirements.min_yield is not None:  # a Monte Carlo estimate: imported only then
             from wormgear_cli.tolerance.engine import YIELD_REQUIREMENTS, check_yield
@@ -80,4 +85,5 @@ def check_file(path) -> FileCheck:
         n = len(verdicts)
         findings.append(f"{name}: ok ({n} requirement{'s' if n != 1 else ''} met)" if n else
                         f"{name}: ok (valid; no requirements)")
-    return FileCheck(name, True, passed, requirements=tuple(rows), yield_check=yc, findings=tuple(findings))
+    return FileCheck(name, True, passed, requirements=tuple(rows), yield_check=yc, findings=tuple(findings),
+                     warnings=(absurd,) if absurd else ())

@@ -1,0 +1,72 @@
+"""No NaN, no overflow, no absurd number without a word: the guard on the model's results.
+
+Every input the spec accepts is finite and inside its key's range, yet combinations at the
+edges of those ranges (a 0.05 mm module on a one-tooth pinion, a 10 mm centre-distance
+error, 10^8 N on a worm) take the paper's small-angle models far outside what they describe.
+The commands pass their angles through :func:`check_angles` before writing them: a value that
+is not finite is an error (exit 2, one line); an error or lost motion of more than a full
+turn of the output is one warning line.  Which inputs are implausible, and why, is the
+plausibility checks' business (the spec's validation); this guard only makes sure no such
+number leaves silently.  No I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from wormgear_cli.errors import SpecError
+
+#: an output error or lost motion larger than this [rad] (one turn) is no positioning error
+FULL_TURN = 2.0 * math.pi
+
+#: what the messages advise
+_CHECK = "check modules, teeth, centre distances and loads"
+
+
+def check_angles(values: Mapping[str, object], source: str = "") -> str | None:
+    """Refuse non-finite angles; describe absurd ones.
+
+    Parameters
+    ----------
+    values : mapping of str to float or array
+        Quantity name -> angle(s) [rad] (zero-to-peak or peak-to-peak, as the caller's
+        output states; only the magnitude is checked).
+    source : str
+        The drive file, for the message.
+
+    Returns
+    -------
+    str or None
+        One warning line when any magnitude exceeds :data:`FULL_TURN` (naming up to three
+        quantities and their largest value in degrees), else None.
+
+    Raises
+    ------
+    SpecError
+        A value is NaN or infinite (overflow): one line naming the quantity.
+    """
+    over = []
+    where = f"{source}: " if source else ""
+    for name, v in values.items():
+        a = np.abs(np.asarray(v, dtype=float))
+        if a.size == 0:
+            continue
+        finite = np.isfinite(a)
+        if not finite.all():
+            bad = int(a.size - np.count_nonzero(finite))
+            of = f" ({bad} of {a.size} values)" if a.size > 1 else ""
+            raise SpecError(f"{where}the model gives no finite {name}{of} for these inputs: they lie outside "
+                            f"what it describes; {_CHECK}")
+        peak = float(a.max())
+        if peak > FULL_TURN:
+            over.append((peak, name))
+    if not over:
+        return None
+    over.sort(reverse=True)
+    named = ", ".join(f"{name} {math.degrees(peak):.4g} deg" for peak, name in over[:3])
+    more = f" and {len(over) - 3} more" if len(over) > 3 else ""
+    return (f"{where}{named}{more}: more than a full turn, so the inputs lie far outside what the model "
+            f"describes; {_CHECK}")
