@@ -119,7 +119,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     """
     from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
-    from wormgear_cli.measurement.orders import analyse_orders
+    from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
     from wormgear_cli.measurement.reader import read_measurement
 
     physical: list = []
@@ -153,8 +153,10 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
                                        "run): one-direction figures withheld")
-    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, labels, priority, passes=m.run,
-                              unique=unique)
+    options = OrdersOptions(labels=None if labels is None else tuple(labels),
+                            priority=None if priority is None else tuple(priority), passes=m.run,
+                            time=m.time if "time_s" in m.present else None, unique=unique)
+    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, options)
     cov = analysis.coverage
     if not cov.full_turn and cov.distinct >= 2:
         beyond = [f"{it.order:g}" for it in analysis.items if it.status == "beyond span"]
