@@ -106,7 +106,11 @@ class DominantOrder:
     the independent orders scanned (capped at 1); ``significant``:
     p_adjusted < alpha; ``group`` (lo, hi) [cycles/rev]: the orders that
     cannot be told apart from it; ``period_s``: seconds per cycle (None
-    without a time base); ``label``: the label of an order in its group."""
+    without a time base); ``label``: the label of an order in its group;
+    ``differential`` / ``differential_stderr``: the amplitude of half the
+    reversal at the order (both directions measured; else NaN).  With both
+    directions each order is scanned as its common and differential pair
+    together."""
 
     order: float
     amplitude: float
@@ -118,13 +122,21 @@ class DominantOrder:
     group: tuple[float, float]
     period_s: float | None = None
     label: str | None = None
+    differential: float = math.nan
+    differential_stderr: float = math.nan
+
+    @property
+    def size(self) -> float:
+        """hypot(amplitude, differential): what orders the peaks (the differential counts where measured)."""
+        return math.hypot(self.amplitude, self.differential) if math.isfinite(self.differential) else self.amplitude
 
 
 @dataclass(frozen=True)
 class Dominant:
     """Result of :func:`dominant_orders`.
 
-    ``peaks``: the significant orders, strongest (largest amplitude) first,
+    ``peaks``: the significant orders, strongest (largest amplitude, the
+    differential counted with both directions) first,
     at most ``max_peaks``; when none is significant, the strongest scanned
     order alone (``significant`` False); ``scanned`` (lo, hi) [cycles/rev];
     ``resolution`` [cycles/rev]: the spacing of independent orders
@@ -169,12 +181,17 @@ class _Scan:
     grid: np.ndarray
     span: float
     full_turn: bool
+    d: np.ndarray | None = None  # directions when both occur (then each order has a differential pair too)
     q: np.ndarray = field(default=None)  # orthonormal basis of base and the accepted peaks
     peaks: list = field(default_factory=list)
 
+    def order_columns(self, k: float) -> np.ndarray:
+        """(n, 2) or, with both directions, (n, 4): cos, sin [, d cos, d sin] of order ``k``."""
+        c = np.column_stack([np.cos(k * self.theta), np.sin(k * self.theta)])
+        return c if self.d is None else np.hstack([c, c * self.d[:, None]])
+
     def columns(self) -> np.ndarray:
-        cols = [self.base] + [np.column_stack([np.cos(k * self.theta), np.sin(k * self.theta)]) for k in self.peaks]
-        return np.hstack(cols)
+        return np.hstack([self.base] + [self.order_columns(k) for k in self.peaks])
 
     def refresh(self) -> np.ndarray:
         """The basis of the model and the accepted peaks; returns the residual of y on it."""
@@ -220,7 +237,8 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     spt = opt.seconds_per_turn if opt.seconds_per_turn else _seconds_per_turn(th, t, passes)
     empty = n < 8 or cov.distinct < 3 or not hi >= lo
     grid = _grid(lo, hi, resolution, cov.full_turn, opt.oversample) if not empty else np.zeros(0)
-    scan = _Scan(th, y, base, grid, cov.span, cov.full_turn)
+    both = bool(np.any(d > 0) and np.any(d < 0))
+    scan = _Scan(th, y, base, grid, cov.span, cov.full_turn, d if both else None)
     resid = scan.refresh()
     independent = max(1, int(round((hi - lo) / resolution)) + 1) if grid.size else 0
     found, method = _peaks(scan, resid, independent, opt) if grid.size else ([], "")
@@ -230,8 +248,9 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     for i, (k, ratio, p_adj) in enumerate(found):
         group = _group(scan, k, opt.separation, resolution)
         peaks.append(DominantOrder(k, fit["amp"][i], fit["se"][i], fit["phase"][i], ratio, p_adj, p_adj < opt.alpha,
-                                   group, spt / k if spt else None, _label(group, k, opt.labels)))
-    significant = sorted((p for p in peaks if p.significant), key=lambda p: -p.amplitude)[:opt.max_peaks]
+                                   group, spt / k if spt else None, _label(group, k, opt.labels),
+                                   fit["diff"][i], fit["diff_se"][i]))
+    significant = sorted((p for p in peaks if p.significant), key=lambda p: -p.size)[:opt.max_peaks]
     shown = tuple(significant) if significant else tuple(peaks[:1])
     note = "" if grid.size else _empty_note(n, cov, lo, hi)
     return Dominant(shown, (lo, hi), resolution, nyquist, independent, method, slow.part(slow_size),
@@ -314,27 +333,35 @@ def _empty_note(n: int, cov: Coverage, lo: float, hi: float) -> str:
 
 
 def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
-    """Sum of squares of ``resid`` explained by each order's (cos, sin) pair with the model projected out
-    (NaN where the model takes up all but MIN_SCAN_SHARE of the pair), exactly, in chunks."""
+    """Sum of squares of ``resid`` explained by each order's (cos, sin) pair (and its differential pair with
+    both directions) with the model projected out, exactly, in chunks (NaN where the model takes up all
+    but MIN_SCAN_SHARE of the columns)."""
     n = scan.theta.shape[0]
+    width = 2 if scan.d is None else 4
     out = np.full(orders.shape[0], np.nan)
-    chunk = max(1, int(2_000_000 // max(n, 1)))
+    chunk = max(1, int(2_000_000 // max(n * width // 2, 1)))
     q = scan.q
     for a in range(0, orders.shape[0], chunk):
         ks = orders[a:a + chunk]
         arg = np.multiply.outer(scan.theta, ks)
-        c, s = np.cos(arg), np.sin(arg)
-        qc, qs = q.T @ c, q.T @ s
-        cc = np.einsum("ij,ij->j", c, c) - np.einsum("ij,ij->j", qc, qc)
-        ss = np.einsum("ij,ij->j", s, s) - np.einsum("ij,ij->j", qs, qs)
-        cs = np.einsum("ij,ij->j", c, s) - np.einsum("ij,ij->j", qc, qs)
-        cr, sr = resid @ c, resid @ s
-        det = cc * ss - cs * cs
-        keep = (cc + ss) > MIN_SCAN_SHARE * n
-        keep &= det > 1e-12 * np.maximum(cc + ss, 1e-300) ** 2
-        with np.errstate(invalid="ignore", divide="ignore"):
-            p = (ss * cr * cr - 2.0 * cs * cr * sr + cc * sr * sr) / det
-        out[a:a + chunk] = np.where(keep, p, np.nan)
+        cols = [np.cos(arg), np.sin(arg)]
+        arg = None
+        if scan.d is not None:
+            cols += [cols[0] * scan.d[:, None], cols[1] * scan.d[:, None]]
+        proj = [q.T @ c for c in cols]
+        gram = np.empty((ks.shape[0], width, width))
+        for i in range(width):
+            for j in range(i, width):
+                gram[:, i, j] = gram[:, j, i] = (np.einsum("ij,ij->j", cols[i], cols[j])
+                                                 - np.einsum("ij,ij->j", proj[i], proj[j]))
+        rhs = np.stack([resid @ c for c in cols], axis=1)
+        total = np.einsum("kii->k", gram)
+        keep = total > MIN_SCAN_SHARE * n * width / 2
+        lam = np.linalg.eigvalsh(gram)
+        keep &= lam[:, 0] > 1e-9 * np.maximum(lam[:, -1], 1e-300)
+        safe = np.where(keep[:, None, None], gram, np.eye(width))
+        coef = np.linalg.solve(safe, rhs[:, :, None])[:, :, 0]
+        out[a:a + chunk] = np.where(keep, np.einsum("ki,ki->k", coef, rhs), np.nan)
     return out
 
 
@@ -354,17 +381,19 @@ def _fft_powers(scan: _Scan, resid: np.ndarray) -> np.ndarray:
     if scan.full_turn:
         idx = np.mod(((np.mod(scan.theta, two_pi)) / width).astype(np.int64), cells)
         start = 0.0
-    sums = np.bincount(idx, weights=resid, minlength=cells)
     step = float(grid[1] - grid[0]) if grid.shape[0] > 1 else 1.0
     length = cells
     while two_pi / (length * width) > step * (1.0 + 1e-9) and length < MAX_FFT:
         length *= 2
-    spec = np.fft.rfft(sums, n=length)
-    freq = two_pi * np.arange(spec.shape[0]) / (length * width)  # cycles per revolution of each bin
-    pos = np.clip(np.searchsorted(freq, grid), 1, spec.shape[0] - 1)
+    freq = two_pi * np.arange(length // 2 + 1) / (length * width)  # cycles per revolution of each bin
+    pos = np.clip(np.searchsorted(freq, grid), 1, freq.shape[0] - 1)
     nearest = np.where(np.abs(freq[pos - 1] - grid) < np.abs(freq[pos] - grid), pos - 1, pos)
-    # the phase reference of the bins (their centres, from ``start``) does not change |F|
-    return 2.0 * np.abs(spec[nearest]) ** 2 / n
+    out = np.zeros(grid.shape[0])
+    for weights in ([resid] if scan.d is None else [resid, resid * scan.d]):
+        spec = np.fft.rfft(np.bincount(idx, weights=weights, minlength=cells), n=length)
+        # the phase reference of the bins (their centres, from ``start``) does not change |F|
+        out += 2.0 * np.abs(spec[nearest]) ** 2 / n
+    return out
 
 
 def _background(orders: np.ndarray, power: np.ndarray) -> np.ndarray:
@@ -457,8 +486,7 @@ def _refine(scan: _Scan, resid: np.ndarray, k: float) -> float:
 def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
     """Least squares of y on the model columns and the peaks' (cos, sin): amplitudes, phases, standard
     errors (block-robust when the residual is serially correlated), the residual RMS."""
-    cols = [scan.base] + [np.column_stack([np.cos(k * scan.theta), np.sin(k * scan.theta)]) for k in orders]
-    x = np.hstack(cols)
+    x = np.hstack([scan.base] + [scan.order_columns(k) for k in orders])
     n, p = x.shape
     coef, *_ = np.linalg.lstsq(x, scan.y, rcond=None)
     resid = scan.y - x @ coef
@@ -472,18 +500,28 @@ def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
         for j in range(p):
             scores[:, j] = np.bincount(serial.block_id, weights=x[:, j] * resid, minlength=serial.blocks)
         cov = block_covariance(gram_inv, scores, n)
-    q0 = scan.base.shape[1]
-    amp, se, phase = [], [], []
+    q0, width = scan.base.shape[1], 2 if scan.d is None else 4
+    out: dict = {"coef": coef, "serial": serial, "rms": float(math.sqrt(np.mean(resid**2))) if n else math.nan,
+                 "amp": [], "se": [], "phase": [], "diff": [], "diff_se": []}
     for i in range(len(orders)):
-        a, b = coef[q0 + 2 * i], coef[q0 + 2 * i + 1]
-        c = cov[q0 + 2 * i:q0 + 2 * i + 2, q0 + 2 * i:q0 + 2 * i + 2]
-        amplitude = math.hypot(a, b)
-        g = np.array([a, b]) / amplitude if amplitude > 0 else np.array([math.sqrt(0.5), math.sqrt(0.5)])
-        amp.append(amplitude)
-        se.append(math.sqrt(max(float(g @ c @ g), 0.0)))
-        phase.append(math.atan2(a, b))
-    return {"coef": coef, "amp": amp, "se": se, "phase": phase, "serial": serial,
-            "rms": float(math.sqrt(np.mean(resid**2))) if n else math.nan}
+        j = q0 + width * i
+        amp, se, phase = _amplitude(coef[j:j + 2], cov[j:j + 2, j:j + 2])
+        out["amp"].append(amp)
+        out["se"].append(se)
+        out["phase"].append(phase)
+        diff, diff_se, _ = (_amplitude(coef[j + 2:j + 4], cov[j + 2:j + 4, j + 2:j + 4]) if width == 4
+                            else (math.nan, math.nan, math.nan))
+        out["diff"].append(diff)
+        out["diff_se"].append(diff_se)
+    return out
+
+
+def _amplitude(ab: np.ndarray, cov: np.ndarray) -> tuple[float, float, float]:
+    """(amplitude, its standard error by the delta method, phase) of a (cos, sin) coefficient pair."""
+    a, b = float(ab[0]), float(ab[1])
+    amplitude = math.hypot(a, b)
+    g = np.array([a, b]) / amplitude if amplitude > 0 else np.array([math.sqrt(0.5), math.sqrt(0.5)])
+    return amplitude, math.sqrt(max(float(g @ cov @ g), 0.0)), math.atan2(a, b)
 
 
 def _group(scan: _Scan, k: float, threshold: float, resolution: float) -> tuple[float, float]:

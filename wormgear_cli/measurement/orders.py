@@ -31,7 +31,7 @@ from wormgear_cli.measurement.harmonics import (
     select_orders,
 )
 from wormgear_cli.measurement.separation import SEPARATION_CORR, canonical_correlations, separation_groups
-from wormgear_cli.measurement.serial import SerialBlocks, block_covariance, serial_blocks
+from wormgear_cli.measurement.serial import SerialBlocks, block_covariance, point_noise, serial_blocks
 
 #: statuses of an order in :class:`OrderReport`
 STATUSES = ("fitted", "ambiguous", "aliased", "folded", "unresolved", "beyond span")
@@ -119,7 +119,8 @@ class OrdersAnalysis:
     fitted as one), ``serial`` (:class:`~wormgear_cli.measurement.serial.SerialBlocks`:
     how the standard errors treat serially correlated rows), ``slow``
     (:class:`~wormgear_cli.measurement.drift.SlowPart`: the trend or drift
-    and its size)."""
+    and its size), ``point_noise`` (the point-to-point noise of the residual
+    within passes, :func:`~wormgear_cli.measurement.serial.point_noise`)."""
 
     items: tuple[OrderReport, ...]
     residual_rms: float
@@ -135,6 +136,7 @@ class OrdersAnalysis:
     groups: tuple = ()
     serial: SerialBlocks | None = None
     slow: SlowPart | None = None
+    point_noise: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -240,11 +242,12 @@ def analyse_orders(theta, y, direction, orders: Sequence[float],
                                                                else None)
         fit = fit_modes(th, y, d, fitted, trend=rows_trend)
         serial, drift = SerialBlocks("independent rows", math.nan, 1, n), math.nan
+        noise = point_noise(fit.residual, _pass_keys(opt.passes, d), opt.time)
     else:
-        fit, serial, drift = _finish(solved, sums, design, fitted, opt)
+        fit, serial, drift, noise = _finish(solved, sums, design, fitted, opt)
     return OrdersAnalysis(tuple(_items(req, state, fit, fitted)), fit.rms, fit.sigma, fit.common.offset,
                           fit.differential.offset if sums.both else math.nan, opt.tol, sums.both, cov.distinct, cov,
-                          slow.degree, unwrapped, tuple(state.groups.values()), serial, slow.part(drift))
+                          slow.degree, unwrapped, tuple(state.groups.values()), serial, slow.part(drift), noise)
 
 
 @dataclass
@@ -582,23 +585,24 @@ def _solve_sums(sums: _AngleSums, design: _Design, fitted: list) -> _Solved | No
 
 
 def _finish(solved: _Solved, sums: _AngleSums, design: _Design, fitted: list,
-            opt: OrdersOptions) -> tuple[ModeFit, SerialBlocks, float]:
+            opt: OrdersOptions) -> tuple[ModeFit, SerialBlocks, float, float]:
     """(the :class:`ModeFit` with standard errors that hold for the rows' serial correlation, how, the
-    peak-to-peak of the fitted slow part)."""
+    peak-to-peak of the fitted slow part, the point-to-point noise of the residual)."""
     ords = np.asarray(fitted, dtype=float)
     resid = _row_residual(sums, ords, solved)
     n = sums.n
     serial = SerialBlocks("independent rows", math.nan, 1, n)
+    keys = _pass_keys(opt.passes, sums.d)
     if opt.serial and n > solved.coef.shape[0] + 2:
-        serial = serial_blocks(resid, _pass_keys(opt.passes, sums.d), opt.time)
+        serial = serial_blocks(resid, keys, opt.time)
     if serial.independent:
         cov, scale = solved.gram_inv, solved.sigma
     else:
         cov, scale = block_covariance(solved.gram_inv, _score_sums(sums, ords, resid, serial), n), 1.0
     fit = _mode_fits(solved, ords, cov, scale, sums.both, design.fixed)
     t = sums.trend_count
-    drift = drift_size(sums.trend, solved.coef[1:1 + t]) if t else 0.0
-    return fit, serial, drift
+    drift = drift_size(sums.trend[sums.inverse], solved.coef[1:1 + t]) if t else 0.0
+    return fit, serial, drift, point_noise(resid, keys, opt.time)
 
 
 def _pass_keys(passes, d: np.ndarray) -> np.ndarray:
