@@ -497,9 +497,10 @@ def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
         cov = gram_inv * (float(resid @ resid) / dof if dof > 0 else math.nan)
     else:
         scores = np.zeros((serial.blocks, p))
+        v = serial.whiten(resid)
         for j in range(p):
-            scores[:, j] = np.bincount(serial.block_id, weights=x[:, j] * resid, minlength=serial.blocks)
-        cov = block_covariance(gram_inv, scores, n)
+            scores[:, j] = np.bincount(serial.block_id, weights=x[:, j] * v, minlength=serial.blocks)
+        cov = block_covariance(gram_inv, scores, n) * serial.recolour
     q0, width = scan.base.shape[1], 2 if scan.d is None else 4
     out: dict = {"coef": coef, "serial": serial, "rms": float(math.sqrt(np.mean(resid**2))) if n else math.nan,
                  "amp": [], "se": [], "phase": [], "diff": [], "diff_se": []}

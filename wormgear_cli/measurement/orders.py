@@ -598,7 +598,8 @@ def _finish(solved: _Solved, sums: _AngleSums, design: _Design, fitted: list,
     if serial.independent:
         cov, scale = solved.gram_inv, solved.sigma
     else:
-        cov, scale = block_covariance(solved.gram_inv, _score_sums(sums, ords, resid, serial), n), 1.0
+        scores = _score_sums(sums, ords, serial.whiten(resid), serial)
+        cov, scale = block_covariance(solved.gram_inv, scores, n) * serial.recolour, 1.0
     fit = _mode_fits(solved, ords, cov, scale, sums.both, design.fixed)
     t = sums.trend_count
     drift = drift_size(sums.trend[sums.inverse], solved.coef[1:1 + t]) if t else 0.0
