@@ -470,12 +470,12 @@ def _conclude(run: _Run) -> Diagnosis:
     likely = _likely(run, found)
     run.remaining = {}  # the candidates' columns are not needed any more
     opt.say("scanning the residual for structure")
-    # what is left, tested with the held structure in the model, plus the held structure itself (as found)
-    unexplained = scan_residual(after, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
-                                                   run.scan_orders))
+    # what is left once the named effects are in, tested afresh without the nuisance terms (structure held
+    # while the candidates were tested may have been a named effect's content seen from too short an arc)
+    unexplained = scan_residual(run.plain, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
+                                                       run.scan_orders))
     nuisance, rms_with = [], None
     if run.held:
-        unexplained = sorted([*(item for _, _, item in run.held), *unexplained], key=lambda it: it["p_adjusted"])
         nuisance = _nuisance_parts(run, after)
         rms_with = float(np.sqrt(np.mean(after.residual**2)))
         # the drive's model without the held structure, which no spec can hold: the named effects at their
