@@ -225,7 +225,7 @@ def analyse_orders(theta, y, direction, orders: Sequence[float],
     state = _Decisions(req, {}, {}, {})
     _too_slow(state, cov, slow)
     design = _Design.make(sums, [k for k in req.ords if k not in state.status])
-    candidates = _alias_and_fold(state, design, opt.tol)
+    candidates = _alias_and_fold(state, design, opt.tol, cov)
     candidates = _separate(state, design, candidates, cov, opt.separation)
     design = design.restricted(candidates)
     res = select_orders(th[:0], candidates, gram=design.g0, distinct=sums.ut.shape[0])
@@ -310,13 +310,17 @@ class _Design:
         return _Design(list(ks), self.g0[sub], self.g1[sub], self.r0[cols], self.r1[cols], self.fixed, self.n)
 
 
-def _alias_and_fold(state: _Decisions, design: _Design, tol: float) -> list[float]:
-    """Aliased and folded orders decided; the candidates left, by priority."""
+def _alias_and_fold(state: _Decisions, design: _Design, tol: float, cov: Coverage) -> list[float]:
+    """Aliased and folded orders decided; the candidates left, by priority.  Orders that look alike only
+    because the arc is short (closer than 360 deg / span apart) are left to the separation rule: it is
+    the span, not the spacing of the samples, that cannot tell them apart."""
     req, rest = state.req, design.rest
     if rest:
         arr = np.asarray(rest)
         cm, cp, cz = _correlations_from_gram(design.g0, design.fixed, len(rest), design.n)
-        groups = _groups(arr, cm, cp, cz, tol)
+        arc = 2.0 * math.pi if cov.full_turn else cov.span
+        groups = [g for g in _groups(arr, cm, cp, cz, tol)
+                  if 0.0 in g or (max(g) - min(g)) * arc >= 2.0 * math.pi * (1.0 - 1e-9)]
         folded = set(_folded(arr, cp, tol))
     else:
         groups, folded = [], set()
