@@ -120,3 +120,23 @@ def test_measure_reports_dominant_and_the_order_left_out(runner, tmp_path):
     doc = json.loads(res.stdout)
     assert not any(n.startswith("the residual of the fit") for n in doc["notes"])
     assert doc["orders"]["residual_rms"] == pytest.approx(0.5, rel=0.1)
+
+
+def test_repeated_targets_give_the_row_least_squares():
+    # 40 targets x 30 runs x 2 directions: the scan reduces the rows to (angle, direction) units; the
+    # amplitudes must be those of an ordinary least-squares fit on every row (numpy's lstsq, the oracle)
+    rng = np.random.default_rng(12)
+    targets = np.sort(rng.uniform(0, 2 * math.pi, 40))
+    theta = np.tile(np.concatenate([targets, targets[::-1]]), 30)
+    d = np.tile(np.repeat([1.0, -1.0], 40), 30)
+    y = 4.0 * np.sin(3 * theta + 0.5) + 1.5 * d * np.cos(7 * theta) - 2.0 * d + 0.4 * rng.normal(size=theta.size)
+    dom = dominant_orders(theta, y, direction=d)
+    got = {p.order: p for p in dom.significant}
+    assert set(got) == {3.0, 7.0}
+    x = np.column_stack([np.ones_like(theta), d] + [f(k * theta) * m for k in (3.0, 7.0)
+                                                    for m in (1.0, d) for f in (np.cos, np.sin)])
+    coef = np.linalg.lstsq(x, y, rcond=None)[0]
+    assert got[3.0].amplitude == pytest.approx(math.hypot(coef[2], coef[3]), rel=1e-9)
+    assert got[7.0].differential == pytest.approx(math.hypot(coef[8], coef[9]), rel=1e-9)
+    resid = y - x @ coef
+    assert dom.residual_rms == pytest.approx(float(np.sqrt(np.mean(resid**2))), rel=1e-9)

@@ -64,6 +64,10 @@ BACKGROUND_BINS = 16
 GROUP_ROWS = 20_000
 #: largest FFT length of the screening
 MAX_FFT = 1 << 22
+#: rows up to which an orthonormal basis of the model is kept (beyond: normal equations in blocks of rows)
+BASIS_ROWS = 100_000
+#: rows per block when the model is handled in blocks
+BLOCK = 65_536
 
 
 @dataclass(frozen=True)
@@ -184,19 +188,88 @@ class _Scan:
     d: np.ndarray | None = None  # directions when both occur (then each order has a differential pair too)
     q: np.ndarray = field(default=None)  # orthonormal basis of base and the accepted peaks
     peaks: list = field(default_factory=list)
+    q_peaks: int = 0  # peaks already in q
+    normal: tuple | None = None  # (peaks, X'X, X'y) of the last normal equations
+    sw: np.ndarray | None = None  # sqrt of the rows per unit when the rows are reduced to (angle, direction) units
+    rows: tuple | None = None  # (y per row, unit of each row) when reduced
+
+    @property
+    def total(self) -> float:
+        """Rows behind the scan (units weighted by their rows)."""
+        return float(self.theta.shape[0]) if self.sw is None else float(self.sw @ self.sw)
+
+    def trig(self, k: float, a: int = 0, b: int | None = None) -> np.ndarray:
+        """cos, sin [, d cos, d sin] of order ``k`` at units a..b-1, weighted when reduced."""
+        th = self.theta[a:b]
+        c = np.column_stack([np.cos(k * th), np.sin(k * th)])
+        if self.d is not None:
+            c = np.hstack([c, c * self.d[a:b, None]])
+        return c if self.sw is None else c * self.sw[a:b, None]
 
     def order_columns(self, k: float) -> np.ndarray:
         """(n, 2) or, with both directions, (n, 4): cos, sin [, d cos, d sin] of order ``k``."""
-        c = np.column_stack([np.cos(k * self.theta), np.sin(k * self.theta)])
-        return c if self.d is None else np.hstack([c, c * self.d[:, None]])
+        return self.trig(k)
 
-    def columns(self) -> np.ndarray:
-        return np.hstack([self.base] + [self.order_columns(k) for k in self.peaks])
+    def design(self, a: int, b: int) -> np.ndarray:
+        """Rows a..b-1 of the model's columns: [base, each accepted peak's columns]."""
+        return np.hstack([self.base[a:b]] + [self.trig(k, a, b) for k in self.peaks])
+
+    def blocks(self):
+        n = self.theta.shape[0]
+        return [(a, min(a + BLOCK, n)) for a in range(0, n, BLOCK)] or [(0, 0)]
 
     def refresh(self) -> np.ndarray:
-        """The basis of the model and the accepted peaks; returns the residual of y on it."""
-        self.q = np.linalg.qr(self.columns())[0]
+        """The residual of y on the model and the accepted peaks.  Up to :data:`BASIS_ROWS` rows an
+        orthonormal basis is kept (the base's once, each new peak's columns orthogonalised against it and
+        appended) for the exact powers; beyond, the normal equations are accumulated in blocks of rows."""
+        if self.theta.shape[0] > BASIS_ROWS:
+            gram, rhs = self.normal_equations()
+            coef = _solve_gram(gram, rhs)
+            resid = np.empty_like(self.y)
+            for a, b in self.blocks():
+                resid[a:b] = self.y[a:b] - self.design(a, b) @ coef
+            return resid
+        if self.q is None:
+            self.q = _orthonormal(self.base)
+        for k in self.peaks[self.q_peaks:]:
+            c = self.order_columns(k)
+            for _ in range(2):  # twice is enough (Gram-Schmidt with reorthogonalisation)
+                c = c - self.q @ (self.q.T @ c)
+            self.q = np.hstack([self.q, _orthonormal(c)])
+        self.q_peaks = len(self.peaks)
         return self.y - self.q @ (self.q.T @ self.y)
+
+    def normal_equations(self) -> tuple[np.ndarray, np.ndarray]:
+        """(X'X, X'y) of the model and the accepted peaks, accumulated in blocks of rows (kept per peak set)."""
+        key = tuple(self.peaks)
+        if self.normal is not None and self.normal[0] == key:
+            return self.normal[1], self.normal[2]
+        gram, rhs = None, None
+        for a, b in self.blocks():
+            x = self.design(a, b)
+            g, r = x.T @ x, x.T @ self.y[a:b]
+            gram, rhs = (g, r) if gram is None else (gram + g, rhs + r)
+        self.normal = (key, gram, rhs)
+        return gram, rhs
+
+
+def _solve_gram(gram: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """The least-squares coefficients from the normal equations (scaled, pseudo-inverse for safety)."""
+    return _gram_inverse(gram) @ rhs
+
+
+def _gram_inverse(gram: np.ndarray) -> np.ndarray:
+    scale = np.sqrt(np.maximum(np.diag(gram), 1e-300))
+    return np.linalg.pinv(gram / np.outer(scale, scale), rcond=1e-12, hermitian=True) / np.outer(scale, scale)
+
+
+def _orthonormal(x: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of the columns of ``x`` (n x k, k small) from the eigenvectors of its Gram
+    matrix (directions below 1e-10 of the largest left out): n k^2 work, no n x n factor."""
+    gram = x.T @ x
+    lam, vec = np.linalg.eigh(gram)
+    keep = lam > 1e-10 * max(float(lam[-1]), 1e-300)
+    return x @ (vec[:, keep] / np.sqrt(lam[keep]))
 
 
 def dominant_orders(theta, y, direction=None, time=None, passes=None, options: ScanOptions | None = None) -> Dominant:
@@ -230,7 +303,7 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     d = np.ones(n) if direction is None else _as_1d("direction", direction, n)
     t = None if time is None else _as_1d("time", time, n)
     th = unwrap_passes(theta, passes)
-    cov = coverage(theta, passes, orders=[1.0, *[float(k) for k in opt.held]])
+    cov = coverage(theta, orders=[1.0, *[float(k) for k in opt.held]])
     slow = slow_model(theta, cov, passes, d, t)
     base, slow_at = _base_columns(th, d, slow.columns, opt.held)
     lo, hi, resolution, nyquist = _range(th, cov, slow.kind, opt)
@@ -238,7 +311,7 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     empty = n < 8 or cov.distinct < 3 or not hi >= lo
     grid = _grid(lo, hi, resolution, cov.full_turn, opt.oversample) if not empty else np.zeros(0)
     both = bool(np.any(d > 0) and np.any(d < 0))
-    scan = _Scan(th, y, base, grid, cov.span, cov.full_turn, d if both else None)
+    scan = _make_scan(th, y, d if both else None, base, grid, cov, slow.kind != "time")
     resid = scan.refresh()
     independent = max(1, int(round((hi - lo) / resolution)) + 1) if grid.size else 0
     found, method = _peaks(scan, resid, independent, opt) if grid.size else ([], "")
@@ -255,6 +328,25 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     note = "" if grid.size else _empty_note(n, cov, lo, hi)
     return Dominant(shown, (lo, hi), resolution, nyquist, independent, method, slow.part(slow_size),
                     fit["rms"], fit["serial"], spt, cov, note)
+
+
+def _make_scan(th, y, d, base, grid, cov: Coverage, reducible: bool) -> _Scan:
+    """The scan over the rows, or, when the model is a function of angle and direction (no drift in time)
+    and rows repeat their (angle, direction) at least four times on average, over those units: the unit
+    means weighted by sqrt(rows) give the rows' least squares exactly, for a fraction of the work."""
+    n = th.shape[0]
+    if reducible:
+        ut, inv = np.unique(th, return_inverse=True)
+        key = inv.reshape(-1).astype(np.int64) * 2 + (0 if d is None else (d > 0).astype(np.int64))
+        uk, first, unit = np.unique(key, return_index=True, return_inverse=True)
+        if uk.shape[0] * 4 <= n:
+            unit = unit.reshape(-1)
+            counts = np.bincount(unit).astype(float)
+            sw = np.sqrt(counts)
+            mean = np.bincount(unit, weights=y) / counts
+            return _Scan(th[first], mean * sw, base[first] * sw[:, None], grid, cov.span, cov.full_turn,
+                         None if d is None else d[first], sw=sw, rows=(y, unit))
+    return _Scan(th, y, base, grid, cov.span, cov.full_turn, d)
 
 
 def _base_columns(theta, d, slow_cols, held) -> tuple[np.ndarray, slice]:
@@ -336,6 +428,8 @@ def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
     """Sum of squares of ``resid`` explained by each order's (cos, sin) pair (and its differential pair with
     both directions) with the model projected out, exactly, in chunks (NaN where the model takes up all
     but MIN_SCAN_SHARE of the columns)."""
+    if scan.q is None:
+        return _powers_blocks(scan, resid, orders)
     n = scan.theta.shape[0]
     width = 2 if scan.d is None else 4
     out = np.full(orders.shape[0], np.nan)
@@ -348,6 +442,8 @@ def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
         arg = None
         if scan.d is not None:
             cols += [cols[0] * scan.d[:, None], cols[1] * scan.d[:, None]]
+        if scan.sw is not None:
+            cols = [c * scan.sw[:, None] for c in cols]
         proj = [q.T @ c for c in cols]
         gram = np.empty((ks.shape[0], width, width))
         for i in range(width):
@@ -356,7 +452,7 @@ def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
                                                  - np.einsum("ij,ij->j", proj[i], proj[j]))
         rhs = np.stack([resid @ c for c in cols], axis=1)
         total = np.einsum("kii->k", gram)
-        keep = total > MIN_SCAN_SHARE * n * width / 2
+        keep = total > MIN_SCAN_SHARE * scan.total * width / 2
         lam = np.linalg.eigvalsh(gram)
         keep &= lam[:, 0] > 1e-9 * np.maximum(lam[:, -1], 1e-300)
         safe = np.where(keep[:, None, None], gram, np.eye(width))
@@ -365,11 +461,33 @@ def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
     return out
 
 
+def _powers_blocks(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
+    """:func:`_powers` at a few orders on a long measurement: the orders' columns against the model by
+    normal equations accumulated in blocks of rows (no n x k basis)."""
+    gram_model, _ = scan.normal_equations()
+    g_inv = _gram_inverse(gram_model)
+    width = 2 if scan.d is None else 4
+    out = np.full(orders.shape[0], np.nan)
+    for i, k in enumerate(orders):
+        cc = np.zeros((width, width))
+        cx = np.zeros((width, gram_model.shape[0]))
+        cr = np.zeros(width)
+        for a, b in scan.blocks():
+            c = scan.trig(k, a, b)
+            cc += c.T @ c
+            cx += c.T @ scan.design(a, b)
+            cr += c.T @ resid[a:b]
+        m = cc - cx @ g_inv @ cx.T
+        lam = np.linalg.eigvalsh(m)
+        if np.trace(m) > MIN_SCAN_SHARE * scan.total * width / 2 and lam[0] > 1e-9 * max(lam[-1], 1e-300):
+            out[i] = float(cr @ np.linalg.solve(m, cr))
+    return out
+
+
 def _fft_powers(scan: _Scan, resid: np.ndarray) -> np.ndarray:
     """Screening powers at the grid orders from an FFT of the residual binned along the arc
     (2 |sum r e^(-i k theta)|^2 / n, each row moved to its bin's centre)."""
     two_pi = 2.0 * math.pi
-    n = resid.shape[0]
     grid = scan.grid
     hi = float(grid[-1])
     start = float(np.min(scan.theta))
@@ -389,6 +507,9 @@ def _fft_powers(scan: _Scan, resid: np.ndarray) -> np.ndarray:
     pos = np.clip(np.searchsorted(freq, grid), 1, freq.shape[0] - 1)
     nearest = np.where(np.abs(freq[pos - 1] - grid) < np.abs(freq[pos] - grid), pos - 1, pos)
     out = np.zeros(grid.shape[0])
+    n = scan.total
+    if scan.sw is not None:
+        resid = resid * scan.sw  # the rows' residuals summed per unit
     for weights in ([resid] if scan.d is None else [resid, resid * scan.d]):
         spec = np.fft.rfft(np.bincount(idx, weights=weights, minlength=cells), n=length)
         # the phase reference of the bins (their centres, from ``start``) does not change |F|
@@ -486,21 +607,28 @@ def _refine(scan: _Scan, resid: np.ndarray, k: float) -> float:
 def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
     """Least squares of y on the model columns and the peaks' (cos, sin): amplitudes, phases, standard
     errors (block-robust when the residual is serially correlated), the residual RMS."""
-    x = np.hstack([scan.base] + [scan.order_columns(k) for k in orders])
-    n, p = x.shape
-    coef, *_ = np.linalg.lstsq(x, scan.y, rcond=None)
-    resid = scan.y - x @ coef
-    gram_inv = np.linalg.pinv(x.T @ x)
+    keep_peaks = scan.peaks
+    scan.peaks = list(orders)
+    gram, rhs = scan.normal_equations()
+    gram_inv = _gram_inverse(gram)
+    coef = gram_inv @ rhs
+    p = gram.shape[0]
+    fitted = np.empty(scan.theta.shape[0])
+    for a, b in scan.blocks():
+        fitted[a:b] = scan.design(a, b) @ coef
+    if scan.sw is None:
+        resid, unit = scan.y - fitted, None
+    else:
+        y_rows, unit = scan.rows
+        resid = y_rows - (fitted / scan.sw)[unit]
+    n = resid.shape[0]
     serial = serial_blocks(resid, passes, time) if n > p + 2 else SerialBlocks("independent rows", math.nan, 1, n)
     if serial.independent:
         dof = n - p
         cov = gram_inv * (float(resid @ resid) / dof if dof > 0 else math.nan)
     else:
-        scores = np.zeros((serial.blocks, p))
-        v = serial.whiten(resid)
-        for j in range(p):
-            scores[:, j] = np.bincount(serial.block_id, weights=x[:, j] * v, minlength=serial.blocks)
-        cov = block_covariance(gram_inv, scores, n) * serial.recolour
+        cov = block_covariance(gram_inv, _scores(scan, serial, serial.whiten(resid), unit, p), n) * serial.recolour
+    scan.peaks = keep_peaks
     q0, width = scan.base.shape[1], 2 if scan.d is None else 4
     out: dict = {"coef": coef, "serial": serial, "rms": float(math.sqrt(np.mean(resid**2))) if n else math.nan,
                  "amp": [], "se": [], "phase": [], "diff": [], "diff_se": []}
@@ -515,6 +643,24 @@ def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
         out["diff"].append(diff)
         out["diff_se"].append(diff_se)
     return out
+
+
+def _scores(scan: _Scan, serial: SerialBlocks, v: np.ndarray, unit, p: int) -> np.ndarray:
+    """Per block, the sum over its rows of x_t v_t (x_t the row's model and peak columns)."""
+    scores = np.zeros((serial.blocks, p))
+    for a, b in scan.blocks():
+        x = scan.design(a, b)
+        if scan.sw is not None:
+            x = x / scan.sw[a:b, None]  # the unit's columns, unweighted
+        if unit is None:
+            for j in range(p):
+                scores[:, j] += np.bincount(serial.block_id[a:b], weights=x[:, j] * v[a:b], minlength=serial.blocks)
+        else:
+            rows = (unit >= a) & (unit < b)
+            for j in range(p):
+                scores[:, j] += np.bincount(serial.block_id[rows], weights=x[unit[rows] - a, j] * v[rows],
+                                            minlength=serial.blocks)
+    return scores
 
 
 def _amplitude(ab: np.ndarray, cov: np.ndarray) -> tuple[float, float, float]:
@@ -533,13 +679,18 @@ def _group(scan: _Scan, k: float, threshold: float, resolution: float) -> tuple[
         return (k, k)
     theta = scan.theta
     base = scan.base
+    sel = None
     if theta.shape[0] > GROUP_ROWS:
         sel = np.linspace(0, theta.shape[0] - 1, GROUP_ROWS).astype(np.int64)
         theta, base = theta[sel], base[sel]
     q = np.linalg.qr(base)[0]
 
+    sw = None if scan.sw is None else (scan.sw if theta.shape[0] == scan.theta.shape[0] else scan.sw[sel])
+
     def basis(order):
         c = np.column_stack([np.cos(order * theta), np.sin(order * theta)])
+        if sw is not None:
+            c = c * sw[:, None]
         c = c - q @ (q.T @ c)
         return np.linalg.qr(c)[0]
 

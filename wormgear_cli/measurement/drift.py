@@ -64,21 +64,32 @@ class SlowModel:
         return SlowPart(self.kind, self.degree, self.signal, self.traversals, float(size))
 
 
+def pass_keys(passes, direction) -> np.ndarray:
+    """A pass id per row (N,) int: the run (or pass) of each row split by its direction (one pass without
+    either)."""
+    d = None if direction is None else np.asarray(direction, dtype=float).reshape(-1)
+    n = (d.shape[0] if d is not None else np.asarray(passes).reshape(-1).shape[0])
+    if passes is None:
+        run = np.zeros(n, dtype=np.int64)
+    else:
+        run = np.unique(np.asarray(passes).reshape(-1), return_inverse=True)[1].reshape(-1).astype(np.int64)
+    key = run * 2 + (0 if d is None else (d > 0).astype(np.int64))
+    return np.unique(key, return_inverse=True)[1].reshape(-1)
+
+
 def traversals(theta, cov: Coverage, passes=None, direction=None) -> int:
     """Passes (runs split by direction) that each span at least :data:`PASS_SHARE` of the covered arc."""
     th = np.asarray(theta, dtype=float)
-    n = th.shape[0]
-    keys = [np.zeros(n, dtype=np.int64) if passes is None else np.asarray(passes).reshape(-1)]
-    if direction is not None:
-        keys.append(np.sign(np.asarray(direction, dtype=float)).astype(np.int64))
-    _, pid = np.unique(np.column_stack(keys), axis=0, return_inverse=True)
-    pid = pid.reshape(-1)
-    count = 0
-    for p in range(int(pid.max()) + 1 if n else 0):
-        t = np.mod(th[pid == p] - cov.start, 2.0 * math.pi)
-        if t.size and float(np.ptp(t)) >= PASS_SHARE * cov.span:
-            count += 1
-    return count
+    if th.shape[0] == 0:
+        return 0
+    pid = pass_keys(passes, direction if direction is not None else np.ones(th.shape[0]))
+    u = np.mod(th - cov.start, 2.0 * math.pi)
+    count = int(pid.max()) + 1
+    lo = np.full(count, np.inf)
+    hi = np.full(count, -np.inf)
+    np.minimum.at(lo, pid, u)
+    np.maximum.at(hi, pid, u)
+    return int(np.count_nonzero(hi - lo >= PASS_SHARE * cov.span))
 
 
 def slow_model(theta, cov: Coverage, passes=None, direction=None, time=None, degree: int = TREND_DEGREE) -> SlowModel:

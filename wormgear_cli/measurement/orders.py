@@ -18,7 +18,7 @@ import numpy as np
 
 from wormgear_cli.measurement.coverage import Coverage, coverage, trend_columns, unwrap_passes
 from wormgear_cli.measurement.coverage import as_1d as _as_1d
-from wormgear_cli.measurement.drift import SlowModel, SlowPart, drift_size, slow_model
+from wormgear_cli.measurement.drift import SlowModel, SlowPart, drift_size, pass_keys, slow_model
 from wormgear_cli.measurement.harmonics import (
     ALIAS_TOL,
     BLOCK_ROWS,
@@ -612,9 +612,7 @@ def _finish(solved: _Solved, sums: _AngleSums, design: _Design, fitted: list,
 
 def _pass_keys(passes, d: np.ndarray) -> np.ndarray:
     """A pass id per row: the run (or pass) split by direction."""
-    run = np.zeros(d.shape[0], dtype=np.int64) if passes is None else np.asarray(passes).reshape(-1)
-    _, pid = np.unique(np.column_stack([run, np.sign(d).astype(np.int64)]), axis=0, return_inverse=True)
-    return pid.reshape(-1)
+    return pass_keys(passes, d)
 
 
 def _row_residual(sums: _AngleSums, ords: np.ndarray, solved: _Solved) -> np.ndarray:
