@@ -62,8 +62,12 @@ def measure(
     deviation E, mean bidirectional deviation M and repeatability R; and
     the amplitude and phase at exact orders by least squares on all rows,
     split into the common mode (mean of the directions) and the
-    differential mode (half the reversal).  The span covered is reported;
-    orders longer than a partial span are 'beyond span'.  Spreadsheet
+    differential mode (half the reversal); orders too close for the span
+    to separate are one 'ambiguous' group.  The strongest orders of the
+    data, scanned up to the Nyquist limit of the spacing, are reported too.
+    The span covered is reported; over a partial arc the slow part is a
+    trend (or, over an arc traversed repeatedly, a drift in time) and orders
+    too slow for the arc are 'beyond span'.  Spreadsheet
     exports (';' or tab, decimal commas, other headers) are read with
     --map and the unit options.  CSV output is the per-target table.
 
