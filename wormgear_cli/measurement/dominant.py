@@ -192,6 +192,7 @@ class _Scan:
     normal: tuple | None = None  # (peaks, X'X, X'y) of the last normal equations
     sw: np.ndarray | None = None  # sqrt of the rows per unit when the rows are reduced to (angle, direction) units
     rows: tuple | None = None  # (y per row, unit of each row) when reduced
+    bins: tuple | None = None  # (cells, cell of each unit) of the FFT screening
 
     @property
     def total(self) -> float:
@@ -335,7 +336,7 @@ def _make_scan(th, y, d, base, grid, cov: Coverage, reducible: bool) -> _Scan:
     and rows repeat their (angle, direction) at least four times on average, over those units: the unit
     means weighted by sqrt(rows) give the rows' least squares exactly, for a fraction of the work."""
     n = th.shape[0]
-    if reducible:
+    if reducible and cov.distinct * 4 <= n:  # (distinct angles on the circle: no more than in th)
         ut, inv = np.unique(th, return_inverse=True)
         key = inv.reshape(-1).astype(np.int64) * 2 + (0 if d is None else (d > 0).astype(np.int64))
         uk, first, unit = np.unique(key, return_index=True, return_inverse=True)
@@ -495,10 +496,13 @@ def _fft_powers(scan: _Scan, resid: np.ndarray) -> np.ndarray:
     cells = 1 << max(4, int(math.ceil(math.log2(max(4.0 * hi * extent / math.pi, 16.0)))))
     cells = min(cells, MAX_FFT)
     width = extent / cells
-    idx = np.clip(((scan.theta - start) / width).astype(np.int64), 0, cells - 1)
-    if scan.full_turn:
-        idx = np.mod(((np.mod(scan.theta, two_pi)) / width).astype(np.int64), cells)
-        start = 0.0
+    if scan.bins is None or scan.bins[0] != cells:
+        if scan.full_turn:
+            idx = np.mod((np.mod(scan.theta, two_pi) / width).astype(np.int64), cells)
+        else:
+            idx = np.clip(((scan.theta - start) / width).astype(np.int64), 0, cells - 1)
+        scan.bins = (cells, idx)
+    idx = scan.bins[1]
     step = float(grid[1] - grid[0]) if grid.shape[0] > 1 else 1.0
     length = cells
     while two_pi / (length * width) > step * (1.0 + 1e-9) and length < MAX_FFT:

@@ -44,7 +44,8 @@ class MeasureResult:
     (:class:`~wormgear_cli.measurement.orders.OrdersAnalysis`), ``drive_name``,
     ``findings`` (tuple of :class:`Finding`), ``mixed_directions``, ``dominant``
     (:class:`~wormgear_cli.measurement.dominant.Dominant`: the strongest orders of the
-    data, scanned up to the Nyquist limit of the spacing).
+    data, scanned up to the Nyquist limit of the spacing), ``outside`` (the strongest
+    orders left outside the fitted ones when the residual is far above the noise).
     """
 
     measurement: object
@@ -54,6 +55,7 @@ class MeasureResult:
     findings: tuple
     mixed_directions: bool
     dominant: object = None
+    outside: tuple = ()
 
     @property
     def verdict(self) -> str:
@@ -135,7 +137,8 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
                                        "run): one-direction figures withheld")
     analysis, dominant = _orders_and_dominant(m, order_list, labels, priority, physical, unique)
-    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant)
+    outside = _left_outside(m, analysis)
+    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant, outside)
 
 
 def _orders_asked(drive, orders, harmonics):
@@ -180,6 +183,23 @@ def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
     return analysis, dominant
 
 
+def _left_outside(m, analysis) -> tuple:
+    """When the fit's residual is more than EXCESS_FACTOR times the point-to-point noise: the significant
+    strongest orders of the data with the fitted orders held (projected out), outside their groups;
+    else ()."""
+    from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR
+    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+
+    noise, rms = analysis.point_noise, analysis.residual_rms
+    if not (math.isfinite(noise) and noise > 0 and rms > EXCESS_FACTOR * noise):
+        return ()
+    fitted = tuple(it.order for it in analysis.items if it.fitted)
+    time = m.time if "time_s" in m.present else None
+    left = dominant_orders(m.angle, m.error, m.direction, time, m.run, ScanOptions(held=fitted))
+    return tuple(p for p in left.significant if not any(p.group[0] - 1e-9 <= k <= p.group[1] + 1e-9
+                                                        or abs(k - p.order) < 1e-6 for k in fitted))
+
+
 def _span_finding(analysis, unit: str) -> Finding | None:
     """The partial span, the orders beyond it and what stands for the slow part (with its size in ``unit``)."""
     from wormgear_cli.units import to_unit
@@ -190,7 +210,7 @@ def _span_finding(analysis, unit: str) -> Finding | None:
     beyond = [f"{it.order:g}" for it in analysis.items if it.status == "beyond span"]
     slow = analysis.slow
     size = ("" if slow is None or not math.isfinite(slow.size) or not slow.degree
-            else f", {to_unit(slow.size, unit):.3g} {unit} peak to peak")
+            else f", {round(float(to_unit(slow.size, unit)), 4):.4g} {unit} peak to peak")
     text = (f"the data cover {math.degrees(cov.span):.4g} deg of the turn, not a full turn"
             + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} (period longer than the span) "
                "cannot be told from a trend and are reported as beyond span, without amplitude" if beyond else ""))
@@ -203,27 +223,21 @@ def _span_finding(analysis, unit: str) -> Finding | None:
     return Finding("span", text, False)
 
 
-def _excess_finding(analysis, dominant, unit: str) -> Finding | None:
+def _excess_finding(analysis, outside: tuple, unit: str) -> Finding | None:
     """A note when the fit's residual is far above the point-to-point noise and the strongest content of
-    the data lies outside the orders fitted (angles in ``unit``)."""
-    from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR
+    the data lies outside the orders fitted (``outside``: :func:`_left_outside`; angles in ``unit``)."""
     from wormgear_cli.units import to_unit
 
-    noise, rms = analysis.point_noise, analysis.residual_rms
-    if dominant is None or not (math.isfinite(noise) and noise > 0 and rms > EXCESS_FACTOR * noise):
-        return None
-    fitted = [it.order for it in analysis.items if it.fitted]
-    outside = [p for p in dominant.significant if not any(p.group[0] - 1e-9 <= k <= p.group[1] + 1e-9
-                                                          or abs(k - p.order) < 1e-6 for k in fitted)]
     if not outside:
         return None
-    strongest = outside[0]
-    names = ", ".join(f"{p.order:.6g} ({to_unit(p.amplitude, unit):.3g} {unit})" for p in outside)
+    noise, rms = analysis.point_noise, analysis.residual_rms
+    fitted = [it.order for it in analysis.items if it.fitted]
+    names = ", ".join(f"{p.order:.6g} ({to_unit(p.size, unit):.3g} {unit})" for p in outside)
     text = (f"the residual of the fit ({to_unit(rms, unit):.3g} {unit} RMS) is {rms / noise:.1f} times the "
             f"point-to-point noise ({to_unit(noise, unit):.3g} {unit}), and the strongest content of the data lies "
-            f"outside the orders fitted: order{'s' if len(outside) > 1 else ''} {names} (see dominant); add "
+            f"outside the orders fitted: order{'s' if len(outside) > 1 else ''} {names}; add "
             f"{'them' if len(outside) > 1 else 'it'} with --orders, e.g. --orders "
-            + ",".join(f"{k:g}" for k in [*fitted, round(strongest.order, 6)]))
+            + ",".join(f"{k:g}" for k in [*fitted, *(round(p.order, 6) for p in outside)]))
     return Finding("excess", text, False)
 
 
@@ -297,7 +311,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
 
     t = figures.targets
     findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
-                                                    _excess_finding(analysis, result.dominant, unit)) if f]
+                                                    _excess_finding(analysis, result.outside, unit)) if f]
     notes = list(figures.notes) + _order_notes(analysis)
     runs_f = t.n_up[t.n_up > 0]
     runs_r = t.n_down[t.n_down > 0]
