@@ -62,6 +62,8 @@ MIN_BACKGROUND_POINTS = 40
 BACKGROUND_BINS = 16
 #: rows used to find a peak's group on a long measurement (an even subsample)
 GROUP_ROWS = 20_000
+#: correlation above which a labelled order beyond the scanned range is named as (partly) aliased onto a peak
+ALIAS_CORR = 0.5
 #: largest FFT length of the screening
 MAX_FFT = 1 << 22
 #: rows up to which an orthonormal basis of the model is kept (beyond: normal equations in blocks of rows)
@@ -114,7 +116,12 @@ class DominantOrder:
     ``differential`` / ``differential_stderr``: the amplitude of half the
     reversal at the order (both directions measured; else NaN).  With both
     directions each order is scanned as its common and differential pair
-    together."""
+    together.  ``aliases``: ((order, correlation, label), ...) of the labelled
+    orders beyond the scanned range whose columns correlate with this
+    order's by at least :data:`ALIAS_CORR` on these samples (on sparse
+    targets a drive order above the Nyquist limit shows partly here); the
+    ``label`` then names the strongest of them when no labelled order is in
+    the group."""
 
     order: float
     amplitude: float
@@ -128,6 +135,7 @@ class DominantOrder:
     label: str | None = None
     differential: float = math.nan
     differential_stderr: float = math.nan
+    aliases: tuple = ()
 
     @property
     def size(self) -> float:
@@ -321,9 +329,14 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     peaks = []
     for i, (k, ratio, p_adj) in enumerate(found):
         group = _group(scan, k, opt.separation, resolution)
+        aliases = _aliases(scan, k, [(o, lab) for o, lab in opt.labels if float(o) > hi])
+        label = _label(group, k, opt.labels)
+        if label is None and aliases:
+            o, c, lab = aliases[0]
+            label = f"partly aliased with order {o:g} ({lab}; correlation {c:.2f} on these angles)"
         peaks.append(DominantOrder(k, fit["amp"][i], fit["se"][i], fit["phase"][i], ratio, p_adj, p_adj < opt.alpha,
-                                   group, spt / k if spt else None, _label(group, k, opt.labels),
-                                   fit["diff"][i], fit["diff_se"][i]))
+                                   group, spt / k if spt else None, label, fit["diff"][i], fit["diff_se"][i],
+                                   aliases))
     significant = sorted((p for p in peaks if p.significant), key=lambda p: -p.size)[:opt.max_peaks]
     shown = tuple(significant) if significant else tuple(peaks[:1])
     note = "" if grid.size else _empty_note(n, cov, lo, hi)
@@ -712,6 +725,31 @@ def _group(scan: _Scan, k: float, threshold: float, resolution: float) -> tuple[
             edge = other
         bounds.append(edge)
     return (bounds[0], bounds[1])
+
+
+def _aliases(scan: _Scan, k: float, labelled: list) -> tuple:
+    """((order, correlation, label), ...) of ``labelled`` orders whose (cos, sin) columns correlate with order
+    ``k``'s by at least ALIAS_CORR on the sampled angles (offset projected out), strongest first."""
+    if not labelled:
+        return ()
+    theta = scan.theta
+    if theta.shape[0] > GROUP_ROWS:
+        theta = theta[np.linspace(0, theta.shape[0] - 1, GROUP_ROWS).astype(np.int64)]
+
+    def basis(order):
+        c = np.column_stack([np.cos(order * theta), np.sin(order * theta)])
+        c = c - c.mean(axis=0)
+        return _orthonormal(c)
+
+    own = basis(k)
+    out = []
+    for o, lab in labelled:
+        other = basis(float(o))
+        if own.shape[1] and other.shape[1]:
+            corr = float(np.linalg.svd(own.T @ other, compute_uv=False)[0])
+            if corr >= ALIAS_CORR:
+                out.append((float(o), corr, lab))
+    return tuple(sorted(out, key=lambda t: -t[1]))
 
 
 def _label(group: tuple[float, float], k: float, labels) -> str | None:

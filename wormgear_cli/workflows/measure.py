@@ -211,9 +211,11 @@ def _span_finding(analysis, unit: str) -> Finding | None:
     slow = analysis.slow
     size = ("" if slow is None or not math.isfinite(slow.size) or not slow.degree
             else f", {round(float(to_unit(slow.size, unit)), 4):.4g} {unit} peak to peak")
+    why = ("(less than an eighth of a period over the span) cannot be told from the offset"
+           if slow is not None and slow.kind == "time" else "(period longer than the span) cannot be told from a trend")
     text = (f"the data cover {math.degrees(cov.span):.4g} deg of the turn, not a full turn"
-            + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} (period longer than the span) "
-               "cannot be told from a trend and are reported as beyond span, without amplitude" if beyond else ""))
+            + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} {why} and "
+               f"{'are' if len(beyond) > 1 else 'is'} reported as beyond span, without amplitude" if beyond else ""))
     if slow is not None and slow.kind == "time" and slow.degree:
         text += (f"; the arc is traversed {slow.traversals} times, so the slow part is {slow.describe()}{size}, "
                  "fitted apart from the errors fixed to the angle (a once-per-turn runout among them), which are "
@@ -436,7 +438,8 @@ def _dominant_doc(dominant, a) -> dict | None:
     peaks = [{"order": p.order, "amplitude": a(p.amplitude), "amplitude_stderr": a(p.amplitude_stderr),
               "phase_deg": math.degrees(p.phase), "differential": a(p.differential),
               "differential_stderr": a(p.differential_stderr), "p_adjusted": p.p_adjusted,
-              "significant": p.significant, "group": list(p.group), "period_s": p.period_s, "label": p.label}
+              "significant": p.significant, "group": list(p.group), "period_s": p.period_s, "label": p.label,
+              "aliases": [{"order": o, "correlation": c, "label": lab} for o, c, lab in p.aliases]}
              for p in dominant.peaks]
     return {
         "method": dominant.method,
