@@ -110,3 +110,39 @@ def test_groups_need_both_closeness_and_correlation():
     (grp,) = separation_groups([10.0, 10.5], corr[:2, :2], 2 * math.pi, True)
     assert grp.span_needed_deg == pytest.approx(720.0)
     assert "720 deg (more than a full turn)" in grp.describe(360.0)
+
+
+def test_the_note_names_the_span_that_would_separate_them():
+    from wormgear_cli.measurement.separation import SeparationGroup
+
+    assert SeparationGroup((10.0, 13.0), 0.95, 120.0).describe(40.0) == (
+        "orders 10, 13 cannot be told apart on this 40 deg arc (closer than 360 deg / span apart; their columns "
+        "correlate 0.95); a span of at least 120 deg would separate them")
+    assert "on a full turn" in SeparationGroup((1.0, 1.5), 0.99, 720.0).describe(360.0)
+    assert "a span of at least a full turn would" in SeparationGroup((1.0, 2.0), 0.99, 360.0).describe(30.0)
+
+
+def test_canonical_correlations_without_fixed_columns_and_with_a_vanishing_pair():
+    theta = np.linspace(0.0, 2 * math.pi, 24, endpoint=False)
+    cols = [np.column_stack([np.cos(k * theta), np.sin(k * theta)]) for k in (1.0, 2.0, 12.0)]
+    x = np.hstack(cols)
+    corr = canonical_correlations(x.T @ x, 0, 3)
+    assert np.allclose(np.diag(corr), 1.0)
+    assert corr[0, 1] == pytest.approx(0.0, abs=1e-12)  # orthogonal on a full even turn
+    # order 12 on 24 even targets: sin vanishes, cos is left; the pair keeps one direction (still a pair)
+    y = np.column_stack([np.ones(24), x])
+    full = canonical_correlations(y.T @ y, 1, 3)
+    assert full.shape == (3, 3) and np.all(full <= 1.0)
+    # a pair that vanishes entirely once the offset is projected out (order 24 = a constant) is inseparable
+    z = np.column_stack([np.ones(24), cols[0], np.cos(24 * theta), np.sin(24 * theta)])
+    c2 = canonical_correlations(z.T @ z, 1, 2)
+    assert c2[0, 1] == 1.0 and c2[1, 0] == 1.0
+
+
+def test_groups_are_sorted_and_report_their_largest_correlation():
+    corr = np.array([[1.0, 0.93, 0.2], [0.93, 1.0, 0.91], [0.2, 0.91, 1.0]])
+    (grp,) = separation_groups([12.0, 10.0, 11.0], corr, math.radians(20.0), False)
+    assert grp.orders == (10.0, 11.0, 12.0)  # sorted, joined through 10-11 (0.91) and 12-10 (0.93)
+    assert grp.correlation == pytest.approx(0.93)
+    assert grp.span_needed_deg == pytest.approx(360.0)
+    assert separation_groups([12.0, 10.0, 11.0], corr, math.radians(20.0), False, threshold=0.95) == []
