@@ -59,6 +59,8 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                ("tests/measurement/test_iso230_hand.py",), None),
     # the aliasing decisions (correlations, groups, folding); the least-squares fits are left to
     # a later round (run them with a functions list of their own)
+    "serial": (("wormgear_cli/measurement/serial.py",), ("tests/measurement/test_serial.py",), None),
+    "separation": (("wormgear_cli/measurement/separation.py",), ("tests/measurement/test_separation.py",), None),
     "harmonics": (("wormgear_cli/measurement/harmonics.py",),
                   ("tests/measurement/test_aliasing.py", "tests/measurement/test_harmonics.py"),
                   ("_sampling", "_correlations", "order_correlations", "offset_correlations", "_groups",

@@ -54,7 +54,7 @@ CASES = {
 
 
 def _verdicts(runner, tmp_path, text):
-    from wormgear_cli.cli._app import app
+    from wormgear_cli.cli import app
 
     spec = tmp_path / "drive.toml"
     spec.write_text(perfect_mch50_toml())
@@ -85,7 +85,7 @@ def test_a_clean_file_has_no_data_flags(runner, tmp_path):
 
 
 def test_the_table_verdict_line_carries_the_flag(runner, tmp_path):
-    from wormgear_cli.cli._app import app
+    from wormgear_cli.cli import app
 
     spec = tmp_path / "drive.toml"
     spec.write_text(perfect_mch50_toml())

@@ -54,7 +54,7 @@ def _radar_csv(seed, lost_motion):
 
 
 def _diagnose(runner, spec, data, *extra):
-    from wormgear_cli.cli._app import app
+    from wormgear_cli.cli import app
 
     res = runner.invoke(app, ["diagnose", str(spec), str(data), "--resamples", "10", *extra])
     assert res.exit_code == 0, res.output

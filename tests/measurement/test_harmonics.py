@@ -17,7 +17,7 @@ from wormgear_cli.measurement.harmonics import (
     physical_orders,
     physical_priority,
 )
-from wormgear_cli.measurement.orders import analyse_orders
+from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
 from wormgear_cli.physics.effects import DriveGeometry
 
 TWO_PI = 2.0 * math.pi
@@ -214,7 +214,7 @@ def test_analyse_orders_statuses_on_even_targets():
 def test_analyse_orders_keeps_the_priority_orders_when_targets_are_few():
     theta = np.array([0.0, 1.1, 2.3, 3.9, 5.0])  # 5 distinct targets: offset + 2 orders at most
     y = np.sin(theta)
-    res = analyse_orders(theta, y, np.ones(5), [1, 2, 3, 4], priority=[3, 1, 4, 2])
+    res = analyse_orders(theta, y, np.ones(5), [1, 2, 3, 4], OrdersOptions(priority=(3, 1, 4, 2)))
     assert {it.order: it.status for it in res.items} == {1.0: "fitted", 2.0: "unresolved", 3.0: "fitted",
                                                           4.0: "unresolved"}
 

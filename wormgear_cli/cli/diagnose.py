@@ -154,23 +154,44 @@ def diagnose(
 def _tables(doc: dict, unit: str) -> list:
     """The report as rich tables (every angle converted from arcsec to ``unit``; effect parameters stay in
     their catalogue units)."""
-    from rich.markup import escape
     from rich.table import Table
 
-    from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
+    v = _View(unit)
+    out = _head(doc, v) + [_gap_table(doc, v)] + _nuisance_lines(doc, v) + _effect_parts(doc, v)
+    out += _candidate_parts(doc, v) + _unexplained_parts(doc, v) + _fit_parts(doc, v) + _noise_parts(doc, v)
+    out += _order_parts(doc, v) + _versus_parts(doc, v) + [_iso_table(doc, v)]
+    for t in out:
+        if isinstance(t, Table):
+            _keep_numbers_whole(t)
+    return out
 
-    factor = ARCSEC / RAD_PER_UNIT[unit]
 
-    def a(x):
-        return "-" if x is None else fmt_angle(x * factor, unit)
+class _View:
+    """Formatting shared by the tables of one report (angles from arcsec to ``unit``)."""
 
+    def __init__(self, unit: str):
+        from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
+
+        self.unit = unit
+        self.factor = ARCSEC / RAD_PER_UNIT[unit]
+
+    def a(self, x) -> str:
+        return "-" if x is None else fmt_angle(x * self.factor, self.unit)
+
+    @staticmethod
     def table(title, cols, keep=1):
+        from rich.markup import escape
+        from rich.table import Table
+
         t = Table(title=escape(title), title_justify="left")
         for i, c in enumerate(cols):
             t.add_column(escape(c), justify="left" if i < keep else "right", no_wrap=i < keep)
         return t
 
-    out = []
+
+def _head(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
     sig = doc["signals"]
     runs = doc["noise"]["before"]["runs"]
     parts = [f"{doc['rows']} rows", f"{runs} run{'s' if runs != 1 else ''}",
@@ -179,82 +200,130 @@ def _tables(doc: dict, unit: str) -> list:
         if sig.get(key):
             lo, hi = sig[key]
             parts.append(f"{name} {lo:g} to {hi:g} {u}" if hi > lo else f"{name} {lo:g} {u}")
-    out.append(escape(f"{doc['drive']} vs {doc['data']}: " + ", ".join(parts)))
-    out.append(escape(f"verdict: {doc['verdict']}"))
+    out = [escape(f"{doc['drive']} vs {doc['data']}: " + ", ".join(parts)), escape(f"verdict: {doc['verdict']}")]
     if sig.get("warning"):
         out.append(escape(f"note: {sig['warning']}"))
     if sig.get("data_warning"):
         out.append(escape(f"note: {sig['data_warning']}"))
+    return out
 
-    gt = table(f"gap: measured - simulated [{unit}]", ["", "as specified", "before (phases fitted)",
-                                                         "after (effects added)"])
+
+def _gap_table(doc: dict, v: _View):
+    a = v.a
+    gt = v.table(f"gap: measured - simulated [{v.unit}]", ["", "as specified", "before (phases fitted)",
+                                                          "after (effects added)"])
     for key, label in (("rms_arcsec", "RMS"), ("max_arcsec", "max |.|"), ("common_rms_arcsec", "common mode RMS"),
                        ("common_max_arcsec", "common mode max"), ("differential_rms_arcsec", "differential RMS"),
                        ("differential_max_arcsec", "differential max")):
         gt.add_row(label, a(doc["gap_as_specified"][key]), a(doc["gap_before"][key]), a(doc["gap_after"][key]))
-    out.append(gt)
+    return gt
 
-    if doc["effects_found"]:
-        et = table("effects found", ["effect / parameter", "value", "95 % interval"])
-        for e in doc["effects_found"]:
-            et.add_row(escape(e["name"] + ("" if e["separable"] else " (size not separable)")), "", "")
-            for key, value in e["parameters"].items():
-                iv = e["interval_95"].get(key)
-                if iv:
-                    span = f"{iv[0]:.4g} to {iv[1]:.4g}" + ("" if e["separable"] else " (fit as well)")
-                elif key in e["fixed_parameters"]:
-                    span = "fixed"
-                else:
-                    span = "not determined"
-                et.add_row(escape(f"  {key}"), f"{value:.4g}", span)
-        out.append(et)
-        for e in doc["effects_found"]:
-            stab = (f"best in {100 * e['stability']:.0f} % of resamples of whole runs" if e["stability"] is not None
-                    else f"stability {e['stability_note'] or 'not assessed'}")
-            out.append(escape(f"{e['name']}: explains {e['gap_share_pct']:.1f} % of the gap (p = {e['p_value']:.2g}, "
-                              f"df {e['df']:.3g}; {stab})"))
-            if "prediction" in e:
-                pr = e["prediction"]
-                out.append(escape(
-                    f"{e['name']}: physics predicts {pr['centre_distance_um_per_K']:.3g} um/K ({pr['basis']}); "
-                    f"fitted/predicted = {pr['fitted_over_predicted']:.2f}; the prediction is "
-                    f"{'inside' if pr['inside_interval'] else 'outside'} the 95 % interval"))
-            for note in e["notes"]:
-                out.append(escape(f"{e['name']}: {note}"))
 
-    ct = table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], keep=2)
+def _nuisance_lines(doc: dict, v: _View) -> list:
+    """The nuisance terms, apart from the gap (which is measured without them)."""
+    from rich.markup import escape
+
+    nu = doc.get("nuisance")
+    if not nu:
+        return []
+    out = [escape(f"fitted alongside the candidates as nuisance terms (no drive spec holds them; the gap above is "
+                  f"without them; with them the RMS gap is {v.a(nu['rms_with_arcsec'])} {v.unit}):")]
+    for term in nu["terms"]:
+        size = (f"amplitude {v.a(term['amplitude_arcsec'])}" if term.get("amplitude_arcsec") is not None
+                else f"{v.a(term.get('peak_to_peak_arcsec'))} peak to peak")
+        out.append(escape(f"  {term['label']}: {size}, RMS {v.a(term['rms_arcsec'])} [{v.unit}]"))
+    return out
+
+
+def _effect_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    if not doc["effects_found"]:
+        return []
+    et = v.table("effects found", ["effect / parameter", "value", "95 % interval"])
+    for e in doc["effects_found"]:
+        et.add_row(escape(e["name"] + ("" if e["separable"] else " (size not separable)")), "", "")
+        for key, value in e["parameters"].items():
+            iv = e["interval_95"].get(key)
+            if iv:
+                span = f"{iv[0]:.4g} to {iv[1]:.4g}" + ("" if e["separable"] else " (fit as well)")
+            elif key in e["fixed_parameters"]:
+                span = "fixed"
+            else:
+                span = "not determined"
+            et.add_row(escape(f"  {key}"), f"{value:.4g}", span)
+    out = [et]
+    for e in doc["effects_found"]:
+        stab = (f"best in {100 * e['stability']:.0f} % of resamples of whole runs" if e["stability"] is not None
+                else f"stability {e['stability_note'] or 'not assessed'}")
+        out.append(escape(f"{e['name']}: explains {e['gap_share_pct']:.1f} % of the gap (p = {e['p_value']:.2g}, "
+                          f"df {e['df']:.3g}; {stab})"))
+        if "prediction" in e:
+            pr = e["prediction"]
+            out.append(escape(
+                f"{e['name']}: physics predicts {pr['centre_distance_um_per_K']:.3g} um/K ({pr['basis']}); "
+                f"fitted/predicted = {pr['fitted_over_predicted']:.2f}; the prediction is "
+                f"{'inside' if pr['inside_interval'] else 'outside'} the 95 % interval"))
+        for note in e["notes"]:
+            out.append(escape(f"{e['name']}: {note}"))
+    return out
+
+
+def _candidate_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    ct = v.table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], keep=2)
     ct.columns[3].justify = "left"
     for c in doc["candidates"]:
         p = c.get("p_adjusted")
         ct.add_row(escape(c["name"]), escape(c["status"]), "-" if p is None else f"{p:.2g}",
                    escape(c.get("reason", "")))
-    out.append(ct)
+    out = [ct]
     for c in doc["candidates"]:
         if c.get("remedy"):
             out.append(escape(f"{c['name']}: {c['remedy']}"))
+    return out
 
-    if doc["unexplained"]:
-        ut = table(f"unexplained residual (after) [{unit}]", ["what", "mode", "size", "p (adjusted)", "note"])
-        ut.columns[4].justify = "left"
-        for u in doc["unexplained"]:
-            if u["kind"] == "order":
-                what, size = f"order {u['order']:g}", a(u["amplitude_arcsec"])
-            elif u["kind"] == "trend":
-                what, size = f"trend with {u['signal']}", f"{u['slope_arcsec_per_unit'] * factor:.4g}/{u['unit']}"
-            elif u["kind"] == "likely_effect":
-                what, size = f"likely effect {u['name']}", f"RMS {a(u['rms_arcsec'])} -> {a(u['rms_with_arcsec'])}"
-            elif u["kind"] == "excess":
-                what, size = "residual above the noise floor", f"RMS {a(u['rms_arcsec'])}"
-            else:
-                what, size = "mean reversal", a(u["mean_reversal_change_arcsec"])
-            p = u.get("p_adjusted")
-            ut.add_row(escape(what), u["mode"], size, "-" if p is None else f"{p:.2g}", escape(u["explanation"]))
-        out.append(ut)
 
+def _unexplained_row(u: dict, v: _View) -> tuple[str, str]:
+    """(what, size) of an unexplained item."""
+    a = v.a
+    if u["kind"] == "order":
+        return f"order {u['order']:.6g}", a(u["amplitude_arcsec"])
+    if u["kind"] == "trend":
+        return f"trend with {u['signal']}", f"{u['slope_arcsec_per_unit'] * v.factor:.4g}/{u['unit']}"
+    if u["kind"] == "likely_effect":
+        return f"likely effect {u['name']}", f"RMS {a(u['rms_arcsec'])} -> {a(u['rms_with_arcsec'])}"
+    if u["kind"] == "excess":
+        return "residual above the noise floor", f"RMS {a(u['rms_arcsec'])}"
+    if u["kind"] == "drift":
+        what = "drift in time" if u["signal"] in ("time_s", "row order") else "trend over the arc"
+        return what, f"{a(u['peak_to_peak_arcsec'])} p-p"
+    return "mean reversal", a(u["mean_reversal_change_arcsec"])
+
+
+def _unexplained_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    if not doc["unexplained"]:
+        return []
+    ut = v.table(f"unexplained residual (after) [{v.unit}]", ["what", "mode", "size", "p (adjusted)", "note"])
+    ut.columns[4].justify = "left"
+    for u in doc["unexplained"]:
+        what, size = _unexplained_row(u, v)
+        p = u.get("p_adjusted")
+        ut.add_row(escape(what), u["mode"], size, "-" if p is None else f"{p:.2g}", escape(u["explanation"]))
+    return [ut]
+
+
+def _fit_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    a, out = v.a, []
     fit = doc["fit"]
     if fit["phases"]:
-        pt = table("phases of the spec's periodic sources [deg]" + ("" if fit["phases_fitted"] else " (held)"),
-                   ["source", "order", "amplitude", "specified", "fitted"])
+        pt = v.table("phases of the spec's periodic sources [deg]" + ("" if fit["phases_fitted"] else " (held)"),
+                     ["source", "order", "amplitude", "specified", "fitted"])
         for p in fit["phases"]:
             pt.add_row(escape(p["source"]), f"{p['order']:g}", a(p["amplitude_arcsec"]), f"{p['specified_deg']:.2f}",
                        f"{p['fitted_deg']:.2f}")
@@ -262,24 +331,36 @@ def _tables(doc: dict, unit: str) -> list:
         if fit["note"]:
             out.append(escape(fit["note"]))
     out.append(escape(f"zero offset: {a(fit['zero_offset_before_arcsec'])} before, "
-                      f"{a(fit['zero_offset_after_arcsec'])} after [{unit}]"))
+                      f"{a(fit['zero_offset_after_arcsec'])} after [{v.unit}]"))
+    return out
 
-    nt = table(f"noise [{unit}]", ["", "before", "after"])
+
+def _noise_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    a = v.a
+    nt = v.table(f"noise [{v.unit}]", ["", "before", "after"])
     nb, na = doc["noise"]["before"], doc["noise"]["after"]
     for key, label in (("repeat_std_arcsec", "repeatability (std over runs)"), ("white_arcsec", "white"),
                        ("pass_arcsec", "per pass"), ("run_arcsec", "per run"), ("total_arcsec", "total")):
         nt.add_row(label, a(nb[key]), a(na[key]))
-    out.append(nt)
+    out = [nt]
     if doc["noise"].get("floor_arcsec") is not None:
         out.append(escape(f"noise floor (point-to-point noise within passes"
                           f"{'' if nb['runs'] < 3 else ' and scatter between passes and runs'}): "
-                          f"{a(doc['noise']['floor_arcsec'])} [{unit}]"))
+                          f"{a(doc['noise']['floor_arcsec'])} [{v.unit}]"))
     out.append(escape(f"run structure: {nb['structure']} ({nb['passes']} pass{'es' if nb['passes'] != 1 else ''}, "
                       f"{nb['runs']} run{'s' if nb['runs'] != 1 else ''})"))
+    return out
 
-    ot = table(f"residual at the physical orders [{unit}]", ["order", "shaft or mesh", "common before",
-                                                               "common after", "diff. before", "diff. after"],
-               keep=2)
+
+def _order_parts(doc: dict, v: _View) -> list:
+    from rich.markup import escape
+
+    a = v.a
+    ot = v.table(f"residual at the physical orders [{v.unit}]", ["order", "shaft or mesh", "common before",
+                                                                 "common after", "diff. before", "diff. after"],
+                 keep=2)
     unresolved = []
     for b, f in zip(doc["orders"]["before"], doc["orders"]["after"]):
         label = "constant" if b["order"] == 0 else b["label"]
@@ -288,33 +369,36 @@ def _tables(doc: dict, unit: str) -> list:
             continue
         ot.add_row(f"{b['order']:g}", escape(label), a(b["common_arcsec"]), a(f["common_arcsec"]),
                    a(b.get("differential_arcsec")), a(f.get("differential_arcsec")))
-    out.append(ot)
+    out = [ot]
     if unresolved:
         out.append(escape(f"not resolved at these targets (aliased, or too few targets for all orders): orders "
                           f"{', '.join(unresolved)}"))
+    return out
 
+
+def _versus_parts(doc: dict, v: _View) -> list:
     vs = doc["residual_vs"]
-    if vs["before"]:
-        vt = table(f"residual slope against the signals [{unit} per unit]",
-                   ["signal", "range", "common before", "common after", "differential before", "differential after"])
-        for key, b in vs["before"].items():
-            f = vs["after"][key]
-            lo, hi = b["range"]
-            s = lambda v: "-" if v is None else f"{v * factor:.4g}"  # noqa: E731
-            vt.add_row(key, f"{lo:g} to {hi:g}", s(b["slope_common"]), s(f["slope_common"]),
-                       s(b.get("slope_differential")), s(f.get("slope_differential")))
-        out.append(vt)
+    if not vs["before"]:
+        return []
+    vt = v.table(f"residual slope against the signals [{v.unit} per unit]",
+                 ["signal", "range", "common before", "common after", "differential before", "differential after"])
+    for key, b in vs["before"].items():
+        f = vs["after"][key]
+        lo, hi = b["range"]
+        s = lambda x: "-" if x is None else f"{x * v.factor:.4g}"  # noqa: E731
+        vt.add_row(key, f"{lo:g} to {hi:g}", s(b["slope_common"]), s(f["slope_common"]),
+                   s(b.get("slope_differential")), s(f.get("slope_differential")))
+    return [vt]
 
-    it = table(f"ISO 230-2 figures [{unit}]", ["figure", "measured", "simulated before", "simulated after"])
+
+def _iso_table(doc: dict, v: _View):
+    a = v.a
+    it = v.table(f"ISO 230-2 figures [{v.unit}]", ["figure", "measured", "simulated before", "simulated after"])
     iso = doc["iso230"]
     for key, label in (("A", "A accuracy"), ("B", "B reversal"), ("E", "E systematic"), ("M", "M mean bidirectional"),
                        ("R", "R repeatability")):
         it.add_row(label, a(iso["measured"][key]), a(iso["simulated_before"][key]), a(iso["simulated_after"][key]))
-    out.append(it)
-    for t in out:
-        if isinstance(t, Table):
-            _keep_numbers_whole(t)
-    return out
+    return it
 
 
 def _keep_numbers_whole(t) -> None:

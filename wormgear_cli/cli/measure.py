@@ -73,8 +73,12 @@ def measure(
     deviation E, mean bidirectional deviation M and repeatability R; and
     the amplitude and phase at exact orders by least squares on all rows,
     split into the common mode (mean of the directions) and the
-    differential mode (half the reversal).  The span covered is reported;
-    orders longer than a partial span are 'beyond span'.  Spreadsheet
+    differential mode (half the reversal); orders too close for the span
+    to separate are one 'ambiguous' group.  The strongest orders of the
+    data, scanned up to the Nyquist limit of the spacing, are reported too.
+    The span covered is reported; over a partial arc the slow part is a
+    trend (or, over an arc traversed repeatedly, a drift in time) and orders
+    too slow for the arc are 'beyond span'.  Spreadsheet
     exports (';' or tab, decimal commas, other headers) are read with
     --map and the unit options.  CSV output is the per-target table.
 
@@ -142,39 +146,61 @@ def _json(doc: dict) -> str:
 
 
 def _tables(doc: dict, ntargets: int) -> list:
-    """The table view: verdict line, ISO 230-2 figures, orders (common, then differential), per target, notes.
+    """The table view: verdict line, ISO 230-2 figures, orders (common, then differential), the strongest
+    orders of the data, per target, notes.
 
     Every table fits 80 columns without cutting a number: numbers never wrap
     (no_wrap), labels and long words fold, and wide tables are split."""
-    from rich import box
-    from rich.markup import escape
-    from rich.table import Table
     from rich.text import Text
 
-    unit = doc["unit"]
+    view = _View(doc["unit"])
+    out = [Text(doc["verdict"]), _iso_table(doc, view)]
+    out += _order_tables(doc, view)
+    dom = _dominant_table(doc, view)
+    if dom is not None:
+        out.append(dom)
+    out += _target_tables(doc, ntargets, view)
+    for w in doc["warnings"]:
+        out.append(Text(f"warning: {w}"))
+    for note in doc["notes"]:
+        out.append(Text(f"note: {note}"))
+    return out
 
-    def a(x) -> str:
-        return "-" if x is None or not math.isfinite(x) else fmt_angle(x, unit)
 
-    def table(title: str) -> Table:
-        return Table(title=escape(title), title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False,
-                     padding=(0, 1))
+class _View:
+    """Formatting shared by the tables of one document (angles in ``unit``)."""
 
-    def num(t: Table, name: str) -> None:
+    def __init__(self, unit: str):
+        self.unit = unit
+
+    def a(self, x) -> str:
+        return "-" if x is None or not math.isfinite(x) else fmt_angle(x, self.unit)
+
+    def na(self, x) -> str:
+        return "n/a" if x is None else fmt_angle(x, self.unit)
+
+    @staticmethod
+    def table(title: str):
+        from rich import box
+        from rich.markup import escape
+        from rich.table import Table
+
+        return Table(title=escape(title), title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1))
+
+    @staticmethod
+    def num(t, name: str) -> None:
         t.add_column(name, justify="right", no_wrap=True)
 
-    iso = doc["iso230_2"]
-    out = [Text(doc["verdict"])]
+
+def _iso_table(doc: dict, view: _View):
+    iso, unit, na = doc["iso230_2"], view.unit, view.na
     fig_keys = ("A", "A_forward", "A_reverse", "E", "E_forward", "E_reverse", "R", "R_forward", "R_reverse", "M", "B",
                 "B_signed", "B_mean")
-    st = table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if any(iso[k] is None for k in fig_keys) else ""))
+    st = view.table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if any(iso[k] is None for k in fig_keys)
+                                                      else ""))
     st.add_column("figure", overflow="fold")
     for col in ("bidirectional", "forward", "reverse"):
-        num(st, col)
-
-    def na(x) -> str:
-        return "n/a" if x is None else fmt_angle(x, unit)
-
+        view.num(st, col)
     st.add_row("accuracy A", na(iso["A"]), na(iso["A_forward"]), na(iso["A_reverse"]))
     st.add_row("systematic deviation E", na(iso["E"]), na(iso["E_forward"]), na(iso["E_reverse"]))
     st.add_row("repeatability R", na(iso["R"]), na(iso["R_forward"]), na(iso["R_reverse"]))
@@ -182,43 +208,51 @@ def _tables(doc: dict, ntargets: int) -> list:
     st.add_row("reversal B = max |B_i|", na(iso["B"]), "", "")
     st.add_row("  largest B_i, signed", na(iso["B_signed"]), "", "")
     st.add_row("mean reversal B_mean", na(iso["B_mean"]), "", "")
-    out.append(st)
+    return st
 
-    od = doc["orders"]
-    cov = doc["coverage"]
+
+def _status_text(it: dict) -> str:
+    s = it["status"]
+    if it["aliased_with"]:
+        s += " ~ " + ("offset" if 0 in it["aliased_with"] else ", ".join(f"{k:g}" for k in it["aliased_with"]))
+    if s == "ambiguous" and it["group"]:
+        others = ", ".join(f"{k:g}" for k in it["group"] if k != it["order"])
+        s += (f": one group with {others}" if it["common"]["amplitude"] is not None else f" ~ {others}")
+    return s
+
+
+def _order_tables(doc: dict, view: _View) -> list:
+    from rich.markup import escape
+
+    unit, a = view.unit, view.a
+    od, cov = doc["orders"], doc["coverage"]
 
     def ph(x):
         return "-" if x is None else f"{x:.1f}"
 
-    def status(it):
-        s = it["status"]
-        if it["aliased_with"]:
-            s += " ~ " + ("offset" if 0 in it["aliased_with"] else ", ".join(f"{k:g}" for k in it["aliased_with"]))
-        return s
-
     has_diff = any(it["differential"]["amplitude"] is not None for it in od["items"])
-    ot = table(f"orders, common mode (mean of directions) [{unit}, phase deg]")
-    num(ot, "order")
+    ot = view.table(f"orders, common mode (mean of directions) [{unit}, phase deg]")
+    view.num(ot, "order")
     ot.add_column("shaft / mesh", overflow="fold", ratio=1)
     for col in ("amplitude", "+/-", "phase"):
-        num(ot, col)
+        view.num(ot, col)
     ot.add_column("status", overflow="fold")
     for it in od["items"]:
         c = it["common"]
         ot.add_row(f"{it['order']:g}", escape(it["label"] or ""),
                    a(c["amplitude"]) if c["amplitude"] is not None else "-",
                    a(c["amplitude_stderr"]) if c["amplitude"] is not None else "-", ph(c["phase_deg"]),
-                   escape(status(it)))
+                   escape(_status_text(it)))
     span = "full turn" if cov["full_turn"] else f"span {cov['span_deg']:.4g} deg, trend degree {cov['trend_degree']}"
     ot.caption = escape(f"error ~ offset + A sin(k theta + phase) per order; {span}. Residual RMS "
                         f"{a(od['residual_rms'])}, common offset {a(od['common_offset'])}")
     ot.caption_justify = "left"
-    out.append(ot)
+    out = [ot]
     if has_diff:
-        dt = table(f"differential mode (half the reversal) [{unit}, phase deg]")
-        num(dt, "order")
+        dt = view.table(f"differential mode (half the reversal) [{unit}, phase deg]")
+        view.num(dt, "order")
         for col in ("amplitude", "+/-", "phase"):
-            num(dt, col)
+            view.num(dt, col)
         for it in od["items"]:
             d = it["differential"]
             if d["amplitude"] is None:
@@ -227,27 +261,65 @@ def _tables(doc: dict, ntargets: int) -> list:
         dt.caption = escape(f"differential offset {a(od['differential_offset'])}")
         dt.caption_justify = "left"
         out.append(dt)
-
-    rows = doc["per_target"]
-    if ntargets <= MAX_TABLE_TARGETS:
-        tt = table(f"per target by direction [{unit}; target deg]")
-        for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev"):
-            num(tt, col)
-        for r in rows:
-            tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]), a(r["s_forward"]),
-                       str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]))
-        out.append(tt)
-        bt = table(f"per target bidirectional [{unit}; target deg]")
-        for col in ("target", "mean bi", "B_i", "R fwd", "R rev", "R_i"):
-            num(bt, col)
-        for r in rows:
-            bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]), a(r["R_forward"]),
-                       a(r["R_reverse"]), a(r["R"]))
-        out.append(bt)
-    else:
-        out.append(Text(f"{ntargets} targets: the per-target table is in --format csv or json"))
-    for w in doc["warnings"]:
-        out.append(Text(f"warning: {w}"))
-    for note in doc["notes"]:
-        out.append(Text(f"note: {note}"))
     return out
+
+
+def _dominant_table(doc: dict, view: _View):
+    """The strongest orders of the data, or None when nothing was scanned."""
+    from rich.markup import escape
+
+    dom = doc.get("dominant")
+    if not dom or not dom["peaks"]:
+        return None
+    a = view.a
+    lo, hi = dom["scanned_orders"]
+    tt = view.table(f"strongest orders of the data [{view.unit}] (orders {lo:.4g} to {hi:.4g} scanned)")
+    view.num(tt, "order")
+    for col in ("amplitude", "+/-"):
+        view.num(tt, col)
+    timed = any(p["period_s"] is not None for p in dom["peaks"])
+    diff = any(p["differential"] is not None for p in dom["peaks"])
+    if diff:
+        view.num(tt, "diff.")
+    if timed:
+        view.num(tt, "period s")
+    tt.add_column("cannot be told from", overflow="fold")
+    tt.add_column("p adj.", justify="right", no_wrap=True)
+    for p in dom["peaks"]:
+        g_lo, g_hi = p["group"]
+        group = "-" if g_hi - g_lo < 1e-9 else f"{g_lo:.5g} to {g_hi:.5g}"
+        if p["label"]:
+            group = f"{group} ({p['label']})" if group != "-" else p["label"]
+        cells = [f"{p['order']:.6g}", a(p["amplitude"]), a(p["amplitude_stderr"])]
+        if diff:
+            cells.append(a(p["differential"]))
+        if timed:
+            cells.append("-" if p["period_s"] is None else f"{p['period_s']:.5g}")
+        cells += [escape(group), f"{p['p_adjusted']:.2g}" + ("" if p["significant"] else " (n.s.)")]
+        tt.add_row(*cells)
+    head = "amplitude: common mode; diff.: half the reversal; " if diff else ""
+    tt.caption = escape(f"{head}{dom['method']}; residual RMS {a(dom['residual_rms'])}")
+    tt.caption_justify = "left"
+    return tt
+
+
+def _target_tables(doc: dict, ntargets: int, view: _View) -> list:
+    from rich.text import Text
+
+    unit, a = view.unit, view.a
+    rows = doc["per_target"]
+    if ntargets > MAX_TABLE_TARGETS:
+        return [Text(f"{ntargets} targets: the per-target table is in --format csv or json")]
+    tt = view.table(f"per target by direction [{unit}; target deg]")
+    for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev"):
+        view.num(tt, col)
+    for r in rows:
+        tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]), a(r["s_forward"]),
+                   str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]))
+    bt = view.table(f"per target bidirectional [{unit}; target deg]")
+    for col in ("target", "mean bi", "B_i", "R fwd", "R rev", "R_i"):
+        view.num(bt, col)
+    for r in rows:
+        bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]), a(r["R_forward"]),
+                   a(r["R_reverse"]), a(r["R"]))
+    return [tt, bt]

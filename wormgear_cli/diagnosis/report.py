@@ -211,7 +211,25 @@ def _separate_hint(names) -> str:
     return "measure with irregular target spacing or a dense scan, in both directions"
 
 
-def _verdict(diag: Diagnosis, twins: dict) -> str:
+def over_prediction(diag: Diagnosis, order: float, data_rows: list | None) -> tuple[float, float] | None:
+    """(the least the spec's sources at ``order`` can produce together with free phases [arcsec], the data's
+    amplitude there [arcsec]) when the spec predicts more at the order than the data hold, else None.
+
+    Sources on one order add as vectors: with free phases their sum ranges from max(0, A_max - (sum of
+    the others)) to the sum of the amplitudes; the data's amplitude is the common mode of the measured
+    error at the order (:func:`~wormgear_cli.diagnosis.residuals.order_table`)."""
+    amps = [s.amplitude for s in diag.sources if abs(s.order - order) < 1e-9 and s.amplitude > 1e-9]
+    if not amps or not data_rows:
+        return None
+    least = max(0.0, max(amps) - (sum(amps) - max(amps)))
+    row = next((r for r in data_rows if abs(r["order"] - order) < 1e-9 and r.get("identifiable")), None)
+    if row is None or "common_arcsec" not in row:
+        return None
+    data = abs(float(row["common_arcsec"]))
+    return (least, data) if least > data else None
+
+
+def _verdict(diag: Diagnosis, twins: dict, data_rows: list | None = None) -> str:
     found = [f for f in diag.found if f.separable]
     mixed = [f for f in diag.found if not f.separable]
     parts = []
@@ -232,9 +250,16 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
         folded = "".join(f" or {t['name']} at order {t['order']:g}" for t in twins.get(f.name, []))
         also = ", ".join(f"{t['order']:g}" for t in twins.get(f.name, []))
         where = f" (where these targets also put order {also})" if also else ""
-        parts.append(f"missing content at order {order:g}{where} that the spec's sources cannot produce: {f.name} "
-                     f"({key} anywhere from {lo:.3g} to {hi:.3g}){folded} or a larger "
-                     + " or ".join(f.indistinguishable_from)
+        over = over_prediction(diag, order, data_rows)
+        if over is not None:
+            head = (f"the spec predicts more at order {order:g} than the data hold (its sources there give at least "
+                    f"{over[0]:.3g} arcsec with any phases, the data {over[1]:.3g}){where}: {f.name} ")
+            tail = " set against them fits as well"
+        else:
+            head = f"missing content at order {order:g}{where} that the spec's sources cannot produce: {f.name} "
+            tail = ""
+        parts.append(head + f"({key} anywhere from {lo:.3g} to {hi:.3g}){folded}{tail} or a "
+                     + ("smaller " if over is not None else "larger ") + " or ".join(f.indistinguishable_from)
                      + " (indistinguishable here: measure their runouts directly, enter the phases and rerun with "
                      "--keep-phases" + (f"; {FOLD_REMEDY}" if also else "") + ")")
     untestable = [n for n, sc in diag.candidates.items() if sc.status is ScoreStatus.UNTESTABLE]
@@ -275,6 +300,11 @@ def _verdict(diag: Diagnosis, twins: dict) -> str:
     if diag.likely is not None and diag.likely["name"] not in {n for n, _ in waiting}:
         parts.append(f"likely {'further ' if diag.found else ''}effect: {diag.likely['name']} (adjusted p = "
                      f"{diag.likely['p_adjusted']:.2g}, short of the level; see unexplained)")
+    check = gap_check(diag)
+    if not check["after_not_above_before"]:
+        parts.append(f"the named effects do not shrink the gap against the spec alone ({check['before_rms_arcsec']:.3g}"
+                     f" -> {check['after_rms_arcsec']:.3g} arcsec RMS): they were sized with the nuisance terms in the "
+                     "model (see nuisance)")
     others = [u for u in diag.unexplained if u["kind"] != "likely_effect"]
     if others:
         text = "the residual keeps structure no catalogue effect explains"
@@ -307,6 +337,30 @@ def _data_verdict(findings) -> list[str]:
         elif f.verdict:
             out.append(f.verdict)
     return out
+
+
+def gap_check(diag: Diagnosis) -> dict:
+    """The invariant of the report: the gap after the named effects is no larger than the gap of the spec's
+    own sources with fitted phases (both without nuisance terms), RMS over all rows [arcsec]."""
+    y = diag.meas.error / ARCSEC
+    before = float(np.sqrt(np.mean(diag.before.residual**2)))
+    after = float(np.sqrt(np.mean((y - diag.augmented_fitted) ** 2)))
+    return {"before_rms_arcsec": before, "after_rms_arcsec": after,
+            "after_not_above_before": bool(after <= before * (1.0 + 1e-6) + 1e-12)}
+
+
+def _rms_item(diag: Diagnosis, noise: float) -> dict | None:
+    """The spec's predicted variation over the measured rows against the data's (each about its mean): an
+    item when the spec, its phases fitted, predicts MISMATCH_RATIO times more variation than the data hold,
+    and by MISMATCH_NOISE times the noise (a check that needs no resolved order: single runs, short arcs)."""
+    y = diag.meas.error / ARCSEC
+    model = diag.before.fitted
+    spec_v = float(np.sqrt(np.mean((model - np.mean(model)) ** 2)))
+    data_v = float(np.sqrt(np.mean((y - np.mean(y)) ** 2)))
+    if spec_v >= MISMATCH_RATIO * data_v and spec_v - data_v >= MISMATCH_NOISE * noise:
+        return {"what": "RMS of the predicted error over the measured rows (phases fitted)", "spec_arcsec": spec_v,
+                "data_arcsec": data_v}
+    return None
 
 
 def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> dict | None:
@@ -367,6 +421,9 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> 
                                            >= MISMATCH_NOISE * noise):
             items.append({"what": "mean reversal (reverse - forward; ISO 230-2 B_mean has the other sign)",
                           "spec_arcsec": spec_b, "data_arcsec": data_b})
+    rms = _rms_item(diag, noise) if not items else None  # the fallback when no order or reversal shows it
+    if rms is not None:
+        items.append(rms)
     if not items:
         return None
     ratios = [abs(it["data_arcsec"]) / abs(it["spec_arcsec"]) for it in items
@@ -422,64 +479,21 @@ def _report(diag: Diagnosis) -> dict:
     orders_before, orders_after, orders_data, orders_model = order_tables(
         meas, [diag.before.residual, resid_after, y, diag.before.fitted], g)
     pair_cells = target_run_cells(meas)
-    found = []
-    for f in diag.found:
-        item = {"name": f.name, "parameters": augmented_params(f),
-                "interval_95": {k: [float(lo), float(hi)] for k, (lo, hi) in f.intervals.items()},
-                "p_value": f.p, "df": f.df, "gap_share_pct": 100.0 * f.share,
-                "stability": f.stability, "stability_note": f.stability_note,
-                "signature_rms_arcsec": f.signature_rms, "step": f.step, "separable": f.separable,
-                "fixed_parameters": list(f.fixed_keys),
-                "notes": list(f.notes), "indistinguishable_from": list(f.indistinguishable_from)}
-        if f.name == "thermal_backlash" and diag.thermal_prediction is not None and \
-                "centre_distance_um_per_K" in f.intervals:
-            lo, hi = f.intervals["centre_distance_um_per_K"]
-            pred = diag.thermal_prediction
-            fitted = item["parameters"]["centre_distance_um_per_K"]
-            ratio = float(diag.spec.materials.housing_rise_ratio)
-            basis = ("housing, worm and wheel warming alike (housing_rise_ratio = 1)" if ratio == 1.0 else
-                     f"worm and wheel at the measured temperature, the housing rising {ratio:g} K per K of it "
-                     "(housing_rise_ratio)")
-            item["prediction"] = {"centre_distance_um_per_K": pred, "inside_interval": bool(lo <= pred <= hi),
-                                  "fitted_over_predicted": fitted / pred if pred else None,
-                                  "housing_rise_ratio": ratio,
-                                  "basis": basis + ", expansion from the spec's [materials]"}
-        if f.name in twins:
-            item["indistinguishable_from"] += [t["name"] for t in twins[f.name]]
-            item["aliased_with"] = twins[f.name]
-            item["notes"].append(_twin_text(f.name, _effect_order(f.name, diag), twins[f.name])
-                                 + "".join(f"; as {t['name']}: " + ", ".join(f"{k} = {v:.4g}" for k, v in
-                                                                             t["estimate"].items())
-                                           for t in twins[f.name] if "estimate" in t)
-                                 + f" ({FOLD_REMEDY})")
-        found.append(item)
-    phases = []
-    for s, psi in zip(diag.sources, diag.after.psi):
-        same = [t.name for t in diag.sources if abs(t.order - s.order) < 1e-9 and t is not s]
-        phases.append({"source": s.name, "key": s.key, "order": s.order, "amplitude_arcsec": s.amplitude,
-                       "specified_deg": wrap_deg(s.phase), "fitted_deg": round(wrap_deg(float(psi)), 4),
-                       "shares_order_with": same})
     info = diag.info
     doc = {
         "drive": diag.spec.drive.name,
         "data": str(meas.source),
         "rows": len(meas),
-        "verdict": _verdict(diag, twins),
-        "effects_found": found,
+        "verdict": _verdict(diag, twins, orders_data),
+        "effects_found": [_found_item(diag, f, twins) for f in diag.found],
         "gap_as_specified": gap_summary(meas, diag.as_specified, pair_cells),
         "gap_before": gap_summary(meas, diag.before.residual, pair_cells),
         "gap_after": gap_summary(meas, resid_after, pair_cells),
-        "unexplained": diag.unexplained,
+        "gap_check": gap_check(diag),
+        "nuisance": _nuisance_doc(diag),
+        "unexplained": _over_predicted_items(diag, orders_data),
         "candidates": _status(diag, twins),
-        "fit": {
-            "phases_fitted": bool(diag.fit_phases),
-            "zero_offset_before_arcsec": diag.before.offset,
-            "zero_offset_after_arcsec": diag.after.offset,
-            "phases": phases,
-            "note": ("sources on one shaft share an order: only their combined vector is determined, the "
-                     "individual phases are one of several equivalent solutions") if any(p["shares_order_with"]
-                                                                                       for p in phases) else "",
-        },
+        "fit": _fit_doc(diag),
         "noise": {"before": noise_floor(meas, diag.before.residual, diag.before.var, diag.groups),
                   "after": noise_floor(meas, resid_after, diag.after.var, diag.groups),
                   "floor_arcsec": diag.noise_floor if math.isfinite(diag.noise_floor) else None},
@@ -487,35 +501,127 @@ def _report(diag: Diagnosis) -> dict:
         "residual_vs": {"before": versus(meas, diag.before.residual, info), "after": versus(meas, resid_after, info)},
         "iso230": {"measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
                    "simulated_after": iso_figures(meas, diag.augmented_fitted)},
-        "signals": {"directions": list(info.directions),
-                    "temperature_C": [float(np.min(meas.temperature)), float(np.max(meas.temperature))]
-                    if info.temperature_present else None,
-                    "load_Nm": [float(np.min(meas.load)), float(np.max(meas.load))] if info.load_present else None,
-                    "time_s": [float(np.min(meas.time)), float(np.max(meas.time))] if "time_s" in meas.present
-                    else None,
-                    "temperature_time_correlation": None if math.isnan(info.temperature_time_corr)
-                    else info.temperature_time_corr},
+        "signals": _signals_doc(meas, info),
         "selection": {"alpha": diag.alpha, "steps": diag.steps, "stop": diag.stop.as_dict(),
                       "method": "forward selection; Wald F-test with REML run/pass random intercepts and "
                                 "Satterthwaite df, Bonferroni over the candidates of each step; stability by "
                                 "cluster bootstrap of whole runs; a candidate whose refit does not shrink the "
-                                "RMS gap is rejected; fewer than 3 runs: white noise, effects needing "
-                                "replication untestable"},
+                                "RMS gap (with and without the nuisance terms) is rejected; fewer than 3 runs: "
+                                "white noise, effects needing replication untestable"},
     }
-    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"], (orders_data, orders_model))
+    _plausibility(diag, doc, (orders_data, orders_model))
+    _data_checks(diag, doc)
+    return doc
+
+
+def _found_item(diag: Diagnosis, f, twins: dict) -> dict:
+    item = {"name": f.name, "parameters": augmented_params(f),
+            "interval_95": {k: [float(lo), float(hi)] for k, (lo, hi) in f.intervals.items()},
+            "p_value": f.p, "df": f.df, "gap_share_pct": 100.0 * f.share,
+            "stability": f.stability, "stability_note": f.stability_note,
+            "signature_rms_arcsec": f.signature_rms, "step": f.step, "separable": f.separable,
+            "fixed_parameters": list(f.fixed_keys),
+            "notes": list(f.notes), "indistinguishable_from": list(f.indistinguishable_from)}
+    if f.name == "thermal_backlash" and diag.thermal_prediction is not None and \
+            "centre_distance_um_per_K" in f.intervals:
+        lo, hi = f.intervals["centre_distance_um_per_K"]
+        pred = diag.thermal_prediction
+        fitted = item["parameters"]["centre_distance_um_per_K"]
+        ratio = float(diag.spec.materials.housing_rise_ratio)
+        basis = ("housing, worm and wheel warming alike (housing_rise_ratio = 1)" if ratio == 1.0 else
+                 f"worm and wheel at the measured temperature, the housing rising {ratio:g} K per K of it "
+                 "(housing_rise_ratio)")
+        item["prediction"] = {"centre_distance_um_per_K": pred, "inside_interval": bool(lo <= pred <= hi),
+                              "fitted_over_predicted": fitted / pred if pred else None,
+                              "housing_rise_ratio": ratio,
+                              "basis": basis + ", expansion from the spec's [materials]"}
+    if f.name in twins:
+        item["indistinguishable_from"] += [t["name"] for t in twins[f.name]]
+        item["aliased_with"] = twins[f.name]
+        item["notes"].append(_twin_text(f.name, _effect_order(f.name, diag), twins[f.name])
+                             + "".join(f"; as {t['name']}: " + ", ".join(f"{k} = {v:.4g}" for k, v in
+                                                                         t["estimate"].items())
+                                       for t in twins[f.name] if "estimate" in t)
+                             + f" ({FOLD_REMEDY})")
+    return item
+
+
+def _fit_doc(diag: Diagnosis) -> dict:
+    phases = []
+    for s, psi in zip(diag.sources, diag.after.psi):
+        same = [t.name for t in diag.sources if abs(t.order - s.order) < 1e-9 and t is not s]
+        phases.append({"source": s.name, "key": s.key, "order": s.order, "amplitude_arcsec": s.amplitude,
+                       "specified_deg": wrap_deg(s.phase), "fitted_deg": round(wrap_deg(float(psi)), 4),
+                       "shares_order_with": same})
+    return {
+        "phases_fitted": bool(diag.fit_phases),
+        "zero_offset_before_arcsec": diag.before.offset,
+        "zero_offset_after_arcsec": diag.after.offset,
+        "phases": phases,
+        "note": ("sources on one shaft share an order: only their combined vector is determined, the "
+                 "individual phases are one of several equivalent solutions") if any(p["shares_order_with"]
+                                                                                   for p in phases) else "",
+    }
+
+
+def _nuisance_doc(diag: Diagnosis) -> dict | None:
+    """The nuisance terms fitted alongside during the selection, each labelled, and the gap with them."""
+    if not diag.nuisance:
+        return None
+    return {"terms": diag.nuisance, "rms_with_arcsec": diag.rms_with_nuisance,
+            "note": "fitted alongside the candidates during the selection so that they cannot leak into a catalogue "
+                    "effect; no drive spec holds them: the gap before and after (and each effect's share of it) is "
+                    "measured without them"}
+
+
+def _over_predicted_items(diag: Diagnosis, data_rows: list) -> list:
+    """The unexplained items, where a harmonic at an order of the spec's sources is in fact over-predicted
+    (the spec's sources give more there than the data hold), said so."""
+    out = []
+    for item in diag.unexplained:
+        if item["kind"] == "order" and "cannot produce with their specified sizes" in item.get("explanation", ""):
+            over = over_prediction(diag, item["order"], data_rows)
+            if over is not None:
+                item = dict(item)
+                item["over_predicted"] = True
+                item["explanation"] = (f"order {item['order']:g} ({item.get('label', '')}) in {item['mode']} mode: "
+                                       f"the spec predicts more here than the data hold (its sources give at least "
+                                       f"{over[0]:.3g} arcsec with any phases, the data {over[1]:.3g}): check the "
+                                       "spec's tolerances of the parts on this shaft")
+        out.append(item)
+    return out
+
+
+def _signals_doc(meas, info) -> dict:
+    return {"directions": list(info.directions),
+            "temperature_C": [float(np.min(meas.temperature)), float(np.max(meas.temperature))]
+            if info.temperature_present else None,
+            "load_Nm": [float(np.min(meas.load)), float(np.max(meas.load))] if info.load_present else None,
+            "time_s": [float(np.min(meas.time)), float(np.max(meas.time))] if "time_s" in meas.present else None,
+            "temperature_time_correlation": None if math.isnan(info.temperature_time_corr)
+            else info.temperature_time_corr}
+
+
+def _plausibility(diag: Diagnosis, doc: dict, tables) -> None:
+    mismatch = spec_mismatch(diag, doc["noise"]["before"]["repeat_std_arcsec"], tables)
     doc["plausibility"] = None
-    if mismatch is not None:
-        doc["plausibility"] = {
-            "spec_fits_data": False, "items": mismatch["items"],
-            "gap_after_arcsec": mismatch["gap_after_arcsec"], "repeatability_arcsec": mismatch["repeat_arcsec"],
-            "data_over_spec": mismatch["scale"],
-            "likely_units": None if mismatch["units"] is None else {"column": mismatch["units"][0],
-                                                                   "read_as": mismatch["units"][1]},
-            "effects_not_named": [f.name for f in diag.found]}
-        doc["verdict"] = _mismatch_text(mismatch, diag.spec.drive.name, diag.found)
-        for item in found:
-            item["notes"].append("not named in the verdict: the drive spec does not describe these data "
-                                 "(see plausibility)")
+    if mismatch is None:
+        return
+    doc["plausibility"] = {
+        "spec_fits_data": False, "items": mismatch["items"],
+        "gap_after_arcsec": mismatch["gap_after_arcsec"], "repeatability_arcsec": mismatch["repeat_arcsec"],
+        "data_over_spec": mismatch["scale"],
+        "likely_units": None if mismatch["units"] is None else {"column": mismatch["units"][0],
+                                                               "read_as": mismatch["units"][1]},
+        "effects_not_named": [f.name for f in diag.found]}
+    doc["verdict"] = _mismatch_text(mismatch, diag.spec.drive.name, diag.found)
+    for item in doc["effects_found"]:
+        item["notes"].append("not named in the verdict: the drive spec does not describe these data "
+                             "(see plausibility)")
+
+
+def _data_checks(diag: Diagnosis, doc: dict) -> None:
+    meas, info = diag.meas, diag.info
     checks = data_findings(meas)
     data_warning = next((f.text for f in checks if f.kind in ("repeated_targets", "mixed_directions")), None)
     if data_warning:
@@ -529,7 +635,6 @@ def _report(diag: Diagnosis) -> dict:
         doc["signals"]["warning"] = (f"temperature and time correlate {info.temperature_time_corr:.2f}: a "
                                      "common-mode thermal_drift cannot be told apart from a plain drift over "
                                      "time; heating and cooling separates them")
-    return doc
 
 
 @dataclass(frozen=True)

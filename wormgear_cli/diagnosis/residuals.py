@@ -19,13 +19,9 @@ def short_term_noise(resid: np.ndarray, groups: Groups, time: np.ndarray | None 
     """Point-to-point noise [arcsec]: robust standard deviation (1.4826 x median absolute value) of the
     differences of consecutive rows within a pass (in time order), over sqrt(2).  Offsets per pass or
     run cancel; structure that changes slowly along a pass adds little.  NaN without such pairs."""
-    t = np.arange(resid.shape[0], dtype=float) if time is None else np.asarray(time, dtype=float)
-    order = np.lexsort((np.arange(resid.shape[0]), t, groups.pass_id))
-    pid = groups.pass_id[order]
-    diff = np.diff(resid[order])[pid[1:] == pid[:-1]]
-    if diff.shape[0] < 3:
-        return math.nan
-    return float(1.4826 * np.median(np.abs(diff)) / math.sqrt(2.0))
+    from wormgear_cli.measurement.serial import point_noise
+
+    return point_noise(resid, groups.pass_id, time)
 
 
 def noise_floor_rms(state: ModelFit, groups: Groups, time=None) -> float:

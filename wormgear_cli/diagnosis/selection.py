@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from enum import Enum
 
 import numpy as np
@@ -15,7 +15,7 @@ from wormgear_cli.diagnosis.inference import Accepted, final_inference, likely_e
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.residuals import noise_floor_rms
 from wormgear_cli.diagnosis.runs import DataInfo, Groups, data_info, make_cells, make_groups
-from wormgear_cli.diagnosis.scan import annotate, scan_residual, unowned_order_columns
+from wormgear_cli.diagnosis.scan import ScanContext, annotate, nuisance_columns, scan_residual
 from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR, NEARLY
 from wormgear_cli.errors import DataError, UsageError
@@ -90,9 +90,17 @@ class Stop:
 class Diagnosis:
     """Everything ``wormgear diagnose`` reports (angles in arcsec).
 
-    ``before``: the fit of the spec (phases, offset, held structure) before any
-    effect; once the model has moved on its ``jac`` and ``lin`` are dropped
-    (shape (N, 0)), only its phases, coefficients, residual and noise are kept."""
+    ``before``: the baseline, the spec's own sources with fitted phases and the
+    zero offset (no nuisance term, no effect); once the model has moved on its
+    ``jac`` and ``lin`` are dropped (shape (N, 0)), only its phases,
+    coefficients, residual and noise are kept.  ``after``: the spec with the
+    named effects, phases and offset refitted, no nuisance term.
+    ``nuisance``: the terms fitted alongside during the selection that no
+    spec can hold (harmonics no catalogue effect owns, a drift over a partial
+    arc), each a dict with ``label``, ``kind``, ``rms_arcsec`` (RMS of its
+    fitted part at the rows) and, for a harmonic, ``order``, ``mode`` and
+    ``amplitude_arcsec``; ``rms_with_nuisance``: the RMS gap with them in the
+    model [arcsec] (None without nuisance terms)."""
 
     spec: object
     meas: object
@@ -116,6 +124,25 @@ class Diagnosis:
     few_runs: bool = False
     noise_floor: float = math.nan
     likely: dict | None = None
+    nuisance: list = field(default_factory=list)
+    rms_with_nuisance: float | None = None
+
+
+@dataclass(frozen=True)
+class DiagnoseOptions:
+    """Options of :func:`diagnose` (see there)."""
+
+    alpha: float = 0.01
+    fit_phases: bool = True
+    max_effects: int = 4
+    resamples: int = 50
+    progress: Callable | None = None
+    #: worker processes for the stability check's resamples (the same result whatever the count)
+    jobs: int = 1
+
+    def say(self, text: str) -> None:
+        if self.progress is not None:
+            self.progress(text)
 
 
 def _reported_only(fit: ModelFit) -> ModelFit:
@@ -146,22 +173,44 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
     See the module docstring for the model and the selection rules.  Raises
     UsageError for bad options and DataError for data it cannot use.
     """
+    opt = DiagnoseOptions(alpha, fit_phases, max_effects, resamples, progress, jobs)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
-        return _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress, jobs)
+        return _diagnose(spec, meas, opt)
 
 
-def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress, jobs=1) -> Diagnosis:
+@dataclass
+class _Setup:
+    """What the spec and the data give before any fit."""
+
+    spec: object
+    meas: object
+    sig: object
+    y: np.ndarray
+    g: object
+    groups: Groups
+    few_runs: bool
+    info: DataInfo
+    fittable: list
+    sources: list
+    cells: object
+    simulated_spec: np.ndarray
+    ctx: FitContext
+
+    @property
+    def n(self) -> int:
+        return self.y.shape[0]
+
+
+def _setup(spec, meas, opt: DiagnoseOptions) -> _Setup:
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
     from wormgear_cli.analysis.simulate import simulate
-    from wormgear_cli.physics.effects import EFFECTS
 
-    if not (0.0 < alpha < 0.5):
-        raise UsageError(f"--alpha: expected a number in (0, 0.5), got {alpha:g}")
-    if max_effects < 0:
-        raise UsageError(f"--max-effects: expected an integer >= 0, got {max_effects}")
+    if not (0.0 < opt.alpha < 0.5):
+        raise UsageError(f"--alpha: expected a number in (0, 0.5), got {opt.alpha:g}")
+    if opt.max_effects < 0:
+        raise UsageError(f"--max-effects: expected an integer >= 0, got {opt.max_effects}")
     if np.any(np.isnan(meas.error)):
         raise DataError(f"{meas.source}: no error_arcsec column; diagnose needs measured errors")
-    say = progress or (lambda text: None)
     sig = meas.signals()
     y = meas.error / ARCSEC
     n = y.shape[0]
@@ -181,188 +230,307 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress, j
                         f"{MIN_RUNS}: scatter between runs and passes cannot be estimated, noise taken as white")
     info = data_info(meas, groups)
     fittable, _ = phase_sources(spec, g, sig)
-    sources = fittable if fit_phases else []
-    cells = make_cells(sig.theta, sig.direction)
+    sources = fittable if opt.fit_phases else []
     simulated_spec = simulate(spec, sig) / ARCSEC
     base = simulated_spec - (sources_total(sources, sig, [s.phase for s in sources]) if sources else 0.0)
-    spec_psi = [s.phase for s in sources]
-    ctx = FitContext(y, sig, groups, base, tuple(sources), tuple(spec_psi))
+    ctx = FitContext(y, sig, groups, base, tuple(sources), tuple(s.phase for s in sources))
     if n < len(sources) + 4:
         raise DataError(f"{meas.source}: {n} rows are too few to fit {len(sources)} phase"
                         f"{'s' if len(sources) != 1 else ''} and a zero offset with noise to spare; need at least "
                         f"{len(sources) + 4} rows (more targets or runs)")
-    say("fitting phases and offset")
-    lin = np.ones((n, 1))
-    lin_names = [("the zero offset", slice(0, 1))]
-    state = fit_model(ctx, lin, fit_phases)
-    before = state
-    rss_before = float(before.residual @ before.residual)
-    # significant structure at orders no catalogue effect owns is part of the model every candidate is tested
-    # against (else it leaks into a catalogue effect whose columns it partly projects onto)
-    say("scanning the residual for structure no catalogue effect owns")
-    scan_orders: dict = {}
-    held = unowned_order_columns(scan_residual(state, sig, groups, g, alpha, info, sources, cells, scan_orders), sig,
-                                 g, state)
-    for label, cols, _ in held:
-        lin_names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
-        lin = np.hstack([lin, cols])
-    cols = None
-    held = [(label, None, item) for label, _, item in held]  # the columns live on in lin only
-    if held:
-        state = fit_model(ctx, lin, fit_phases, extra_starts=[state.psi])
-        before = _reported_only(before)
-    fixed = lin.shape[1]
-    cands = {name: candidate(name, sig, g) for name in EFFECTS if name not in spec.effects}
-    alias_notes = order_aliases(sig.theta, cands, sources, g)
-    accepted: list[Accepted] = []
-    steps = []
-    final_scores: dict[str, Score] = {}
+    cells = make_cells(sig.theta, sig.direction)
+    return _Setup(spec, meas, sig, y, g, groups, few_runs, info, fittable, sources, cells, simulated_spec, ctx)
+
+
+@dataclass
+class _Run:
+    """The model as the selection goes: ``state`` with the nuisance terms (the first ``fixed`` columns of
+    ``lin``: the offset and the held structure), ``plain`` the same model without them (the spec, the
+    named effects and the offset: the model the gap is measured on), ``before`` the baseline."""
+
+    s: _Setup
+    opt: DiagnoseOptions
+    before: ModelFit
+    state: ModelFit
+    plain: ModelFit
+    lin: np.ndarray
+    plain_lin: np.ndarray
+    lin_names: list
+    fixed: int = 1
+    held: list = field(default_factory=list)
+    scan_orders: dict = field(default_factory=dict)
+    accepted: list = field(default_factory=list)
+    steps: list = field(default_factory=list)
+    scores: dict = field(default_factory=dict)
+    remaining: dict = field(default_factory=dict)
+    alias_notes: dict = field(default_factory=dict)
     stop: Stop | None = None
-    remaining = dict(cands)
+    last: tuple = ({}, {})
+
+    @property
+    def rss_before(self) -> float:
+        return float(self.before.residual @ self.before.residual)
+
+
+def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
+    from wormgear_cli.physics.effects import EFFECTS
+
+    s = _setup(spec, meas, opt)
+    opt.say("fitting phases and offset")
+    ones = np.ones((s.n, 1))
+    before = fit_model(s.ctx, ones, opt.fit_phases)
+    run = _Run(s, opt, before, before, before, ones, ones, [("the zero offset", slice(0, 1))])
+    _hold_nuisance(run)
+    run.remaining = {name: candidate(name, s.sig, s.g) for name in EFFECTS if name not in spec.effects}
+    run.alias_notes = order_aliases(s.sig.theta, run.remaining, s.sources, s.g)
+    _select(run)
+    return _conclude(run)
+
+
+def _hold_nuisance(run: _Run) -> None:
+    """Significant structure at orders no catalogue effect owns, and a drift over a partial arc, become
+    nuisance columns of the model every candidate is tested against (else they leak into a catalogue
+    effect whose columns they partly project onto); the gap stays measured without them."""
+    s, opt = run.s, run.opt
+    opt.say("scanning the residual for structure no catalogue effect owns")
+    items = scan_residual(run.state, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
+                                                 run.scan_orders))
+    held = nuisance_columns(items, s.sig, s.g, run.state, s.info, run.scan_orders)
+    lin, names = run.lin, list(run.lin_names)
+    for label, cols, _ in held:
+        names.append((label, slice(lin.shape[1], lin.shape[1] + cols.shape[1])))
+        lin = np.hstack([lin, cols])
+    run.held = [(label, None, item) for label, _, item in held]  # the columns live on in lin only
+    run.lin, run.lin_names, run.fixed = lin, names, lin.shape[1]
+    if held:
+        run.state = fit_model(s.ctx, lin, opt.fit_phases, extra_starts=[run.state.psi])
+
+
+def _select(run: _Run) -> None:
+    """Forward selection: score, decide, refit, until a stop."""
+    opt = run.opt
     redo = 0
+    step = None
     while True:
-        say(f"scoring {len(remaining)} candidate effects (step {len(steps) + 1})")
-        current, current_lin = state, lin
-
-        def nonlinear(cand, current=current, current_lin=current_lin):
-            return same_order_test(ctx, current, current_lin, cand, cells)
-
+        opt.say(f"scoring {len(run.remaining)} candidate effects (step {len(run.steps) + 1})")
         step = None  # the previous step's design (N x columns) freed before the next is built
-        step = Step(state, remaining, groups, info, lin_names, sources, alias_notes, alpha, cells,
-                    nonlinear if fit_phases else None, few_runs=few_runs)
+        step = _score(run)
         if step.better_null is not None and redo < 3:
             # a same-order refit showed the phase fit sat in a local minimum: refit from there, score again
             redo += 1
-            state = fit_model(ctx, lin, fit_phases, extra_starts=[step.better_null])
-            if not accepted:
-                before = state
-                rss_before = float(before.residual @ before.residual)
-            elif before is not state:
-                before = _reported_only(before)
+            _refit_from(run, step.better_null)
             continue
-        for name, sc in step.scores.items():
-            final_scores[name] = sc
-        record = {"step": len(steps) + 1, "tested": len(step.tested),
+        run.scores.update(step.scores)
+        record = {"step": len(run.steps) + 1, "tested": len(step.tested),
                   "scores": [{"name": nm, "F": step.scores[nm].wald.F, "df": step.scores[nm].wald.df,
                               "p": step.scores[nm].wald.p, "p_adjusted": step.scores[nm].p_adj}
                              for nm in step.tested]}
-        steps.append(record)
-        if not step.tested:
-            stop = Stop(StopReason.NOTHING_LEFT if accepted else StopReason.NONE_OBSERVABLE)
+        run.steps.append(record)
+        run.stop = _decide(run, step)
+        if run.stop is None:
+            run.stop = _accept(run, step, record)
+        if run.stop is not None:
             break
-        best = step.tested[0]
-        sc = step.scores[best]
-        if sc.p_adj >= alpha:
-            stop = Stop(StopReason.NOT_SIGNIFICANT, best=best, p_adjusted=sc.p_adj)
-            break
-        if len(accepted) >= max_effects:
-            stop = Stop(StopReason.MAX_EFFECTS, best=best, max_effects=max_effects)
-            break
-        twins = [o for o in step.tested if o != best and step.similar.get((best, o), 0) >= INDISTINGUISHABLE
-                 and step.scores[o].p_adj < alpha]
-        # a twin at an order the target spacing folds onto best's explains the data equally well by construction:
-        # best is fitted and named together with it (the report names both); only other twins stop the selection
-        folded = {o for o, _ in alias_notes.get(best, []) if o != remaining[best].order}
-        twins = [o for o in twins if remaining[o].order not in folded]
-        if twins:
-            stop = Stop(StopReason.AMBIGUOUS, candidates=(best, *twins),
-                        correlation=max(step.similar[(best, o)] for o in twins))
-            break
-        problem = physical_problem(best, sc.params)
-        if problem:
-            stop = Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=UNPHYSICAL_HINT.get(best, ""))
-            break
-        stab, stab_note = {}, ""
-        if best in step.nonlinear:
-            stab_note = ("not assessed: its test refits the phases of the spec's sources on its order, which "
-                         "resampling does not repeat")
-        elif resamples <= 0:
-            stab_note = "not assessed (--resamples 0)"
-        elif groups.runs < MIN_RUNS:
-            stab_note = (f"not assessed: {groups.runs} run{'s' if groups.runs != 1 else ''}; resampling whole "
-                         f"runs needs at least {MIN_RUNS}")
-        else:
-            say(f"checking {best} on {resamples} resamples of whole runs")
-            stab = step.stability(resamples, alpha, jobs=jobs)
-        frac = stab.get(best) if stab else None
-        if frac is not None:  # a folded twin scoring best is the same content
-            frac += sum(v for k, v in stab.items() if k != best and remaining[k].order in folded)
-        if frac is not None and frac < MIN_STABILITY:
-            rivals = sorted(((v, k) for k, v in stab.items() if k != best and v > 0), reverse=True)
-            stop = Stop(StopReason.UNSTABLE, candidate=best, stability=frac,
-                        rivals=tuple({"name": k, "share": v} for v, k in rivals))
-            break
-        near = [(o, step.similar[(best, o)]) for o in step.tested if o != best
-                and step.similar.get((best, o), 0.0) >= NEARLY and remaining[o].order not in folded]
-        cand = remaining[best]
-        start = lin.shape[1]
-        new_lin = np.hstack([lin, cand.columns])
-        prev_rss = float(state.residual @ state.residual)
-        say(f"refitting with {best}")
-        new_state = fit_model(ctx, new_lin, fit_phases, extra_starts=[state.psi])
-        new_rss = float(new_state.residual @ new_state.residual)
-        if not new_rss < prev_rss * (1.0 - 1e-9):
-            # significant in the GLS metric, yet the gap grows once everything is refitted: the estimate follows
-            # structure that is not its signature (typically the random effects absorb what it gets wrong)
-            stop = Stop(StopReason.WORSENS, candidate=best, p_adjusted=sc.p_adj,
-                        rms_before_arcsec=math.sqrt(prev_rss / n), rms_with_arcsec=math.sqrt(new_rss / n))
-            record["rejected"] = best
-            break
-        record["accepted"] = best
-        remaining.pop(best)
-        lin = new_lin
-        lin_names.append((best, slice(start, start + cand.q)))
-        state = new_state
-        before = _reported_only(before)
-        accepted.append(Accepted(best, cand, sc, frac, len(steps),
-                                 (prev_rss - new_rss) / rss_before if rss_before else 0.0, tuple(near), stab_note))
-    after = state
     # the last step's design (N x columns) is not needed any more: keep its scores only
-    last_slices, last_scores = step.slices, step.scores
-    step = None
-    found = final_inference(after, accepted, lin_names, groups, fittable, fit_phases, fixed)
+    run.last = (step.slices, step.scores)
+
+
+def _score(run: _Run) -> Step:
+    s = run.s
+    current, current_lin = run.state, run.lin
+
+    def nonlinear(cand, current=current, current_lin=current_lin):
+        return same_order_test(s.ctx, current, current_lin, cand, s.cells)
+
+    return Step(run.state, run.remaining, s.groups, s.info, run.lin_names, s.sources, run.alias_notes,
+                run.opt.alpha, s.cells, nonlinear if run.opt.fit_phases else None, few_runs=s.few_runs)
+
+
+def _refit_from(run: _Run, psi) -> None:
+    """Refit the model (and, before any effect, the baseline) from a better start of the phases."""
+    s, opt = run.s, run.opt
+    run.state = fit_model(s.ctx, run.lin, opt.fit_phases, extra_starts=[psi])
+    plain = fit_model(s.ctx, run.plain_lin, opt.fit_phases, extra_starts=[run.plain.psi, psi]) if run.held \
+        else run.state
+    if plain.cost < run.plain.cost or not run.held:
+        run.plain = plain
+    if not run.accepted:
+        run.before = run.plain
+    elif run.before is not run.state:
+        run.before = _reported_only(run.before)
+
+
+def _decide(run: _Run, step: Step) -> Stop | None:
+    """The stop before any refit: nothing to test, nothing significant, the limit, rivals, out of range."""
+    opt = run.opt
+    if not step.tested:
+        return Stop(StopReason.NOTHING_LEFT if run.accepted else StopReason.NONE_OBSERVABLE)
+    best = step.tested[0]
+    sc = step.scores[best]
+    if sc.p_adj >= opt.alpha:
+        return Stop(StopReason.NOT_SIGNIFICANT, best=best, p_adjusted=sc.p_adj)
+    if len(run.accepted) >= opt.max_effects:
+        return Stop(StopReason.MAX_EFFECTS, best=best, max_effects=opt.max_effects)
+    twins = [o for o in step.tested if o != best and step.similar.get((best, o), 0) >= INDISTINGUISHABLE
+             and step.scores[o].p_adj < opt.alpha]
+    # a twin at an order the target spacing folds onto best's explains the data equally well by construction:
+    # best is fitted and named together with it (the report names both); only other twins stop the selection
+    folded = _folded_orders(run, best)
+    twins = [o for o in twins if run.remaining[o].order not in folded]
+    if twins:
+        return Stop(StopReason.AMBIGUOUS, candidates=(best, *twins),
+                    correlation=max(step.similar[(best, o)] for o in twins))
+    problem = physical_problem(best, sc.params)
+    if problem:
+        return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=UNPHYSICAL_HINT.get(best, ""))
+    return None
+
+
+def _folded_orders(run: _Run, best: str) -> set:
+    return {o for o, _ in run.alias_notes.get(best, []) if o != run.remaining[best].order}
+
+
+def _stability(run: _Run, step: Step, best: str) -> tuple[float | None, str]:
+    """(share of resamples of whole runs in which ``best`` scores best, or None; the note when not assessed)."""
+    opt, groups = run.opt, run.s.groups
+    if best in step.nonlinear:
+        return None, ("not assessed: its test refits the phases of the spec's sources on its order, which "
+                      "resampling does not repeat")
+    if opt.resamples <= 0:
+        return None, "not assessed (--resamples 0)"
+    if groups.runs < MIN_RUNS:
+        return None, (f"not assessed: {groups.runs} run{'s' if groups.runs != 1 else ''}; resampling whole "
+                      f"runs needs at least {MIN_RUNS}")
+    opt.say(f"checking {best} on {opt.resamples} resamples of whole runs")
+    stab = step.stability(opt.resamples, opt.alpha, jobs=opt.jobs)
+    frac = stab.get(best) if stab else None
+    if frac is None:
+        return None, ""
+    folded = _folded_orders(run, best)
+    frac += sum(v for k, v in stab.items() if k != best and run.remaining[k].order in folded)  # same content
+    if frac < MIN_STABILITY:
+        rivals = sorted(((v, k) for k, v in stab.items() if k != best and v > 0), reverse=True)
+        run.stop = Stop(StopReason.UNSTABLE, candidate=best, stability=frac,
+                        rivals=tuple({"name": k, "share": v} for v, k in rivals))
+    return frac, ""
+
+
+def _accept(run: _Run, step: Step, record: dict) -> Stop | None:
+    """Refit with the best candidate; accept it when the gap shrinks, with and without the nuisance terms."""
+    s, opt = run.s, run.opt
+    best = step.tested[0]
+    sc = step.scores[best]
+    frac, stab_note = _stability(run, step, best)
+    if run.stop is not None:
+        return run.stop
+    folded = _folded_orders(run, best)
+    near = [(o, step.similar[(best, o)]) for o in step.tested if o != best
+            and step.similar.get((best, o), 0.0) >= NEARLY and run.remaining[o].order not in folded]
+    cand = run.remaining[best]
+    start = run.lin.shape[1]
+    new_lin = np.hstack([run.lin, cand.columns])
+    prev_rss = float(run.state.residual @ run.state.residual)
+    opt.say(f"refitting with {best}")
+    new_state = fit_model(s.ctx, new_lin, opt.fit_phases, extra_starts=[run.state.psi])
+    new_rss = float(new_state.residual @ new_state.residual)
+    plain_lin = np.hstack([run.plain_lin, cand.columns])
+    new_plain = (fit_model(s.ctx, plain_lin, opt.fit_phases, extra_starts=[run.plain.psi, new_state.psi])
+                 if run.held else new_state)
+    plain_prev = float(run.plain.residual @ run.plain.residual)
+    plain_new = float(new_plain.residual @ new_plain.residual)
+    for old, new in ((prev_rss, new_rss), (plain_prev, plain_new)):
+        if not new < old * (1.0 - 1e-9):
+            # significant in the GLS metric, yet the gap grows once everything is refitted (or once the
+            # nuisance terms are left out): the estimate follows structure that is not its signature
+            record["rejected"] = best
+            return Stop(StopReason.WORSENS, candidate=best, p_adjusted=sc.p_adj,
+                        rms_before_arcsec=math.sqrt(old / s.n), rms_with_arcsec=math.sqrt(new / s.n))
+    record["accepted"] = best
+    run.remaining.pop(best)
+    run.lin, run.plain_lin = new_lin, plain_lin
+    run.lin_names.append((best, slice(start, start + cand.q)))
+    run.state, run.plain = new_state, new_plain
+    run.before = _reported_only(run.before)
+    share = (plain_prev - plain_new) / run.rss_before if run.rss_before else 0.0  # against the baseline
+    run.accepted.append(Accepted(best, cand, sc, frac, len(run.steps), share, tuple(near), stab_note))
+    return None
+
+
+def _conclude(run: _Run) -> Diagnosis:
+    """Inference on the named effects, the likely further effect, the final scan, the model without the
+    nuisance terms, the noise floor and the augmented spec."""
+    s, opt = run.s, run.opt
+    after = run.state
+    found = final_inference(after, run.accepted, run.lin_names, s.groups, s.fittable, opt.fit_phases, run.fixed)
     for f in found:
-        final_scores[f.name] = Score(f.name, ScoreStatus.NAMED)
+        run.scores[f.name] = Score(f.name, ScoreStatus.NAMED)
     for f in found:
         if not f.separable:
-            say(f"profiling the size of {f.name} against the phases of its shaft's sources")
-            cand = next(a.candidate for a in accepted if a.name == f.name)
-            sl = next(sl_ for nm, sl_ in lin_names if nm == f.name)
-            same_order_range(f, ctx, after, lin, sl, cand, g)
-    likely = None
-    if stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.MAX_EFFECTS) \
-            and stop.best in remaining and stop.best in last_slices:
-        best = stop.best
-        sc = last_scores[best]
-        if sc.p_adj < min(NEAR_FACTOR * alpha, 0.5) or stop.reason is StopReason.MAX_EFFECTS:
-            say(f"checking whether {best} is a likely further effect")
-            likely = likely_effect(ctx, after, lin, lin_names, accepted, found,
-                                    best, remaining[best], sc, fittable, fit_phases, len(steps), fixed)
-            if likely is not None:
-                final_scores[best].status = ScoreStatus.LIKELY
-    cands = remaining = None  # the candidates' columns are not needed any more
-    say("scanning the residual for structure")
-    # what is left, tested with the held structure in the model, plus the held structure itself (as found)
-    unexplained = scan_residual(after, sig, groups, g, alpha, info, sources, cells, scan_orders)
-    if held:
-        unexplained = sorted([*(item for _, _, item in held), *unexplained], key=lambda it: it["p_adjusted"])
-    if held:
+            opt.say(f"profiling the size of {f.name} against the phases of its shaft's sources")
+            acc = next(a for a in run.accepted if a.name == f.name)
+            sl = next(sl_ for nm, sl_ in run.lin_names if nm == f.name)
+            same_order_range(f, s.ctx, after, run.lin, sl, acc.candidate, s.g)
+    likely = _likely(run, found)
+    run.remaining = {}  # the candidates' columns are not needed any more
+    opt.say("scanning the residual for structure")
+    # what is left once the named effects are in, tested afresh without the nuisance terms (structure held
+    # while the candidates were tested may have been a named effect's content seen from too short an arc)
+    unexplained = scan_residual(run.plain, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
+                                                       run.scan_orders))
+    nuisance, rms_with = [], None
+    if run.held:
+        nuisance = _nuisance_parts(run, after)
+        rms_with = float(np.sqrt(np.mean(after.residual**2)))
         # the drive's model without the held structure, which no spec can hold: the named effects at their
         # estimates (as the augmented spec writes them), the phases and the offset refitted
-        effects_part = lin[:, fixed:] @ after.beta[fixed:]
-        after = fit_model(ctx.replaced(base=ctx.base + effects_part), lin[:, :1], fit_phases,
-                          extra_starts=[after.psi, before.psi])
-    floor = noise_floor_rms(after, groups, sig.time if "time_s" in meas.present else None)
-    unexplained = annotate(unexplained, final_scores, groups, few_runs, likely, after, floor, g)
-    augmented, aug_fitted = augment(spec, sig, after, sources, found, fit_phases, y)
-    thermal = None
+        effects_part = run.lin[:, run.fixed:] @ after.beta[run.fixed:]
+        after = fit_model(s.ctx.replaced(base=s.ctx.base + effects_part), run.lin[:, :1], opt.fit_phases,
+                          extra_starts=[after.psi, run.plain.psi, run.before.psi])
+    floor = noise_floor_rms(after, s.groups, s.sig.time if "time_s" in s.meas.present else None)
+    unexplained = annotate(unexplained, run.scores, s.groups, s.few_runs, likely, after, floor, s.g)
+    augmented, aug_fitted = augment(s.spec, s.sig, after, s.sources, found, opt.fit_phases, s.y)
+    return Diagnosis(s.spec, s.meas, s.groups, s.info, s.sources, opt.fit_phases, opt.alpha, s.y - s.simulated_spec,
+                     s.simulated_spec, run.before, after, found, run.scores, run.steps, run.stop, unexplained,
+                     augmented, aug_fitted, _thermal_prediction(s.spec), s.few_runs, floor, likely, nuisance, rms_with)
+
+
+def _likely(run: _Run, found) -> dict | None:
+    stop, s, opt = run.stop, run.s, run.opt
+    last_slices, last_scores = run.last
+    if not (stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.MAX_EFFECTS)
+            and stop.best in run.remaining and stop.best in last_slices):
+        return None
+    best = stop.best
+    sc = last_scores[best]
+    if not (sc.p_adj < min(NEAR_FACTOR * opt.alpha, 0.5) or stop.reason is StopReason.MAX_EFFECTS):
+        return None
+    opt.say(f"checking whether {best} is a likely further effect")
+    likely = likely_effect(s.ctx, run.state, run.lin, run.lin_names, run.accepted, found, best, run.remaining[best],
+                           sc, s.fittable, opt.fit_phases, len(run.steps), run.fixed)
+    if likely is not None:
+        run.scores[best].status = ScoreStatus.LIKELY
+    return likely
+
+
+def _nuisance_parts(run: _Run, state: ModelFit) -> list[dict]:
+    """Each held nuisance term as fitted in the final model: its label, kind and size."""
+    out = []
+    for (label, sl), (_, _, item) in zip(run.lin_names[1:1 + len(run.held)], run.held):
+        part = state.lin[:, sl] @ state.beta[sl]
+        entry = {"label": label, "kind": item["kind"], "rms_arcsec": float(np.sqrt(np.mean(part**2)))}
+        if item["kind"] == "order":
+            entry.update(order=item["order"], mode=item["mode"],
+                         amplitude_arcsec=float(np.hypot(*state.beta[sl])) if sl.stop - sl.start == 2 else None)
+        else:
+            entry.update(signal=item.get("signal"), peak_to_peak_arcsec=float(np.ptp(part)))
+        out.append(entry)
+    return out
+
+
+def _thermal_prediction(spec) -> float | None:
     try:
         from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
-        thermal = float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
+        return float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
     except (ImportError, AttributeError):
-        thermal = None
-    return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,
-                     before, after, found, final_scores, steps, stop, unexplained, augmented, aug_fitted, thermal,
-                     few_runs, floor, likely)
-
+        return None

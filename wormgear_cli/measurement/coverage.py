@@ -19,6 +19,9 @@ import numpy as np
 TREND_DEGREE = 3
 #: a circular gap counts as a sampling gap (not an uncovered arc) up to this many times the median other gap
 GAP_RATIO = 2.0
+#: ... or while it is at most this share of the period of the slowest order asked for (order 1 unless a slower
+#: one is asked): a hole of a tenth of a period (36 deg of phase) leaves that order seen all round the turn
+GAP_PERIOD_SHARE = 0.1
 #: passes whose span is computed one by one at most (beyond: overall span only)
 MAX_PASS_SPANS = 1000
 
@@ -39,11 +42,16 @@ class Coverage:
 
     ``span`` [rad]: the arc covered (2 pi for a full turn); ``start`` [rad,
     in [0, 2 pi)]: where the covered arc begins (after the largest gap);
-    ``full_turn``: the samples go all round (the largest gap between
-    neighbouring angles is no more than :data:`GAP_RATIO` times the median
-    of the others, or the angles run over a whole turn); ``distinct``:
-    number of distinct angles; ``pass_spans`` [rad]: the span of each pass
-    (empty when there are more than :data:`MAX_PASS_SPANS` passes).
+    ``full_turn``: the samples go all round: the angles run over a whole
+    turn, or the largest gap between neighbouring angles is no more than
+    :data:`GAP_RATIO` times the median of the others (a table of targets),
+    or it is at most :data:`GAP_PERIOD_SHARE` of the period of the slowest
+    order asked for (irregular or random angles: 4000 random angles over a
+    turn leave a largest gap of about 1 deg, a full turn for order 1);
+    ``distinct``: number of distinct angles; ``pass_spans`` [rad]: the span
+    of each pass (empty when there are more than :data:`MAX_PASS_SPANS`
+    passes); ``largest_gap`` [rad]: the largest gap between neighbouring
+    angles on the circle (0 when the angles run over a whole turn).
     """
 
     span: float
@@ -51,32 +59,36 @@ class Coverage:
     full_turn: bool
     distinct: int
     pass_spans: tuple[float, ...] = ()
+    largest_gap: float = 0.0
 
     def beyond(self, order: float) -> bool:
         """Whether one period of ``order`` [cycles/rev] (2 pi / order) is longer than the covered span."""
         return (not self.full_turn) and order * self.span < 2.0 * math.pi * (1.0 - 1e-9)
 
 
-def _arc(theta: np.ndarray, unique: np.ndarray | None = None) -> tuple[float, float, bool, int]:
-    """(span, start, full turn, distinct) of one set of angles [rad]; ``unique``: the sorted
-    distinct angles when known and all within [0, 2 pi)."""
+def _arc(theta: np.ndarray, unique: np.ndarray | None = None,
+         slowest: float = 1.0) -> tuple[float, float, bool, int, float]:
+    """(span, start, full turn, distinct, largest gap) of one set of angles [rad]; ``unique``: the
+    sorted distinct angles when known and all within [0, 2 pi); ``slowest``: the slowest order
+    asked for [cycles/rev] (:data:`GAP_PERIOD_SHARE`)."""
     two_pi = 2.0 * math.pi
     if theta.size and float(np.ptp(theta)) >= two_pi:
-        return two_pi, 0.0, True, int(np.unique(theta).size if unique is None else unique.size)
+        return two_pi, 0.0, True, int(np.unique(theta).size if unique is None else unique.size), 0.0
     t = np.unique(np.mod(theta, two_pi)) if unique is None else unique
     if t.size < 2:
-        return 0.0, float(t[0]) if t.size else 0.0, False, int(t.size)
+        return 0.0, float(t[0]) if t.size else 0.0, False, int(t.size), two_pi
     gaps = np.empty(t.size)
     gaps[:-1] = np.diff(t)
     gaps[-1] = t[0] + two_pi - t[-1]
     i = int(np.argmax(gaps))
+    largest = float(gaps[i])
     others = np.delete(gaps, i)
-    if gaps[i] <= GAP_RATIO * float(np.median(others)):
-        return two_pi, 0.0, True, int(t.size)
-    return float(two_pi - gaps[i]), float(t[(i + 1) % t.size]), False, int(t.size)
+    if largest <= GAP_RATIO * float(np.median(others)) or largest * slowest <= GAP_PERIOD_SHARE * two_pi:
+        return two_pi, 0.0, True, int(t.size), largest
+    return float(two_pi - largest), float(t[(i + 1) % t.size]), False, int(t.size), largest
 
 
-def coverage(theta, passes=None, unique=None) -> Coverage:
+def coverage(theta, passes=None, unique=None, orders=None) -> Coverage:
     """The angular span covered by the samples, overall and per pass.
 
     Parameters
@@ -87,6 +99,9 @@ def coverage(theta, passes=None, unique=None) -> Coverage:
         Pass (run) index of each sample.
     unique : ndarray, optional
         The sorted distinct angles when already known (all within [0, 2 pi)).
+    orders : sequence of float [cycles/rev], optional
+        The orders asked for: the largest gap is judged against the period
+        of the slowest of them (and of order 1).
 
     Returns
     -------
@@ -95,12 +110,16 @@ def coverage(theta, passes=None, unique=None) -> Coverage:
         neighbouring angles on the circle, so it does not depend on how the
         angles are written.  The largest gap is an uncovered arc only when
         it stands out (more than :data:`GAP_RATIO` times the median of the
-        other gaps); otherwise the targets sample the whole turn.
+        other gaps) and is more than :data:`GAP_PERIOD_SHARE` of the period
+        of the slowest order asked for; otherwise the samples cover the
+        whole turn.
     """
     theta = as_1d("theta", theta)
     if unique is not None and not (unique.size and unique[0] >= 0.0 and unique[-1] < 2.0 * math.pi):
         unique = None
-    span, start, full, distinct = _arc(theta, unique)
+    positive = [float(k) for k in (orders if orders is not None else ()) if float(k) > 0]
+    slowest = min([1.0, *positive])
+    span, start, full, distinct, gap = _arc(theta, unique, slowest)
     spans: tuple[float, ...] = ()
     if passes is not None:
         pid = np.asarray(passes)
@@ -110,8 +129,8 @@ def coverage(theta, passes=None, unique=None) -> Coverage:
         elif ids.size <= MAX_PASS_SPANS:
             order = np.argsort(inverse, kind="stable")
             bounds = np.searchsorted(inverse[order], np.arange(ids.size + 1))
-            spans = tuple(_arc(theta[order[bounds[k]:bounds[k + 1]]])[0] for k in range(ids.size))
-    return Coverage(span, start, full, distinct, spans)
+            spans = tuple(_arc(theta[order[bounds[k]:bounds[k + 1]]], slowest=slowest)[0] for k in range(ids.size))
+    return Coverage(span, start, full, distinct, spans, gap)
 
 
 def trend_columns(theta, cov: Coverage, degree: int = TREND_DEGREE) -> np.ndarray:

@@ -42,7 +42,10 @@ class MeasureResult:
     ``figures`` (:class:`~wormgear_cli.measurement.iso230.Iso230Figures`, one-direction
     values withheld when the directions are mixed), ``analysis``
     (:class:`~wormgear_cli.measurement.orders.OrdersAnalysis`), ``drive_name``,
-    ``findings`` (tuple of :class:`Finding`), ``mixed_directions``.
+    ``findings`` (tuple of :class:`Finding`), ``mixed_directions``, ``dominant``
+    (:class:`~wormgear_cli.measurement.dominant.Dominant`: the strongest orders of the
+    data, scanned up to the Nyquist limit of the spacing), ``outside`` (the strongest
+    orders left outside the fitted ones when the residual is far above the noise).
     """
 
     measurement: object
@@ -51,6 +54,8 @@ class MeasureResult:
     drive_name: str | None
     findings: tuple
     mixed_directions: bool
+    dominant: object = None
+    outside: tuple = ()
 
     @property
     def verdict(self) -> str:
@@ -117,10 +122,29 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
-    from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
-    from wormgear_cli.measurement.orders import analyse_orders
     from wormgear_cli.measurement.reader import read_measurement
+
+    order_list, labels, priority, physical, drive_name = _orders_asked(drive, orders, harmonics)
+    m = read_measurement(data, options=options)
+    unique = np.unique(m.angle, return_inverse=True)  # one sort of the rows, shared below
+    grouping = group_targets(m.angle, unique=unique)
+    target_index = grouping[0]
+    figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
+    repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
+    findings, mixed = structure_findings(m, target_index, repeated=repeated)
+    if mixed:
+        figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
+                                       "run): one-direction figures withheld")
+    analysis, dominant = _orders_and_dominant(m, order_list, labels, priority, physical, unique)
+    outside = _left_outside(m, analysis)
+    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant, outside)
+
+
+def _orders_asked(drive, orders, harmonics):
+    """(orders to fit, their labels or None, tie-break priority or None, the drive's (order, label) pairs,
+    the drive's name) from the options."""
+    from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
 
     physical: list = []
     priority = None
@@ -142,58 +166,94 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     else:
         order_list = list(DEFAULT_ORDERS)
     labels = [_label_for(k, physical) for k in order_list] if physical else None
+    return order_list, labels, priority, physical, drive_name
 
-    m = read_measurement(data, options=options)
-    unique = np.unique(m.angle, return_inverse=True)  # one sort of the rows, shared below
-    grouping = group_targets(m.angle, unique=unique)
-    target_index = grouping[0]
-    figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
-    repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
-    findings, mixed = structure_findings(m, target_index, repeated=repeated)
-    if mixed:
-        figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
-                                       "run): one-direction figures withheld")
-    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, labels, priority, passes=m.run,
-                              unique=unique)
+
+def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
+    """The joint fit at the orders asked for, and the strongest orders of the data."""
+    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+    from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
+
+    time = m.time if "time_s" in m.present else None
+    options = OrdersOptions(labels=None if labels is None else tuple(labels),
+                            priority=None if priority is None else tuple(priority), passes=m.run, time=time,
+                            unique=unique)
+    analysis = analyse_orders(m.angle, m.error, m.direction, order_list, options)
+    dominant = dominant_orders(m.angle, m.error, m.direction, time, m.run, ScanOptions(labels=tuple(physical)))
+    return analysis, dominant
+
+
+def _left_outside(m, analysis) -> tuple:
+    """When the fit's residual is more than EXCESS_FACTOR times the point-to-point noise: the significant
+    strongest orders of the data with the fitted orders held (projected out), outside their groups;
+    else ()."""
+    from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR
+    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+
+    noise, rms = analysis.point_noise, analysis.residual_rms
+    if not (math.isfinite(noise) and noise > 0 and rms > EXCESS_FACTOR * noise):
+        return ()
+    fitted = tuple(it.order for it in analysis.items if it.fitted)
+    time = m.time if "time_s" in m.present else None
+    left = dominant_orders(m.angle, m.error, m.direction, time, m.run, ScanOptions(held=fitted))
+    return tuple(p for p in left.significant if not any(p.group[0] - 1e-9 <= k <= p.group[1] + 1e-9
+                                                        or abs(k - p.order) < 1e-6 for k in fitted))
+
+
+def _span_finding(analysis, unit: str) -> Finding | None:
+    """The partial span, the orders beyond it and what stands for the slow part (with its size in ``unit``)."""
+    from wormgear_cli.units import to_unit
+
     cov = analysis.coverage
-    if not cov.full_turn and cov.distinct >= 2:
-        beyond = [f"{it.order:g}" for it in analysis.items if it.status == "beyond span"]
-        text = (f"the data cover {math.degrees(cov.span):.4g} deg of the turn, not a full turn"
-                + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} (period longer than the span) "
-                   "cannot be told from a trend and are reported as beyond span, without amplitude" if beyond else "")
-                + (f"; a polynomial trend of degree {analysis.trend_degree} over the span stands for the slow part"
-                   if analysis.trend_degree else ""))
-        findings.append(Finding("span", text, False))
-    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed)
+    if cov.full_turn or cov.distinct < 2:
+        return None
+    beyond = [f"{it.order:g}" for it in analysis.items if it.status == "beyond span"]
+    slow = analysis.slow
+    size = ("" if slow is None or not math.isfinite(slow.size) or not slow.degree
+            else f", {round(float(to_unit(slow.size, unit)), 4):.4g} {unit} peak to peak")
+    why = ("(less than an eighth of a period over the span) cannot be told from the offset"
+           if slow is not None and slow.kind == "time" else "(period longer than the span) cannot be told from a trend")
+    text = (f"the data cover {math.degrees(cov.span):.4g} deg of the turn, not a full turn"
+            + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} {why} and "
+               f"{'are' if len(beyond) > 1 else 'is'} reported as beyond span, without amplitude" if beyond else ""))
+    if slow is not None and slow.kind == "time" and slow.degree:
+        text += (f"; the arc is traversed {slow.traversals} times, so the slow part is {slow.describe()}{size}, "
+                 "fitted apart from the errors fixed to the angle (a once-per-turn runout among them), which are "
+                 "fitted as orders")
+    elif analysis.trend_degree:
+        text += f"; a polynomial trend of degree {analysis.trend_degree} over the span stands for the slow part{size}"
+    return Finding("span", text, False)
+
+
+def _excess_finding(analysis, outside: tuple, unit: str) -> Finding | None:
+    """A note when the fit's residual is far above the point-to-point noise and the strongest content of
+    the data lies outside the orders fitted (``outside``: :func:`_left_outside`; angles in ``unit``)."""
+    from wormgear_cli.units import to_unit
+
+    if not outside:
+        return None
+    noise, rms = analysis.point_noise, analysis.residual_rms
+    fitted = [it.order for it in analysis.items if it.fitted]
+    names = ", ".join(f"{p.order:.6g} ({to_unit(p.size, unit):.3g} {unit})" for p in outside)
+    text = (f"the residual of the fit ({to_unit(rms, unit):.3g} {unit} RMS) is {rms / noise:.1f} times the "
+            f"point-to-point noise ({to_unit(noise, unit):.3g} {unit}), and the strongest content of the data lies "
+            f"outside the orders fitted: order{'s' if len(outside) > 1 else ''} {names}; add "
+            f"{'them' if len(outside) > 1 else 'it'} with --orders, e.g. --orders "
+            + ",".join(f"{k:g}" for k in [*fitted, *(round(p.order, 6) for p in outside)]))
+    return Finding("excess", text, False)
 
 
 def _order_notes(analysis) -> list[str]:
-    """One sentence per order not fitted, naming the real reason; alias pairs named together."""
-    notes = []
-    carriers = {it.order: it for it in analysis.items if it.fitted}
-    for it in analysis.items:
-        name = f"order {it.order:g}" + (f" ({it.label})" if it.label else "")
-        if it.status == "aliased":
-            if 0.0 in it.aliased_with:
-                notes.append(f"{name} is aliased onto the offset by the target spacing (constant on these "
-                             "targets): not fitted")
-            else:
-                onto = ", ".join(f"{k:g}" for k in it.aliased_with)
-                carried = [carriers[k] for k in it.aliased_with if k in carriers]
-                if carried:
-                    c = carried[0]
-                    cname = f"order {c.order:g}" + (f" ({c.label})" if c.label else "")
-                    plural = 's' if len(it.aliased_with) > 1 else ''
-                    notes.append(f"{name} is aliased by the target spacing onto order{plural} "
-                                 f"{onto}: {name} and {cname} are indistinguishable on these targets, the amplitude "
-                                 f"shown at order {c.order:g} belongs to either or both")
-                else:
-                    notes.append(f"{name} is aliased by the target spacing onto order"
-                                 f"{'s' if len(it.aliased_with) > 1 else ''} {onto}: not fitted")
-        elif it.status == "fitted" and it.aliased_with:
-            onto = ", ".join(f"{k:g}" for k in it.aliased_with if k != 0.0)
-            if onto:
-                notes.append(f"{name} also carries order {onto} (aliased by the target spacing; indistinguishable)")
+    """One sentence per order not fitted, naming the real reason; alias pairs named together; one per group
+    of orders the span cannot separate; how the standard errors were made when the rows correlate."""
+    notes = _alias_notes(analysis)
+    for grp in analysis.groups:
+        carrier = next((it for it in analysis.items if it.status == "ambiguous" and it.fitted and
+                        it.order in grp.orders), None)
+        span = 360.0 if analysis.coverage.full_turn else math.degrees(analysis.coverage.span)
+        text = grp.describe(span)
+        notes.append(text + (f": fitted as one order, at {carrier.order:g}, whose amplitude is the group's"
+                             if carrier is not None else ": not fitted"))
     grouped: dict = {}
     for it in analysis.items:
         if it.status in ("folded", "unresolved", "beyond span"):
@@ -204,6 +264,37 @@ def _order_notes(analysis) -> list[str]:
             notes.append(f"order {it.order:g}" + (f" ({it.label})" if it.label else "") + f" not fitted: {reason}")
         else:
             notes.append(f"orders {', '.join(f'{it.order:g}' for it in its)} not fitted: {reason}")
+    serial = analysis.serial
+    if serial is not None and not serial.independent:
+        notes.append(f"the residual is serially correlated: standard errors from the {serial.describe()}")
+    return notes
+
+
+def _alias_notes(analysis) -> list[str]:
+    notes = []
+    carriers = {it.order: it for it in analysis.items if it.fitted}
+    for it in analysis.items:
+        name = f"order {it.order:g}" + (f" ({it.label})" if it.label else "")
+        if it.status == "aliased":
+            if 0.0 in it.aliased_with:
+                notes.append(f"{name} is aliased onto the offset by the target spacing (constant on these "
+                             "targets): not fitted")
+                continue
+            onto = ", ".join(f"{k:g}" for k in it.aliased_with)
+            plural = 's' if len(it.aliased_with) > 1 else ''
+            carried = [carriers[k] for k in it.aliased_with if k in carriers]
+            if carried:
+                c = carried[0]
+                cname = f"order {c.order:g}" + (f" ({c.label})" if c.label else "")
+                notes.append(f"{name} is aliased by the target spacing onto order{plural} "
+                             f"{onto}: {name} and {cname} are indistinguishable on these targets, the amplitude "
+                             f"shown at order {c.order:g} belongs to either or both")
+            else:
+                notes.append(f"{name} is aliased by the target spacing onto order{plural} {onto}: not fitted")
+        elif it.fitted and it.aliased_with:
+            onto = ", ".join(f"{k:g}" for k in it.aliased_with if k != 0.0)
+            if onto:
+                notes.append(f"{name} also carries order {onto} (aliased by the target spacing; indistinguishable)")
     return notes
 
 
@@ -221,55 +312,9 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
         return float(to_unit(x, unit)) if math.isfinite(x) else None
 
     t = figures.targets
-    rows = []
-    if per_target:
-        def column(values) -> list:
-            # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
-            return np.asarray(to_unit(np.asarray(values, dtype=float), unit)).tolist()
-
-        # rounded to 1e-9 deg: removes the rad -> deg round-off, far below the grouping tolerance
-        cols = {
-            "target_deg": np.round(np.degrees(t.target), 9).tolist(),
-            "n_forward": t.n_up.tolist(),
-            "n_reverse": t.n_down.tolist(),
-            "mean_forward": column(t.mean_up),
-            "s_forward": column(t.s_up),
-            "mean_reverse": column(t.mean_down),
-            "s_reverse": column(t.s_down),
-            "mean_bidirectional": column(t.mean_bi),
-            "reversal": column(t.reversal),
-            "R_forward": column(t.r_up),
-            "R_reverse": column(t.r_down),
-            "R": column(t.r_bi),
-        }
-        names = list(cols)
-        rows = [dict(zip(names, row)) for row in zip(*cols.values())]
-    ax = figures.axis()
-    iso = {
-        "A": a(ax["A"]), "A_forward": a(ax["A_up"]), "A_reverse": a(ax["A_down"]),
-        "B": a(ax["B"]), "B_signed": a(ax["B_signed"]), "B_mean": a(ax["B_mean"]),
-        "B_mean_abs": a(abs(ax["B_mean"])),
-        "E": a(ax["E"]), "E_forward": a(ax["E_up"]), "E_reverse": a(ax["E_down"]),
-        "M": a(ax["M"]),
-        "R": a(ax["R"]), "R_forward": a(ax["R_up"]), "R_reverse": a(ax["R_down"]),
-    }
+    findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
+                                                    _excess_finding(analysis, result.outside, unit)) if f]
     notes = list(figures.notes) + _order_notes(analysis)
-    items = []
-    for it in analysis.items:
-        def mode(tr):
-            amp, se, ph = tr
-            return {"amplitude": a(amp), "amplitude_stderr": a(se),
-                    "phase_deg": float(np.degrees(ph)) if math.isfinite(ph) else None}
-
-        items.append({
-            "order": it.order,
-            "label": it.label,
-            "status": it.status,
-            "aliased_with": list(it.aliased_with),
-            "reason": it.reason,
-            "common": mode(it.common),
-            "differential": mode(it.differential),
-        })
     runs_f = t.n_up[t.n_up > 0]
     runs_r = t.n_down[t.n_down > 0]
     cov = analysis.coverage
@@ -293,24 +338,120 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
             "span_deg": math.degrees(cov.span),
             "full_turn": cov.full_turn,
             "start_deg": math.degrees(cov.start),
+            "largest_gap_deg": math.degrees(cov.largest_gap),
             "distinct_angles": cov.distinct,
             "pass_spans_deg": [math.degrees(x) for x in cov.pass_spans],
             "trend_degree": analysis.trend_degree,
         },
-        "iso230_2": iso,
-        "orders": {
-            "method": "joint least squares on all rows: error = common(theta) + direction * differential(theta), "
-                      "each an offset plus A sin(k theta + phase) per order (plus a polynomial trend over a "
-                      "partial span)",
-            "alias_tolerance": analysis.alias_tol,
-            "residual_rms": a(analysis.residual_rms),
-            "common_offset": a(analysis.common_offset),
-            "differential_offset": a(analysis.differential_offset),
-            "angles_unwrapped": analysis.unwrapped,
-            "items": items,
-        },
-        "warnings": [f.text for f in result.findings if f.warning],
-        "checks": [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in result.findings],
-        "per_target": rows,
-        "notes": notes + [f.text for f in result.findings if not f.warning and f.text],
+        "iso230_2": _iso_doc(figures, a),
+        "orders": _orders_doc(analysis, a),
+        "dominant": _dominant_doc(result.dominant, a),
+        "warnings": [f.text for f in findings if f.warning],
+        "checks": [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in findings],
+        "per_target": _per_target_rows(t, unit) if per_target else [],
+        "notes": notes + [f.text for f in findings if not f.warning and f.text],
+    }
+
+
+def _per_target_rows(t, unit: str) -> list[dict]:
+    from wormgear_cli.units import to_unit
+
+    def column(values) -> list:
+        # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
+        return np.asarray(to_unit(np.asarray(values, dtype=float), unit)).tolist()
+
+    # rounded to 1e-9 deg: removes the rad -> deg round-off, far below the grouping tolerance
+    cols = {
+        "target_deg": np.round(np.degrees(t.target), 9).tolist(),
+        "n_forward": t.n_up.tolist(),
+        "n_reverse": t.n_down.tolist(),
+        "mean_forward": column(t.mean_up),
+        "s_forward": column(t.s_up),
+        "mean_reverse": column(t.mean_down),
+        "s_reverse": column(t.s_down),
+        "mean_bidirectional": column(t.mean_bi),
+        "reversal": column(t.reversal),
+        "R_forward": column(t.r_up),
+        "R_reverse": column(t.r_down),
+        "R": column(t.r_bi),
+    }
+    names = list(cols)
+    return [dict(zip(names, row)) for row in zip(*cols.values())]
+
+
+def _iso_doc(figures, a) -> dict:
+    ax = figures.axis()
+    return {
+        "A": a(ax["A"]), "A_forward": a(ax["A_up"]), "A_reverse": a(ax["A_down"]),
+        "B": a(ax["B"]), "B_signed": a(ax["B_signed"]), "B_mean": a(ax["B_mean"]),
+        "B_mean_abs": a(abs(ax["B_mean"])),
+        "E": a(ax["E"]), "E_forward": a(ax["E_up"]), "E_reverse": a(ax["E_down"]),
+        "M": a(ax["M"]),
+        "R": a(ax["R"]), "R_forward": a(ax["R_up"]), "R_reverse": a(ax["R_down"]),
+    }
+
+
+def _orders_doc(analysis, a) -> dict:
+    items = []
+    for it in analysis.items:
+        def mode(tr):
+            amp, se, ph = tr
+            return {"amplitude": a(amp), "amplitude_stderr": a(se),
+                    "phase_deg": float(np.degrees(ph)) if math.isfinite(ph) else None}
+
+        items.append({
+            "order": it.order,
+            "label": it.label,
+            "status": it.status,
+            "aliased_with": list(it.aliased_with),
+            "group": list(it.group),
+            "reason": it.reason,
+            "common": mode(it.common),
+            "differential": mode(it.differential),
+        })
+    slow = analysis.slow
+    return {
+        "method": "joint least squares on all rows: error = common(theta) + direction * differential(theta), "
+                  "each an offset plus A sin(k theta + phase) per order (plus a polynomial trend over a "
+                  "partial span)",
+        "alias_tolerance": analysis.alias_tol,
+        "residual_rms": a(analysis.residual_rms),
+        "point_noise": a(analysis.point_noise),
+        "common_offset": a(analysis.common_offset),
+        "differential_offset": a(analysis.differential_offset),
+        "angles_unwrapped": analysis.unwrapped,
+        "standard_errors": analysis.serial.describe() if analysis.serial is not None else None,
+        "slow_part": None if slow is None or slow.kind == "none" else {
+            "kind": slow.kind, "signal": slow.signal, "degree": slow.degree, "traversals": slow.traversals,
+            "peak_to_peak": a(slow.size), "description": slow.describe()},
+        "groups": [{"orders": list(g.orders), "correlation": g.correlation, "span_needed_deg": g.span_needed_deg}
+                   for g in analysis.groups],
+        "items": items,
+    }
+
+
+def _dominant_doc(dominant, a) -> dict | None:
+    """The strongest orders of the data (:func:`~wormgear_cli.measurement.dominant.dominant_orders`)."""
+    if dominant is None:
+        return None
+    slow = dominant.slow
+    peaks = [{"order": p.order, "amplitude": a(p.amplitude), "amplitude_stderr": a(p.amplitude_stderr),
+              "phase_deg": math.degrees(p.phase), "differential": a(p.differential),
+              "differential_stderr": a(p.differential_stderr), "p_adjusted": p.p_adjusted,
+              "significant": p.significant, "group": list(p.group), "period_s": p.period_s, "label": p.label,
+              "aliases": [{"order": o, "correlation": c, "label": lab} for o, c, lab in p.aliases]}
+             for p in dominant.peaks]
+    return {
+        "method": dominant.method,
+        "scanned_orders": list(dominant.scanned),
+        "resolution": dominant.resolution,
+        "nyquist_order": dominant.nyquist,
+        "independent_orders": dominant.independent,
+        "seconds_per_turn": dominant.seconds_per_turn,
+        "slow_part": None if slow.kind == "none" else {"kind": slow.kind, "signal": slow.signal,
+                                                        "degree": slow.degree, "peak_to_peak": a(slow.size)},
+        "residual_rms": a(dominant.residual_rms),
+        "standard_errors": dominant.serial.describe(),
+        "note": dominant.note,
+        "peaks": peaks,
     }
