@@ -204,7 +204,7 @@ def test_plot_without_matplotlib_gives_the_install_hint(runner, mch50_path, tmp_
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError
     r = run(runner, mch50_path, "--i", "2:10:3", "--plot", tmp_path / "x.png")
     assert r.exit_code == 2
-    assert r.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert r.stderr == "error: plotting needs matplotlib: pip install matplotlib\n"
     assert not (tmp_path / "x.png").exists()
 
 

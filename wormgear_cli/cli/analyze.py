@@ -18,12 +18,14 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    output_format,
     render,
     stdout_is_terminal,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def analyze(
     drive: DriveArgument,
     format: FormatOption = "table",
@@ -45,7 +47,7 @@ def analyze(
     spec = load_spec(drive)
     result = run(spec)
     unit = getattr(unit, "value", unit)
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     if fmt == "csv":
         m = result.metrics(unit)
         cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
@@ -132,7 +134,7 @@ def _tables(r: dict, unit: str) -> list:
     return out
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def check(
     drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False,
                                                 metavar="DRIVE.toml...")],
@@ -149,7 +151,7 @@ def check(
     """
     from wormgear_cli.workflows.check import check_file
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     checks = [check_file(path) for path in drives]
     for c in checks:
         for p in c.problems:
@@ -175,7 +177,7 @@ def check(
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def new(
     path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
                                            metavar="NEW.toml")],

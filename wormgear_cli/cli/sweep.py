@@ -20,11 +20,14 @@ from wormgear_cli.cli.common import (
     Progress,
     UnitOption,
     announce_written,
+    count_type,
     emit,
     is_stdout,
     json_text,
+    output_format,
     render,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
@@ -36,7 +39,7 @@ class HoldMode(str, Enum):
     torque = "torque"
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def sweep(
     drive: DriveArgument,
     i: Annotated[str | None, typer.Option("--i", metavar="START:STOP:N",
@@ -60,13 +63,13 @@ def sweep(
     min_pinion_teeth: Annotated[int | None, typer.Option(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
-        show_default=False)] = None,
+        show_default=False, click_type=count_type())] = None,
     shard: Annotated[str | None, typer.Option(
         "--shard", metavar="K/N", help="Compute only part K of N contiguous parts of the point list "
                                        "(csv/json); parts concatenate to the full CSV.", show_default=False)] = None,
     plot: Annotated[Path | None, typer.Option(
-        "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs the 'plot' "
-                       "extra).", show_default=False)] = None,
+        "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs "
+                       "matplotlib).", show_default=False)] = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -86,7 +89,7 @@ def sweep(
     from wormgear_cli.plots import check_plot_path
     from wormgear_cli.spec.loader import load_spec
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
     params = list(param or [])
     limits.check_options(params=params, i=i, l_mm=l_mm, module_mm=module_mm, hold=hold, min_teeth=min_pinion_teeth,

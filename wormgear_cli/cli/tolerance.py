@@ -16,12 +16,15 @@ from wormgear_cli.cli.common import (
     Progress,
     UnitOption,
     announce_written,
+    count_type,
     emit,
     is_stdout,
     json_text,
+    output_format,
     render,
     write_stdout,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
@@ -46,10 +49,11 @@ class PlanKind(str, Enum):
     dense = "dense"
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def tolerance(
     drive: DriveArgument,
-    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of built drives to sample (N >= 1).")]
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of built drives to sample (N >= 1, e.g. "
+                                         "20000 or 1e6).", click_type=count_type())]
     = 100_000,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same output).")] = 0,
     metrics: Annotated[MetricSet, typer.Option(
@@ -59,8 +63,8 @@ def tolerance(
     plan: Annotated[PlanKind, typer.Option(
         "--plan", help="Acceptance test: iso (irregular targets as synth plans them with --seed) or dense "
         "(--points even angles).", case_sensitive=False)] = PlanKind.iso,
-    targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.")] = 24,
-    points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.")] = 360,
+    targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.", click_type=count_type())] = 24,
+    points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.", click_type=count_type())] = 360,
     target_yield: Annotated[float | None, typer.Option(
         "--target-yield", help="Yield to aim at (0 < P < 1; default: [requirements] min_yield): rank the "
         "tolerances by the yield one step of tightening gains.", show_default=False)] = None,
@@ -76,7 +80,7 @@ def tolerance(
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
+        "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
 ):
     """Statistical tolerance analysis: what fraction of built drives passes, and which tolerance to tighten.
 
@@ -96,7 +100,7 @@ def tolerance(
     from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
     metric_set = getattr(metrics, "value", metrics)
     k_n = engine.parse_shard(shard) if shard is not None else None
