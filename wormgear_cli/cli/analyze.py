@@ -77,10 +77,10 @@ def _budget_tables(r: dict, unit: str) -> list:
                   f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
                   "(docs/budget.md); the paper's total above is unchanged")
     vt = Table(title="values used", title_justify="left")
-    for col in ("key", escape("value [um]"), "origin"):
+    for col in ("key", escape("value [mm]"), "origin"):  # in the keys' own unit (_mm), as the spec writes them
         vt.add_column(col, justify="right" if col.startswith("value") else "left")
     for v in r["values_used"]:
-        vt.add_row(v["key"], f"{v['value_um']:g}", v["origin"])
+        vt.add_row(v["key"], f"{round(v['value_um'] / 1000.0, 9):g}", v["origin"])
     return [bt, note, vt]
 
 

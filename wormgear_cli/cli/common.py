@@ -318,11 +318,11 @@ def _rich_table(t):
 
 
 def _longest_word(column) -> int:
-    """Longest unbreakable run (word or number) among a rich column's body cells."""
+    """Longest unbreakable run (word or number) among a rich column's header and body cells."""
     from rich.text import Text
 
     longest = 0
-    for cell in column.cells:
+    for cell in [column.header, *column.cells]:
         text = cell.plain if isinstance(cell, Text) else Text.from_markup(str(cell)).plain
         longest = max([longest] + [len(w) for w in text.split()])
     return longest
