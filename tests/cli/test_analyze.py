@@ -187,6 +187,33 @@ def test_new_writes_a_valid_template_and_never_overwrites(runner, tmp_path):
     assert path.read_bytes() == before
 
 
+def test_new_without_a_suffix_writes_a_toml_file(runner, tmp_path):
+    r = runner.invoke(app, ["new", str(tmp_path / "mytable")])
+    assert r.exit_code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mytable.toml"]
+    assert r.stderr.startswith(f"wrote {tmp_path / 'mytable.toml'}\n")
+    assert run_json(runner, "analyze", str(tmp_path / "mytable.toml"), "-f", "json")["drive"] == "mytable"
+    r = runner.invoke(app, ["new", str(tmp_path / "mytable")])  # the completed name exists now
+    assert r.exit_code == 2 and "mytable.toml: already exists" in r.stderr
+
+
+def test_new_refuses_another_suffix_with_the_name_to_use(runner, tmp_path):
+    r = runner.invoke(app, ["new", str(tmp_path / "x.csv")])
+    assert r.exit_code == 2 and not any(tmp_path.iterdir())
+    assert r.stderr == f"error: {tmp_path / 'x.csv'}: a drive spec is a .toml file; name it x.toml (or x.csv.toml)\n"
+
+
+def test_new_dash_writes_the_template_to_stdout_and_no_file(runner, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["new", "-", "--name", "bench"])
+    assert r.exit_code == 0 and r.stderr == ""
+    assert not any(tmp_path.iterdir())
+    (tmp_path / "b.toml").write_text(r.stdout, encoding="utf-8")
+    assert run_json(runner, "analyze", str(tmp_path / "b.toml"), "-f", "json")["drive"] == "bench"
+    runner.invoke(app, ["new", str(tmp_path / "bench.toml")])
+    assert (tmp_path / "bench.toml").read_text(encoding="utf-8") == r.stdout  # the same template as a file
+
+
 # --- help and entry points ------------------------------------------------------------------------------
 
 

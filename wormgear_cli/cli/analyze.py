@@ -179,7 +179,8 @@ def check(
 
 @app.command(cls=HelpCommand)
 def new(
-    path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist); a name without a suffix gets "
+                                           ".toml; - writes the template to stdout.", show_default=False,
                                            metavar="NEW.toml")],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
@@ -195,13 +196,30 @@ def new(
     from wormgear_cli.files import atomic_write
     from wormgear_cli.spec.template import template
 
-    if path.exists() or path.is_symlink():
-        raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    if str(path) == "-":  # stdout, as everywhere: wormgear new - > drive.toml, or into an editor
+        emit(template(name or "drive"), None)
+        return
+    path = _spec_name(path)
+    if path.exists() or path.is_symlink():
+        raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     from wormgear_cli.cli.common import announce_written
     from wormgear_cli.files import after_commit
 
     atomic_write(path, template(name or path.stem))
     announce_written(path)
     after_commit(lambda: typer.echo(f"edit it, then run: wormgear check {path}", err=True))
+
+
+def _spec_name(path: Path) -> Path:
+    """The file ``new`` writes: ``path``, with ``.toml`` added when it has no suffix; a suffix
+    other than ``.toml`` is refused with the name to use (every command reads drives as TOML)."""
+    from wormgear_cli.errors import UsageError
+
+    if path.suffix.lower() == ".toml":
+        return path
+    if not path.suffix or not path.name.strip("."):
+        return path.with_name(path.name + ".toml")
+    raise UsageError(f"{path}: a drive spec is a .toml file; name it {path.with_suffix('.toml').name} (or "
+                     f"{path.name}.toml)")
