@@ -183,6 +183,7 @@ def _tables(doc: dict, target) -> list:
     from rich.table import Table
 
     from wormgear_cli.cli.common import fmt_angle
+    from wormgear_cli.tolerance.report import short_key, variance_rows
 
     unit = doc["unit"]
     a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
@@ -216,19 +217,16 @@ def _tables(doc: dict, target) -> list:
                 row.append(Yield(y["passing"], doc["samples"], y["value"], y["low"], y["high"]).verdict(target))
             t3.add_row(*row)
         out.append(t3)
-    sens = {m: v for m, v in doc["sensitivity"].items() if v is not None}
-    if sens:
+    metrics, shares = variance_rows(doc["sensitivity"])
+    if shares:
         t4 = Table(title="variance share (first-order index)",
                    **{**kw, "padding": (0, 0)})
         t4.add_column("key ", no_wrap=True)
-        for m in sens:
+        for m in metrics:
             t4.add_column(SHORT[m], justify="right")
-        keys = [k for k in next(iter(sens.values())) if k != "remainder"]
-        shown = [k for k in keys if any(sens[m].get(k, 0.0) >= 0.005 for m in sens)]
-        for k in shown:
-            t4.add_row(escape(_short_key(k)), *(f"{sens[m][k]:.2f}" for m in sens))
-        t4.add_row("remainder (rest and interactions)",
-                   *(f"{1.0 - sum(sens[m][k] for k in shown):.2f}" for m in sens))
+        for k, values in shares:
+            label = "remainder (rest and interactions)" if k == "remainder" else escape(short_key(k))
+            t4.add_row(label, *(f"{v:.2f}" for v in values))
         out.append(t4)
     alloc = doc.get("allocation")
     if alloc:
@@ -237,7 +235,7 @@ def _tables(doc: dict, target) -> list:
         for c in ("key", "step", "yield", "gain"):
             t5.add_column(c, justify="left" if c in ("key", "step") else "right")
         for st in alloc["steps"][:8]:
-            t5.add_row(escape(_short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
+            t5.add_row(escape(short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
                        f"{100 * st['gain']:+.2f} %")
         out.append(t5)
         head, _, rest = alloc["answer"].partition(": ")  # the answer on two lines within 80 columns
@@ -252,14 +250,6 @@ def _tables(doc: dict, target) -> list:
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]
     return out
-
-
-def _short_key(column: str) -> str:
-    """A varied column shortened to fit 80 columns: without the top section and the unit suffix
-    (assembly.wheel_eccentricity_mm -> wheel_eccentricity); the JSON keeps the full TOML path."""
-    head, _, rest = column.partition(".")
-    name = rest if head in ("gear_pair", "worm_pair", "assembly") and rest else column
-    return name.replace("_mm[", "[").removesuffix("_mm")
 
 
 def _pct(x: float) -> str:
