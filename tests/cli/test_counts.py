@@ -39,9 +39,10 @@ COUNT_OPTIONS = {
     "diagnose": ["--max-effects", "--resamples"],
     "sweep": ["--min-pinion-teeth"],
     "grade": ["--teeth"],
+    "compare": ["--samples"],
 }
 #: integer options that are not counts (identifiers and classes), read as plain integers
-NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("grade", "--grade")}
+NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("compare", "--seed"), ("grade", "--grade")}
 
 
 def test_every_integer_option_is_a_count_or_named_as_not_one():

@@ -23,6 +23,7 @@ COMMAND_MODULES = {
     "diagnose": "diagnose",
     "tolerance": "tolerance",
     "grade": "grade",
+    "compare": "compare",
 }
 
 

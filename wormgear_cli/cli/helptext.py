@@ -24,13 +24,13 @@ _WORD = re.compile(r"""(?:[^\s"']+|"[^"]*"|'[^']*')+""")
 
 def example_lines(command: str, width: int) -> list[str]:
     """``Example: COMMAND`` as shell lines of at most ``width`` characters where possible:
-    broken only before an option (a word starting with ``-``) or a ``&&`` / ``|``, each line
-    but the last ending in `` \\``.  A unit (an option and its values) longer than ``width``
-    stays whole on its line."""
-    breaks = ("&&", "|", "||")
+    broken only between whole words, never between an option and its value (nor between the
+    program and the command's name), each line but the last ending in `` \\``.  A unit
+    longer than ``width`` stays whole on its line."""
     units: list[str] = []
     for word in _WORD.findall(command):
-        if units and not (word.startswith("-") or word in breaks or units[-1] in breaks):
+        joins = units and " " not in units[-1] and (units[-1].startswith("-") or units[-1] == "wormgear")
+        if joins and not word.startswith("-") and word not in ("&&", "|", "||"):
             units[-1] += " " + word
         else:
             units.append(word)
