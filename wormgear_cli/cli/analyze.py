@@ -217,7 +217,7 @@ def _spec_name(path: Path) -> Path:
     other than ``.toml`` is refused with the name to use (every command reads drives as TOML)."""
     from wormgear_cli.errors import UsageError
 
-    if path.suffix.lower() == ".toml":
+    if path.suffix.lower() == ".toml" or path.is_dir():  # a directory: refused as it is, below
         return path
     if not path.suffix or not path.name.strip("."):
         return path.with_name(path.name + ".toml")
