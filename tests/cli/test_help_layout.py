@@ -9,7 +9,6 @@ import shlex
 import pytest
 from typer.main import get_command
 
-from tests.support.paths import ROOT
 from wormgear_cli.cli import app
 from wormgear_cli.cli.helptext import HelpCommand, example_lines
 
@@ -68,13 +67,6 @@ def test_examples_come_out_whole_at_every_width(runner, name, width):
 def test_no_line_ends_inside_a_hyphenated_word(runner, name, width):
     for line in _help(runner, name, width).splitlines():
         assert not re.search(r"\w-$", line), f"{name} at {width} columns: {line!r}"
-
-
-def test_the_grade_example_of_the_reference_page_pastes_whole():
-    text = (ROOT / "docs" / "reference" / "cli.md").read_text(encoding="utf-8")
-    grade = text[text.index("## `wormgear grade`"):]
-    assert "wormgear grade --grade 6 --module-mm 2 --diameter-mm 100 --face-width-mm 20" in _examples(grade)[0]
-    assert "--face-\n" not in text
 
 
 def test_example_lines_break_only_before_options_and_fit():
