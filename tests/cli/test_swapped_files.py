@@ -9,7 +9,7 @@ import pytest
 
 from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
-from wormgear_cli.spec.filekind import kind_of_file, looks_like_drive, looks_like_table
+from wormgear_cli.spec.filekind import first_line, kind_of_file, looks_like_drive, looks_like_table
 
 WARM = CONFIGS / "mch50-warm.csv"
 
@@ -87,3 +87,36 @@ def test_a_pipe_is_not_read_ahead(tmp_path):
     os.mkfifo(fifo)
     assert kind_of_file(fifo) is None  # returns at once: a read would block or take the reader's data
     assert kind_of_file(tmp_path / "missing") is None
+
+
+@pytest.mark.parametrize("text", [
+    "\ufeff[drive]\nname = 'x'\n",                       # a byte-order mark before the first table
+    "\ufeff# a comment\n[gear_pair.pinion]\nteeth = 18\n",  # only a sub-table of a drive section
+    "   # indented comment, with, commas\n[worm_pair]\nmodule_mm = 2.5\n",
+])
+def test_drives_are_told_by_their_sections_whatever_comes_first(text):
+    assert looks_like_drive(text) and not looks_like_table(text)
+
+
+def test_a_byte_order_mark_or_an_indented_comment_is_not_the_header():
+    assert looks_like_table("\ufeff# exported, by, a tool\nangle_deg,error_arcsec\n0,1\n")
+    assert first_line("\ufeff# note, here\n  # more = text\nangle,error\n") == "angle,error"
+    assert not looks_like_table("  # a, b, c\n[drive]\nname = 'x'\n")
+
+
+def test_first_line_is_cut_only_beyond_its_length():
+    assert first_line("") == ""
+    assert first_line("a,b\n") == "a,b"
+    exact = "x" * 60
+    assert first_line(exact) == exact
+    assert first_line(exact + "y") == "x" * 57 + "..."
+
+
+def test_a_header_starting_with_x_keeps_its_letters():
+    assert first_line("XY,Z\n1,2\n") == "XY,Z"
+
+
+def test_a_file_with_bytes_that_are_not_utf8_is_still_told(tmp_path):
+    f = tmp_path / "export.csv"
+    f.write_bytes(b"angle,error\n0,\xff\xfe1\n")  # a Latin-1 export: the header decides, not the bytes after
+    assert kind_of_file(f) == "table"
