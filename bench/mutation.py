@@ -38,6 +38,9 @@ ROOT = Path(__file__).resolve().parent.parent
 #: the tests that check the target by its inputs and outputs; keep each run near 10 minutes on
 #: one core.
 TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | None]] = {
+    # what a new user trips on (issue 25): file kinds told apart, help examples laid out whole
+    "filekind": (("wormgear_cli/spec/filekind.py", "wormgear_cli/cli/helptext.py"),
+                 ("tests/cli/test_swapped_files.py", "tests/cli/test_help_layout.py"), None),
     "worm": (("wormgear_cli/physics/worm.py",),
              ("tests/physics/test_hand_worked.py", "tests/physics/test_stage_models.py"), None),
     "deformation": (("wormgear_cli/physics/deformation.py",),

@@ -299,6 +299,24 @@ def test_angle_by_hand():
     assert repr(Angle(53.077808, "arcsec")) == "Angle(53.08 arcsec)"
 
 
+@pytest.mark.parametrize("spec,text", [
+    (".2f", "53.59 arcsec"), ("", "53.59 arcsec"), (".4f deg", "0.0149 deg"), (".1f arcmin", "0.9 arcmin"),
+    ("urad", "259.8 urad"), (".3e rad", "2.598e-04 rad"), (">9.1f", "     53.6 arcsec"), (",.0f urad", "260 urad"),
+])
+def test_angle_formats_in_f_strings_with_its_unit(spec, text):
+    a = wg.Angle(53.5875, "arcsec")  # 53.5875 arcsec = 0.014885 deg = 259.80 urad, by hand
+    assert format(a, spec) == text
+    assert f"{a:{spec}}" == text
+
+
+def test_angle_format_refuses_an_unknown_unit_and_a_bad_spec():
+    a = wg.Angle(1, "arcsec")
+    with pytest.raises(ValueError, match="unknown angle unit 'furlong'"):
+        format(a, ".2f furlong")
+    with pytest.raises(ValueError):
+        format(a, ".2q")
+
+
 def test_angle_comparisons_need_angles():
     a = Angle(1, "deg")
     assert a > Angle(59, "arcmin") and a >= Angle(60, "arcmin") and a < Angle(61, "arcmin")

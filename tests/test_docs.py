@@ -69,6 +69,20 @@ def test_cli_reference_holds_each_commands_help_at_80_columns():
     assert "\x1b[" not in text, "colour codes in the CLI reference"
 
 
+def test_the_grade_example_of_the_cli_reference_pastes_whole():
+    """The example is one shell command over lines continued with ' \\', no option cut in two."""
+    text = page("reference/cli.md")
+    grade = text[text.index("## `wormgear grade`"):]
+    lines = grade[grade.index("Example: "):].splitlines()
+    command = lines[0].strip()
+    k = 0
+    while command.endswith(" \\"):
+        k += 1
+        command = command[:-2] + " " + lines[k].strip()
+    assert command == "Example: wormgear grade --grade 6 --module-mm 2 --diameter-mm 100 --face-width-mm 20"
+    assert "--face-\n" not in text
+
+
 @pytest.mark.slow
 def test_tutorial_outputs_are_fresh():
     """The tutorial's outputs are what its commands print now (re-runs the whole session)."""

@@ -18,6 +18,8 @@ Conventions (decided once, documented in docs/api.md):
   angle * number, angle / number give angles; angle / angle gives a float.
 * The repr shows arcsec, 4 significant digits (``Angle(53.08 arcsec)``):
   readable, not exact; use ``.rad`` for the exact value.
+* In f-strings the format spec applies to the number and the unit follows:
+  ``f"{a:.2f}"`` gives ``53.59 arcsec``, ``f"{a:.4f deg}"`` ``0.0149 deg``.
 """
 
 from __future__ import annotations
@@ -112,6 +114,21 @@ class Angle:
 
     def __str__(self) -> str:
         return f"{self.to(DISPLAY_UNIT):.4g} {DISPLAY_UNIT}"
+
+    def __format__(self, spec: str) -> str:
+        """f-strings: ``f"{a:.2f}"`` is ``53.59 arcsec``; a unit ends the spec to choose another
+        (``f"{a:.4f deg}"`` is ``0.0149 deg``, ``f"{a:urad}"`` is ``259.8 urad``).  The number is
+        formatted as a float with the rest of the spec (``.4g`` when empty); the unit always
+        follows it, so a value is never printed without its unit."""
+        head, _, last = spec.rpartition(" ") if " " in spec else ("", "", spec)
+        if last in RAD_PER_UNIT:
+            number, unit = head, last
+        elif head:
+            raise ValueError(f"format spec {spec!r}: unknown angle unit {last!r}, expected one of "
+                             f"{', '.join(RAD_PER_UNIT)}")
+        else:
+            number, unit = spec, DISPLAY_UNIT
+        return f"{format(self.to(unit), number or '.4g')} {unit}"
 
     def __hash__(self) -> int:
         return hash(("Angle", self._rad))

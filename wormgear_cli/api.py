@@ -10,7 +10,7 @@ the same report function, so the API and the CLI cannot disagree; the test
 
 Functions: :func:`load_spec`, :func:`analyze`, :func:`simulate`,
 :func:`read_measurement`, :func:`measure`, :func:`diagnose`,
-:func:`sweep`, :func:`tolerance`.  Wherever a function takes ``spec`` it
+:func:`sweep`, :func:`tolerance`, :func:`compare`.  Wherever a function takes ``spec`` it
 accepts a loaded :class:`~wormgear_cli.spec.loader.Spec` or a path to a TOML file.
 Bad input raises the CLI's errors (:class:`~wormgear_cli.errors.SpecError`,
 :class:`~wormgear_cli.errors.DataError`,
@@ -36,9 +36,9 @@ from wormgear_cli.angles import Angle, AngleArray
 
 __all__ = [
     "Angle", "AngleArray",
-    "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose", "sweep", "tolerance",
+    "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose", "sweep", "tolerance", "compare",
     "Analysis", "Stage", "Simulation", "SimulationAt", "Measurement", "MeasureResult", "Order",
-    "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats",
+    "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats", "Comparison",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -897,3 +897,77 @@ def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "al
                                   _angle(m["rss"]))
     return Tolerance(doc["drive"], doc["samples"], doc["seed"], stats, doc["yield"], doc["sensitivity"],
                      doc.get("allocation"), run, {"rad": doc})
+
+
+# --- compare -------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Result of :func:`compare`.
+
+    ``drives``: the drives' names, ``files`` their sources (the first is the baseline);
+    ``totals``: key (``total_transmission_error``, ``total_backlash``, ``budget_linear``,
+    ``budget_rss``, ``budget_peak``) -> one :class:`Angle` per drive; ``differences``: the same
+    keys -> each drive minus the first; ``budget``: source -> one Angle (or None) per drive;
+    ``yields``: None, or requirement key (or "all") -> {values, low, high, differences}
+    (fractions, None where a drive has no such limit).
+    """
+
+    drives: list
+    files: list
+    totals: dict
+    differences: dict
+    budget: dict
+    yields: dict | None
+    _run: object = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear compare --format json --unit UNIT``."""
+        return _plain(self._run(unit))
+
+
+def compare(specs: Sequence, *, samples: int | None = None, seed: int = 0) -> Comparison:
+    """Drives side by side: the paper's totals, the budget's totals and lines, and (with
+    ``samples``) the yield against each drive's own limits, with each drive's difference to
+    the first.
+
+    Parameters
+    ----------
+    specs : sequence of Spec or path-like
+        Two or more drives; the first is the baseline.
+    samples : int or None
+        Built drives sampled per drive for the yield (None: no yield).
+    seed : int
+        Seed of the yield's samples.
+
+    Raises
+    ------
+    UsageError, SpecError
+
+    Examples
+    --------
+    >>> c = compare(["configs/mch50.toml", "configs/rotary-table-precision.toml"])
+    >>> c.differences["total_transmission_error"][1] < Angle(0, "arcsec")
+    True
+    >>> f"{c.totals['budget_rss'][1]:.2f}"
+    '17.45 arcsec'
+    """
+    from wormgear_cli.workflows.compare import Options
+    from wormgear_cli.workflows.compare import compare as run
+
+    loaded = [_spec(s) for s in specs]
+    files = [getattr(s, "source", str(s)) for s in loaded]
+
+    def document(unit: str) -> dict:
+        return run(loaded, files, Options(unit=unit, samples=samples, seed=seed))
+
+    doc = document("rad")
+    return Comparison(
+        drives=[d["drive"] for d in doc["drives"]], files=files,
+        totals={k: [Angle(v) for v in q["values"]] for k, q in doc["totals"].items()},
+        differences={k: [Angle(v) for v in q["differences"]] for k, q in doc["totals"].items()},
+        budget={k: [_angle(v) for v in q["values"]] for k, q in doc["budget"].items()},
+        yields=None if doc["yield"] is None else doc["yield"]["requirements"],
+        _run=document,
+    )

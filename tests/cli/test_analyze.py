@@ -197,6 +197,31 @@ def test_new_dash_writes_the_template_to_stdout(runner, tmp_path, monkeypatch):
     spec = tmp_path / "from-stdout.toml"
     spec.write_text(r.stdout)
     assert run_json(runner, "analyze", str(spec), "-f", "json")["drive"] == "bench table"
+def test_new_without_a_suffix_writes_a_toml_file(runner, tmp_path):
+    r = runner.invoke(app, ["new", str(tmp_path / "mytable")])
+    assert r.exit_code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mytable.toml"]
+    assert r.stderr.startswith(f"wrote {tmp_path / 'mytable.toml'}\n")
+    assert run_json(runner, "analyze", str(tmp_path / "mytable.toml"), "-f", "json")["drive"] == "mytable"
+    r = runner.invoke(app, ["new", str(tmp_path / "mytable")])  # the completed name exists now
+    assert r.exit_code == 2 and "mytable.toml: already exists" in r.stderr
+
+
+def test_new_refuses_another_suffix_with_the_name_to_use(runner, tmp_path):
+    r = runner.invoke(app, ["new", str(tmp_path / "x.csv")])
+    assert r.exit_code == 2 and not any(tmp_path.iterdir())
+    assert r.stderr == f"error: {tmp_path / 'x.csv'}: a drive spec is a .toml file; name it x.toml (or x.csv.toml)\n"
+
+
+def test_new_dash_writes_the_template_to_stdout_and_no_file(runner, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, ["new", "-", "--name", "bench"])
+    assert r.exit_code == 0 and r.stderr == ""
+    assert not any(tmp_path.iterdir())
+    (tmp_path / "b.toml").write_text(r.stdout, encoding="utf-8")
+    assert run_json(runner, "analyze", str(tmp_path / "b.toml"), "-f", "json")["drive"] == "bench"
+    runner.invoke(app, ["new", str(tmp_path / "bench.toml")])
+    assert (tmp_path / "bench.toml").read_text(encoding="utf-8") == r.stdout  # the same template as a file
 
 
 # --- help and entry points ------------------------------------------------------------------------------
@@ -268,3 +293,33 @@ def test_version(runner):
 
     r = runner.invoke(app, ["--version"])
     assert (r.exit_code, r.stdout) == (0, f"wormgear {__version__}\n")
+
+
+@pytest.mark.parametrize("config", ["mch50.toml", "rotary-table-precision.toml"])
+def test_values_used_are_shown_in_the_unit_their_keys_name(runner, config):
+    """55 um must not read as 55 mm: the column's unit is the keys' own (_mm), and each value
+    is the spec's value in that unit (from the JSON, independently of the table)."""
+    import tomllib
+
+    path = CONFIGS / config
+    table = runner.invoke(app, ["analyze", str(path)], env={"COLUMNS": "100"}).stdout
+    doc = json.loads(runner.invoke(app, ["analyze", str(path), "-f", "json"]).stdout)
+    section = table[table.index("values used"):]
+    header = next(ln for ln in section.splitlines() if "key" in ln and "value" in ln)
+    unit = header.split("value [", 1)[1].split("]", 1)[0]
+    raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    rows = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip("│┃ ").split("│")]
+        if len(cells) == 3 and "." in cells[0]:
+            rows[cells[0]] = float(cells[1])
+    assert len(rows) == len(doc["values_used"])
+    for v in doc["values_used"]:
+        key = v["key"]
+        assert key.endswith(f"_{unit}"), f"{key} listed under [{unit}]"
+        assert rows[key] == pytest.approx(v["value_um"] / 1000.0, rel=1e-9, abs=1e-12)
+        node = raw
+        for part in key.split("."):
+            node = node.get(part, {}) if isinstance(node, dict) else {}
+        if v["origin"] == "spec" and not isinstance(node, dict):  # written in the file: shown as written
+            assert rows[key] == pytest.approx(node, rel=1e-9)

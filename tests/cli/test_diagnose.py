@@ -200,7 +200,7 @@ def test_plot_without_matplotlib_exits_2_with_the_install_hint(runner, mch50_pat
     monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "matplotlib" else real(name, *a))
     result = run(runner, mch50_path, DEMO, "--plot", tmp_path / "x.png")
     assert result.exit_code == 2
-    assert result.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert result.stderr == "error: plotting needs matplotlib: pip install matplotlib\n"
 
 
 def test_importing_the_cli_does_not_import_the_diagnosis_core():

@@ -122,7 +122,7 @@ def test_output_is_deterministic_and_written_atomically(runner, tmp_path):
     result = invoke(runner, data, "-f", "json", "-o", out)
     assert result.exit_code == 0 and result.stdout == ""
     assert out.read_text() == first
-    result = invoke(runner, data, "-f", "json", "-o", data)
+    result = invoke(runner, data, "-o", data)  # a .csv name: the CSV format, onto the input
     assert result.exit_code == 2
     assert "refusing to overwrite the input file" in result.stderr
 
@@ -294,7 +294,7 @@ def test_plot_bad_suffix_and_missing_matplotlib(runner, tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib now raises ImportError
     result = invoke(runner, hand_csv(tmp_path), "--plot", tmp_path / "chart.png")
     assert result.exit_code == 2
-    assert result.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert result.stderr == "error: plotting needs matplotlib: pip install matplotlib\n"
     assert not (tmp_path / "chart.png").exists()
 
 

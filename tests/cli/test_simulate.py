@@ -200,7 +200,7 @@ def test_plot_without_matplotlib(runner, tmp_path, monkeypatch):
     res = runner.invoke(app, ["simulate", str(MCH50), "--points", "10", "--plot", str(tmp_path / "c.png"),
                               "-o", str(out)])
     assert res.exit_code == 2
-    assert res.stderr.strip() == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'"
+    assert res.stderr.strip() == "error: plotting needs matplotlib: pip install matplotlib"
     assert not out.exists()
 
 

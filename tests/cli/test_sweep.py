@@ -55,7 +55,9 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     r1, r2 = run(runner, *args), run(runner, *args)
     assert r1.exit_code == 0 and r1.stdout_bytes == r2.stdout_bytes and r1.stderr == ""
     out = r1.stdout
-    assert "showing 12 of 30 i values and 8 of 40 l values" in out
+    caption = " ".join(out.split())
+    assert ("showing i = 2, 2.55172, ..., 10 (16 of 30: every 2nd and the last) and l = 100, 120.513, ..., 300 "
+            "(11 of 40: every 4th and the last); all points: --format csv") in caption
     assert out.count("holds") == 3
     assert "gear TE falls 50.2 % from l = 100 to 200 mm and" in out and "33.4 % from 200 to 300 mm" in out
 
@@ -204,7 +206,7 @@ def test_plot_without_matplotlib_gives_the_install_hint(runner, mch50_path, tmp_
     monkeypatch.setitem(sys.modules, "matplotlib", None)  # makes `import matplotlib` raise ImportError
     r = run(runner, mch50_path, "--i", "2:10:3", "--plot", tmp_path / "x.png")
     assert r.exit_code == 2
-    assert r.stderr == "error: plotting needs matplotlib: pip install 'wormgear-cli[plot]'\n"
+    assert r.stderr == "error: plotting needs matplotlib: pip install matplotlib\n"
     assert not (tmp_path / "x.png").exists()
 
 
@@ -426,3 +428,37 @@ def test_effect_parameters_are_refused_with_a_reason(runner, mch50_path, mch50_s
                         "swept with --param (the [effects.*] tables feed simulate and diagnose, not the analyze "
                         "metrics of a sweep); vary it in the drive file and run wormgear simulate\n")
 
+
+
+def _heat_columns(table: str) -> list[float]:
+    """The l values heading the first heat map (all its parts), in order."""
+    first = table[:table.index("total TE at the output")]
+    heads = [ln for ln in first.splitlines() if ln.startswith("┃ i \\ l")]
+    return [float(c) for h in heads for c in h.strip("┃ ").split("┃")[1:]]
+
+
+def test_the_heat_map_shows_every_l_of_the_papers_grid(runner, mch50_path):
+    """--l-mm 100:300:11 (the help's example) shows all eleven columns, l = 200 mm included."""
+    r = run(runner, mch50_path, "--i", "2:10:9", "--l-mm", "100:300:11")
+    assert r.exit_code == 0
+    assert _heat_columns(r.stdout) == [100.0 + 20.0 * k for k in range(11)]
+    assert "showing" not in r.stdout
+
+
+@pytest.mark.parametrize("n", [13, 21, 30, 41, 101])
+def test_a_subsampled_heat_map_keeps_even_steps_and_says_which(runner, mch50_path, n):
+    import numpy as np
+
+    r = run(runner, mch50_path, "--l-mm", f"100:300:{n}")
+    assert r.exit_code == 0
+    shown = _heat_columns(r.stdout)
+    grid = np.linspace(100, 300, n)
+    assert shown[0] == 100 and shown[-1] == 300 and len(shown) <= 12
+    steps = np.diff(shown)
+    assert np.allclose(steps[:-1], steps[0], atol=0.01)  # even, but for a shorter last step to the end
+    assert all(np.isclose(grid, v, atol=0.01).any() for v in shown)
+    caption = " ".join(r.stdout.split())
+    k = round(steps[0] / (200 / (n - 1)))
+    ordinal = {2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+    assert f"({len(shown)} of {n}: every {ordinal}" in caption
+    assert "all points: --format csv" in caption

@@ -134,10 +134,10 @@ def _fill(fd: int) -> None:
 
 @pytest.mark.parametrize(("args", "code", "sig"), [
     (["analyze", str(MCH50), "-f", "csv", "-o", "out.csv"], 0, signal.SIGTERM),  # the issue's case
-    (["check", "tight.toml", "-o", "out.csv"], 1, signal.SIGINT),  # a check that failed and committed its report
+    (["check", "tight.toml", "-o", "out.txt"], 1, signal.SIGINT),  # a check that failed and committed its report
 ])
 def test_a_signal_after_the_commit_keeps_the_runs_exit_code(tmp_path, args, code, sig):
-    """stderr is a full pipe, so "wrote out.csv" waits after the commit; the signal lands there."""
+    """stderr is a full pipe, so "wrote FILE" waits after the commit; the signal lands there."""
     if not os.path.exists("/proc/self/status"):
         pytest.skip("needs /proc")
     (tmp_path / "tight.toml").write_text(MCH50.read_text().replace("max_transmission_error_arcsec = 72.0",
@@ -146,7 +146,8 @@ def test_a_signal_after_the_commit_keeps_the_runs_exit_code(tmp_path, args, code
     _fill(w)
     proc = start(args, tmp_path, stderr=w, stdout=open(os.devnull, "wb"))
     os.close(w)
-    wait_for(lambda: (tmp_path / "out.csv").exists() and catches(proc.pid, signal.SIGTERM), proc)
+    out = tmp_path / args[-1]
+    wait_for(lambda: out.exists() and catches(proc.pid, signal.SIGTERM), proc)
     proc.send_signal(sig)
     proc.wait(timeout=60)
     os.set_blocking(r, False)
@@ -162,7 +163,7 @@ def test_a_signal_after_the_commit_keeps_the_runs_exit_code(tmp_path, args, code
     os.close(r)
     assert proc.returncode == code
     assert b"no output written" not in err and b"Traceback" not in err
-    assert (tmp_path / "out.csv").stat().st_size > 0 and not any(n.endswith(".tmp") for n in os.listdir(tmp_path))
+    assert out.stat().st_size > 0 and not any(n.endswith(".tmp") for n in os.listdir(tmp_path))
 
 
 def test_settle_makes_a_late_signal_end_the_process_with_the_outcome(monkeypatch):

@@ -18,14 +18,16 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    output_format,
     render,
     say,
     stdout_is_terminal,
     warn_if_absurd,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def analyze(
     drive: DriveArgument,
     format: FormatOption = "table",
@@ -48,7 +50,7 @@ def analyze(
     result = run(spec)
     warn_if_absurd(result.angles, drive)
     unit = getattr(unit, "value", unit)
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     if fmt == "csv":
         m = result.metrics(unit)
         cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
@@ -78,10 +80,10 @@ def _budget_tables(r: dict, unit: str) -> list:
                   f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
                   "(docs/budget.md); the paper's total above is unchanged")
     vt = Table(title="values used", title_justify="left")
-    for col in ("key", escape("value [um]"), "origin"):
+    for col in ("key", escape("value [mm]"), "origin"):  # in the keys' own unit (_mm), as the spec writes them
         vt.add_column(col, justify="right" if col.startswith("value") else "left")
     for v in r["values_used"]:
-        vt.add_row(v["key"], f"{v['value_um']:g}", v["origin"])
+        vt.add_row(v["key"], f"{round(v['value_um'] / 1000.0, 9):g}", v["origin"])
     return [bt, note, vt]
 
 
@@ -135,7 +137,7 @@ def _tables(r: dict, unit: str) -> list:
     return out
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def check(
     drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False,
                                                 metavar="DRIVE.toml...")],
@@ -152,7 +154,7 @@ def check(
     """
     from wormgear_cli.workflows.check import check_file
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     checks = [check_file(path) for path in drives]
     for c in checks:
         for p in c.problems:
@@ -182,10 +184,11 @@ def check(
         raise typer.Exit(1)
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def new(
-    path: Annotated[Path, typer.Argument(help="File to create (must not exist); - writes the template to "
-                                         "stdout.", show_default=False, metavar="NEW.toml")],
+    path: Annotated[Path, typer.Argument(help="File to create (must not exist); a name without a suffix gets "
+                                           ".toml; - writes the template to stdout.", show_default=False,
+                                           metavar="NEW.toml")],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
 ):
     """Write a complete, commented drive template to start from.
@@ -204,9 +207,10 @@ def new(
 
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
-    if str(path) == "-" or names_a_descriptor(path):
-        emit(template(name or "my drive"), path)
+    if str(path) == "-" or names_a_descriptor(path):  # stdout (or a descriptor), as everywhere
+        emit(template(name or "drive"), path)
         return
+    path = _spec_name(path)
     if path.exists() or path.is_symlink():
         raise UsageError(f"{quote(path)}: already exists; wormgear new never overwrites a file")
     from wormgear_cli.cli.common import announce_written
@@ -215,3 +219,16 @@ def new(
     atomic_write(path, template(name or quote(path.stem)), exclusive=True)
     announce_written(path)
     after_commit(lambda: say(f"edit it, then run: wormgear check {quote(path)}"))
+
+
+def _spec_name(path: Path) -> Path:
+    """The file ``new`` writes: ``path``, with ``.toml`` added when it has no suffix; a suffix
+    other than ``.toml`` is refused with the name to use (every command reads drives as TOML)."""
+    from wormgear_cli.errors import UsageError, quote
+
+    if path.suffix.lower() == ".toml" or path.is_dir():  # a directory: refused as it is, below
+        return path
+    if not path.suffix or not path.name.strip("."):
+        return path.with_name(path.name + ".toml")
+    raise UsageError(f"{quote(path)}: a drive spec is a .toml file; name it {path.with_suffix('.toml').name} (or "
+                     f"{path.name}.toml)")

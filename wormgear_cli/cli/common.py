@@ -18,6 +18,7 @@ import os
 import sys
 from collections.abc import Iterable
 from enum import Enum
+from functools import lru_cache
 from pathlib import Path
 from typing import Annotated
 
@@ -69,9 +70,129 @@ def _check_output(value: Path | None) -> Path | None:
 OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
                                                       callback=_check_output)]
+
+
+# --- the format a file name asks for -----------------------------------------------------------
+
+#: file-name suffix -> the format a file of that name holds.  ``-o out.json`` without
+#: ``--format`` writes JSON; an explicit ``--format`` that contradicts it is an error.
+SUFFIX_FORMATS = {".json": "json", ".csv": "csv", ".npy": "npy"}
+#: suffixes of plain text: ``-o report.txt`` without ``--format`` writes the table (or text)
+#: format where the command has one, else its default; they never contradict a ``--format``
+TEXT_SUFFIXES = (".txt", ".text", ".log")
+
+
+def _suffix_for(fmt: str) -> str:
+    """The file-name suffix of a format: .json, .csv, else .txt (tables and text)."""
+    return next((k for k, v in SUFFIX_FORMATS.items() if v == fmt), TEXT_SUFFIXES[0])
+
+
+def _format_param(ctx):
+    """(the command's --format parameter, whether the user gave it) in the running command."""
+    for param in ctx.command.params:
+        if param.name == "format":
+            source = ctx.get_parameter_source("format")
+            return param, source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
+    return None, True
+
+
+def output_format(format, output: Path | None) -> str:
+    """The output format of a command: ``--format`` when given, else the one the ``-o`` file's
+    name asks for (``.json``, ``.csv``; ``.txt`` the table or text), else the default.
+
+    One rule for every command with ``--format``, decided before any work: a ``.json`` or
+    ``.csv`` name holds that format, so ``-o out.json`` with ``--format csv``, or a ``.csv``
+    name for a command without CSV, is an error (UsageError, exit 2) naming both.
+    """
+    from typer._click.globals import get_current_context
+
+    from wormgear_cli.errors import UsageError
+
+    fmt = getattr(format, "value", format)
+    ctx = get_current_context(silent=True)
+    if ctx is None or is_stdout(output):
+        return fmt
+    param, explicit = _format_param(ctx)
+    if param is None:
+        return fmt
+    choices = [getattr(c, "value", c) for c in getattr(param.type, "choices", ())]
+    suffix = Path(output).suffix.lower()
+    named = SUFFIX_FORMATS.get(suffix)
+    command = ctx.command_path
+    if named is not None and named != fmt and explicit:
+        raise UsageError(f"-o {output}: the file name says {named}, but --format {fmt} was given; drop "
+                         f"--format or name the file {_suffix_for(fmt)}")
+    if explicit:
+        return fmt
+    if named is not None:
+        if named not in choices:
+            names = " or ".join(f"{_suffix_for(c)} ({c})" for c in choices)
+            raise UsageError(f"-o {output}: {command} writes {' or '.join(choices)}, not {named}; name the "
+                             f"file {names}")
+        return named
+    if suffix in TEXT_SUFFIXES:
+        return next((c for c in ("table", "text") if c in choices), fmt)
+    return fmt
+
+
+# --- counts ------------------------------------------------------------------------------------
+
+
+def parse_count(text: str) -> int:
+    """A whole number as engineers type it: ``100000``, ``100_000``, ``1e5``, ``2.5e3``.
+
+    Raises ValueError (its text says what was expected) for a fraction (``1.5``, ``1e-3``),
+    a non-finite value or anything that is not a number."""
+    import math
+
+    text = str(text).strip()
+    try:
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"expected a whole number (e.g. 100000, 100_000 or 1e5), got {text!r}") from None
+    if not math.isfinite(value) or not value.is_integer():
+        raise ValueError(f"expected a whole number (e.g. 100000, 100_000 or 1e5), got {text}")
+    return int(value)
+
+
+@lru_cache(maxsize=1)
+def _count_types():
+    """The click types of counts (built on first use: typer's click is imported with typer)."""
+    from typer._click.types import IntParamType, IntRange
+
+    class _Parse:
+        def convert(self, value, param, ctx):
+            if isinstance(value, str):
+                try:
+                    value = parse_count(value)
+                except ValueError as exc:
+                    self.fail(str(exc), param, ctx)
+            return super().convert(value, param, ctx)
+
+    class Count(_Parse, IntParamType):
+        """An integer option that also takes 1e6 and 1_000_000."""
+
+    class CountRange(_Parse, IntRange):
+        """A bounded integer option that also takes 1e6 and 1_000_000."""
+
+    return Count, CountRange
+
+
+def count_type(min: int | None = None, max: int | None = None):
+    """The click type of an integer count option (``--samples``, ``--points``, ``--runs`` ...):
+    :func:`parse_count`, within ``[min, max]`` when given (help and messages as click's
+    integer types).  Use as ``typer.Option("--samples", click_type=count_type(1))``."""
+    count, count_range = _count_types()
+    return count() if min is None and max is None else count_range(min=min, max=max)
+
+
 JobsOption = Annotated[int, typer.Option(
-    "--jobs", "-j", metavar="N", help="Worker processes (0: every core). The output is the same, byte for byte, "
-    "whatever N.")]
+    "--jobs", "-j", metavar="N", click_type=count_type(0),
+    help="Worker processes (0: every core). The output is the same, byte for byte, whatever N.")]
 ShardOption = Annotated[str | None, typer.Option(
     "--shard", metavar="K/N|auto", help="Compute only part K of N contiguous parts of the run; auto: the part "
     "from a Slurm, Grid Engine or PBS job array (auto:FIRST-LAST[:STEP] gives the array's range). With -o, a "
@@ -342,11 +463,11 @@ def _rich_table(t):
 
 
 def _longest_word(column) -> int:
-    """Longest unbreakable run (word or number) among a rich column's body cells."""
+    """Longest unbreakable run (word or number) among a rich column's header and body cells."""
     from rich.text import Text
 
     longest = 0
-    for cell in column.cells:
+    for cell in [column.header, *column.cells]:
         text = cell.plain if isinstance(cell, Text) else Text.from_markup(str(cell)).plain
         longest = max([longest] + [len(w) for w in text.split()])
     return longest

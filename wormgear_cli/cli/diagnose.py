@@ -15,15 +15,18 @@ from wormgear_cli.cli.common import (
     OutputOption,
     TableJsonFormat,
     announce_written,
+    count_type,
     emit,
     fmt_angle,
     jobs_count,
     json_text,
     no_color,
+    output_format,
     render,
     stderr_is_terminal,
     terminal_console,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
     ErrorUnitOption,
@@ -44,7 +47,7 @@ DiagnoseUnitOption = Annotated[AngleUnit, typer.Option(
     "arcsec (its keys end in _arcsec).", case_sensitive=False)]
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def diagnose(
     drive: DriveArgument,
     data: Annotated[Path, typer.Argument(
@@ -63,7 +66,7 @@ def diagnose(
     angle_unit: AngleUnitOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
+        "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
     alpha: Annotated[float, typer.Option(
         "--alpha", help="Family-wise significance level of each selection step (Bonferroni over the "
         "candidates tested), 0 < alpha < 0.5.")] = 0.01,
@@ -71,10 +74,10 @@ def diagnose(
         "--keep-phases", help="Hold the spec's phases (known from a direct measurement) instead of fitting "
         "them; only the zero offset and effects are fitted.")] = False,
     max_effects: Annotated[int, typer.Option("--max-effects", help="Name at most this many effects.",
-                                             min=0, max=20)] = 4,
+                                             click_type=count_type(0, 20))] = 4,
     resamples: Annotated[int, typer.Option(
-        "--resamples", help="Resamples of whole runs for the stability check (0: skip it).", min=0,
-        max=10_000)] = 50,
+        "--resamples", help="Resamples of whole runs for the stability check (0: skip it).",
+        click_type=count_type(0, 10_000))] = 50,
     jobs: JobsOption = 1,
 ):
     """Find where the model and a measurement disagree and name the missing effect.
@@ -92,10 +95,14 @@ def diagnose(
     from wormgear_cli.diagnosis.report import run_diagnose
     from wormgear_cli.errors import UsageError
     from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.spec.filekind import kind_of_file
     from wormgear_cli.spec.loader import load_spec
 
+    if kind_of_file(drive) == "table" and kind_of_file(data) == "drive":
+        raise UsageError(f"the arguments look swapped: {drive} is a measurement and {data} a drive spec; diagnose "
+                         f"takes the drive first: wormgear diagnose {data} {drive}")
     unit = getattr(unit, "value", unit)
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     inputs = (drive, data)
     from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
 

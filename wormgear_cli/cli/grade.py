@@ -7,10 +7,20 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import OutputOption, TableJsonFormat, emit, json_text, render, say
+from wormgear_cli.cli.common import (
+    OutputOption,
+    TableJsonFormat,
+    count_type,
+    emit,
+    json_text,
+    output_format,
+    render,
+    say,
+)
+from wormgear_cli.cli.helptext import HelpCommand
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def grade(
     grade: Annotated[int, typer.Option("--grade", "-g", help="ISO 1328-1:2013 flank tolerance class A (1..11).",
                                        show_default=False)],
@@ -20,7 +30,8 @@ def grade(
     face_width_mm: Annotated[float, typer.Option("--face-width-mm", help="Face width b [mm].",
                                                  show_default=False)],
     teeth: Annotated[int | None, typer.Option("--teeth", help="Number of teeth z (checked against the "
-                                                 "standard's scope; default d/m).", show_default=False)] = None,
+                                                 "standard's scope; default d/m).", show_default=False,
+                                                 click_type=count_type())] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format.",
                                                     case_sensitive=False)] = "table",
     output: OutputOption = None,
@@ -38,6 +49,7 @@ def grade(
     from wormgear_cli.errors import UsageError
     from wormgear_cli.physics.iso1328 import PART2_GRADES, GradeError, flank_tolerances, radial_composite
 
+    fmt = output_format(format, output)
     problems = [f"{opt}: expected a finite number > 0, got {v:g}" for opt, v in
                 (("--module-mm", module_mm), ("--diameter-mm", diameter_mm), ("--face-width-mm", face_width_mm))
                 if not v > 0 or v != v or v == float("inf")]
@@ -71,7 +83,6 @@ def grade(
     else:
         say(f"note: ISO 1328-2:1997 has no radial composite grade {grade} (grades 4..12)")
         doc.update({"F_i2T_um": None, "f_i2T_um": None})
-    fmt = getattr(format, "value", format)
     if fmt == "json":
         emit(json_text(doc), output)
         return

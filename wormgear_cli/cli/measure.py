@@ -14,13 +14,16 @@ from wormgear_cli.cli.common import (
     OutputOption,
     UnitOption,
     announce_written,
+    count_type,
     csv_text,
     emit,
     fmt_angle,
     json_text,
+    output_format,
     render,
     say,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
     ErrorUnitOption,
@@ -44,7 +47,7 @@ DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, 
                                               show_default=False, metavar="DATA.csv")]
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def measure(
     data: DataArgument,
     drive: Annotated[Path | None, typer.Option(
@@ -54,8 +57,8 @@ def measure(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,8,240 "
         "(default: the drive's physical orders with --drive, else 1,2,3,4).", show_default=False)] = None,
     harmonics: Annotated[int, typer.Option(
-        "--harmonics", help="With --drive: harmonics of each shaft/mesh order to include.", min=1,
-        max=10)] = 3,
+        "--harmonics", help="With --drive: harmonics of each shaft/mesh order to include.",
+        click_type=count_type(1, 10))] = 3,
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
@@ -63,8 +66,8 @@ def measure(
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
-        "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs the "
-        "'plot' extra).", show_default=False)] = None,
+        "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs "
+        "matplotlib).", show_default=False)] = None,
 ):
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 
@@ -89,8 +92,9 @@ def measure(
     from wormgear_cli.workflows.measure import measure as run
     from wormgear_cli.workflows.measure import parse_orders, report
 
+    _check_roles(data, drive)
     unit = getattr(unit, "value", unit)
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
     if plot is not None:
         from wormgear_cli.plots import check_plot_path
@@ -124,6 +128,22 @@ def measure(
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:
         render(_tables(doc, len(result.figures.targets)), output, inputs)
+
+
+def _check_roles(data: Path, drive: Path | None) -> None:
+    """A drive spec given as DATA.csv (alone, or swapped with --drive's measurement) is a usage
+    error that says where each file goes, before any parser sees it."""
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec.filekind import kind_of_file
+
+    if kind_of_file(data) != "drive":
+        return
+    if drive is None:
+        raise UsageError(f"{data} is a drive spec, not a measurement; measure reads a measurement CSV and takes "
+                         f"the drive as --drive: wormgear measure DATA.csv --drive {data}")
+    if kind_of_file(drive) == "table":
+        raise UsageError(f"the files look swapped: {data} is a drive spec and {drive} a measurement; "
+                         f"wormgear measure {drive} --drive {data}")
 
 
 def _json(doc: dict) -> str:

@@ -9,7 +9,16 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import JobsOption, OutputOption, Progress, announce_written, is_stdout, jobs_count
+from wormgear_cli.cli.common import (
+    JobsOption,
+    OutputOption,
+    Progress,
+    announce_written,
+    is_stdout,
+    jobs_count,
+    output_format,
+)
+from wormgear_cli.cli.helptext import HelpCommand
 
 
 class MergeFormat(str, Enum):
@@ -18,7 +27,7 @@ class MergeFormat(str, Enum):
     csv = "csv"
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def merge(
     parts: Annotated[list[Path], typer.Argument(help="The parts (each written with --shard K/N -o FILE, its "
                                                 "manifest beside it), in any order.", show_default=False,
@@ -47,7 +56,7 @@ def merge(
     from wormgear_cli.errors import UsageError
     from wormgear_cli.workflows import merge as work
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     got = work.parts_of(parts)
     inputs = [Path(p["path"]) for p in got]
     if got[0]["command"] == "sweep":

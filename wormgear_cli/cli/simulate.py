@@ -16,11 +16,14 @@ from wormgear_cli.cli.common import (
     OutputOption,
     UnitOption,
     announce_written,
+    count_type,
     emit,
     jobs_count,
     json_text,
+    output_format,
     warn_if_absurd,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 
 class Phases(str, Enum):
@@ -50,15 +53,15 @@ SIMULATE_BYTES_PER_POINT = 400
 SIMULATE_AT_BYTES_PER_ROW = 650
 
 PlotOption = Annotated[Path | None, typer.Option(
-    "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs the 'plot' extra).",
+    "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs matplotlib).",
     show_default=False)]
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def simulate(
     drive: DriveArgument,
     points: Annotated[int, typer.Option("--points", "-n", help="Dense scan: number of output angles.",
-                                        min=2, max=10_000_000)] = 3600,
+                                        click_type=count_type(2, 10_000_000))] = 3600,
     revs: Annotated[float, typer.Option("--revs", help="Dense scan: output turns covered (angles from 0, "
                                         "end excluded; 0 < R <= 1000).")] = 1.0,
     at: Annotated[Path | None, typer.Option(
@@ -104,7 +107,7 @@ def simulate(
     from wormgear_cli.workflows import simulate as report
 
     unit = getattr(unit, "value", unit)
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     phases = getattr(phases, "value", phases)
     for name, value in (("--temperature-C", temperature_c), ("--load-Nm", load_nm)):
         if not math.isfinite(value):
@@ -149,7 +152,7 @@ def simulate(
     emit(result.text, output, inputs)
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def synth(
     drive: DriveArgument,
     output: OutputOption = None,
@@ -160,12 +163,12 @@ def synth(
                                       min=0)] = 0,
     plan: Annotated[PlanKind, typer.Option("--plan", help="iso: irregularly spaced targets; dense: an even "
                                            "scan.", case_sensitive=False)] = PlanKind.iso,
-    targets: Annotated[int, typer.Option("--targets", help="iso plan: target positions.", min=2,
-                                         max=100_000)] = 24,
-    points: Annotated[int, typer.Option("--points", help="dense plan: angles per pass.", min=2,
-                                        max=10_000_000)] = 3600,
+    targets: Annotated[int, typer.Option("--targets", help="iso plan: target positions.",
+                                         click_type=count_type(2, 100_000))] = 24,
+    points: Annotated[int, typer.Option("--points", help="dense plan: angles per pass.",
+                                        click_type=count_type(2, 10_000_000))] = 3600,
     runs: Annotated[int, typer.Option("--runs", help="Runs; each is one forward then one reverse pass.",
-                                      min=1, max=10_000)] = 5,
+                                      click_type=count_type(1, 10_000))] = 5,
     revs: Annotated[float, typer.Option("--revs", help="Output turns spanned by the targets (0 < R <= 1000).")
                     ] = 1.0,
     dwell_s: Annotated[float | None, typer.Option(
@@ -174,8 +177,8 @@ def synth(
     jitter: Annotated[float, typer.Option("--jitter", help="iso plan: target jitter, +/- this fraction of the "
                                           "mean spacing (0 <= J < 0.5).")] = 0.25,
     cycles: Annotated[int, typer.Option("--cycles", help="Measure the block of --runs runs this many times "
-                                        "(runs numbered on), e.g. repeated as the table warms.", min=1,
-                                        max=1000)] = 1,
+                                        "(runs numbered on), e.g. repeated as the table warms.",
+                                        click_type=count_type(1, 1000))] = 1,
     cycle_gap_s: Annotated[float, typer.Option("--cycle-gap-s", help="Time between cycles [s]; the table "
                                                "keeps running, no rows are recorded.", min=0.0)] = 0.0,
     effect: Annotated[list[str] | None, typer.Option(

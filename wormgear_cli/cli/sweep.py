@@ -23,14 +23,17 @@ from wormgear_cli.cli.common import (
     ShardOption,
     UnitOption,
     announce_written,
+    count_type,
     emit,
     is_stdout,
     jobs_count,
     json_text,
+    output_format,
     render,
     shard_part,
     warn_if_absurd,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
@@ -45,7 +48,7 @@ class HoldMode(str, Enum):
     torque = "torque"
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def sweep(
     drive: DriveArgument,
     i: Annotated[str | None, typer.Option("--i", metavar="START:STOP:N",
@@ -69,12 +72,12 @@ def sweep(
     min_pinion_teeth: Annotated[int | None, typer.Option(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
-        show_default=False)] = None,
+        show_default=False, click_type=count_type())] = None,
     shard: ShardOption = None,
     jobs: JobsOption = 1,
     plot: Annotated[Path | None, typer.Option(
-        "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs the 'plot' "
-                       "extra).", show_default=False)] = None,
+        "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs "
+                       "matplotlib).", show_default=False)] = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -94,7 +97,7 @@ def sweep(
     from wormgear_cli.plots import check_plot_path
     from wormgear_cli.spec.loader import load_spec
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
     params = list(param or [])
     limits.check_options(params=params, i=i, l_mm=l_mm, module_mm=module_mm, hold=hold, min_teeth=min_pinion_teeth,

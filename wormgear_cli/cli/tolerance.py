@@ -18,15 +18,18 @@ from wormgear_cli.cli.common import (
     ShardOption,
     UnitOption,
     announce_written,
+    count_type,
     is_stdout,
     jobs_count,
     json_text,
+    output_format,
     render,
     say,
     shard_part,
     warn_if_absurd,
     write_stdout,
 )
+from wormgear_cli.cli.helptext import HelpCommand
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
@@ -58,10 +61,11 @@ class PlanKind(str, Enum):
     dense = "dense"
 
 
-@app.command()
+@app.command(cls=HelpCommand)
 def tolerance(
     drive: DriveArgument,
-    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of built drives to sample (N >= 1).")]
+    samples: Annotated[int, typer.Option("--samples", "-n", help="Number of built drives to sample (N >= 1, e.g. "
+                                         "20000 or 1e6).", click_type=count_type())]
     = 100_000,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same output).")] = 0,
     metrics: Annotated[MetricSet, typer.Option(
@@ -71,8 +75,8 @@ def tolerance(
     plan: Annotated[PlanKind, typer.Option(
         "--plan", help="Acceptance test: iso (irregular targets as synth plans them with --seed) or dense "
         "(--points even angles).", case_sensitive=False)] = PlanKind.iso,
-    targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.")] = 24,
-    points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.")] = 360,
+    targets: Annotated[int, typer.Option("--targets", help="Targets of the iso plan.", click_type=count_type())] = 24,
+    points: Annotated[int, typer.Option("--points", help="Angles of the dense plan.", click_type=count_type())] = 360,
     target_yield: Annotated[float | None, typer.Option(
         "--target-yield", help="Yield to aim at (0 < P < 1; default: [requirements] min_yield): rank the "
         "tolerances by the yield one step of tightening gains.", show_default=False)] = None,
@@ -89,7 +93,7 @@ def tolerance(
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
-        "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
+        "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
 ):
     """Statistical tolerance analysis: what fraction of built drives passes, and which tolerance to tighten.
 
@@ -109,7 +113,7 @@ def tolerance(
     from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
 
-    fmt = getattr(format, "value", format)
+    fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
     metric_set = getattr(metrics, "value", metrics)
     part = shard_part(shard)
@@ -234,6 +238,7 @@ def _tables(doc: dict, target) -> list:
     from rich.table import Table
 
     from wormgear_cli.cli.common import fmt_angle
+    from wormgear_cli.tolerance.report import short_key, variance_rows
 
     unit = doc["unit"]
     a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
@@ -267,19 +272,16 @@ def _tables(doc: dict, target) -> list:
                 row.append(Yield(y["passing"], doc["samples"], y["value"], y["low"], y["high"]).verdict(target))
             t3.add_row(*row)
         out.append(t3)
-    sens = {m: v for m, v in doc["sensitivity"].items() if v is not None}
-    if sens:
+    metrics, shares = variance_rows(doc["sensitivity"])
+    if shares:
         t4 = Table(title="variance share (first-order index)",
                    **{**kw, "padding": (0, 0)})
         t4.add_column("key ", no_wrap=True)
-        for m in sens:
+        for m in metrics:
             t4.add_column(SHORT[m], justify="right")
-        keys = [k for k in next(iter(sens.values())) if k != "remainder"]
-        shown = [k for k in keys if any(sens[m].get(k, 0.0) >= 0.005 for m in sens)]
-        for k in shown:
-            t4.add_row(escape(_short_key(k)), *(f"{sens[m][k]:.2f}" for m in sens))
-        t4.add_row("remainder (rest and interactions)",
-                   *(f"{1.0 - sum(sens[m][k] for k in shown):.2f}" for m in sens))
+        for k, values in shares:
+            label = "remainder (rest and interactions)" if k == "remainder" else escape(short_key(k))
+            t4.add_row(label, *(f"{v:.2f}" for v in values))
         out.append(t4)
     alloc = doc.get("allocation")
     if alloc:
@@ -288,7 +290,7 @@ def _tables(doc: dict, target) -> list:
         for c in ("key", "step", "yield", "gain"):
             t5.add_column(c, justify="left" if c in ("key", "step") else "right")
         for st in alloc["steps"][:8]:
-            t5.add_row(escape(_short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
+            t5.add_row(escape(short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
                        f"{100 * st['gain']:+.2f} %")
         out.append(t5)
         head, _, rest = alloc["answer"].partition(": ")  # the answer on two lines within 80 columns
@@ -303,14 +305,6 @@ def _tables(doc: dict, target) -> list:
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]
     return out
-
-
-def _short_key(column: str) -> str:
-    """A varied column shortened to fit 80 columns: without the top section and the unit suffix
-    (assembly.wheel_eccentricity_mm -> wheel_eccentricity); the JSON keeps the full TOML path."""
-    head, _, rest = column.partition(".")
-    name = rest if head in ("gear_pair", "worm_pair", "assembly") and rest else column
-    return name.replace("_mm[", "[").removesuffix("_mm")
 
 
 def _pct(x: float) -> str:

@@ -229,8 +229,13 @@ def read_measurement(path: str | Path, require_error: bool = True, options: Read
     DataError
         One line per problem, naming file, line and column.
     """
+    from wormgear_cli.spec.filekind import looks_like_drive
+
     options = options or ReadOptions()
     text = read_bytes_bounded(path, "a CSV file", options.max_bytes)
+    if looks_like_drive(text):  # a drive spec where the data belong: say so, not "missing columns"
+        raise DataError(f"{path}: a TOML drive spec, not a measurement; expected a CSV file with a header "
+                        "line such as angle_deg,error_arcsec")
     return parse_measurement(text, str(path), require_error, options)
 
 

@@ -19,8 +19,9 @@ from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
 from wormgear_cli.output.tables import Cell, Column, Table
 from wormgear_cli.units import to_unit
 
-#: heat-map size shown in the table (rows = i values, columns = l values)
-TABLE_ROWS, TABLE_COLS = 12, 8
+#: heat-map size shown in the table (rows = i values, columns = l values): every value up to
+#: these counts (a map wider than the terminal is split into parts), an even stride beyond
+TABLE_ROWS, TABLE_COLS = 21, 12
 #: rows of the --param table
 TABLE_PARAM_ROWS = 40
 #: --param CSV rows produced at a time (about 0.1 s of work)
@@ -155,6 +156,29 @@ def subsample(n: int, k: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(n, k)).round().astype(int))
 
 
+def every_kth(n: int, most: int) -> tuple[np.ndarray, int]:
+    """(indices, k) of the values of an axis a heat map shows: all ``n`` (k = 1) when they are
+    at most ``most``, else every k-th from the first, with the smallest k that fits, and the last
+    value always (so the map keeps its even steps and both ends)."""
+    if n <= most:
+        return np.arange(n), 1
+    k = -(-(n - 1) // (most - 1))
+    idx = np.arange(0, n, k)
+    if idx[-1] != n - 1:
+        idx = np.append(idx[:most - 1], n - 1)
+    return idx, k
+
+
+def _shown(name: str, values, idx, k: int) -> str:
+    """What a subsampled axis shows, in words: 'l = 100, 140, ..., 300 (6 of 21: every 4th and the last)'."""
+    n = values.size
+    listed = [f"{values[j]:g}" for j in idx]
+    text = ", ".join(listed) if len(listed) <= 4 else f"{listed[0]}, {listed[1]}, ..., {listed[-1]}"
+    ordinal = {2: "2nd", 3: "3rd"}.get(k, f"{k}th")
+    last = "" if (n - 1) % k == 0 else " and the last"
+    return f"{name} = {text} ({idx.size} of {n}: every {ordinal}{last})"
+
+
 def grid2d(sw, data: dict, name: str) -> np.ndarray:
     """Full (n_i, n_l) array of a column, NaN at skipped points."""
     grid = np.full(sw.size, np.nan)
@@ -183,8 +207,8 @@ def _heat_table(sw, data, name, label, unit, rows, cols) -> Table:
 
 def ratio_distance_tables(sw, data: dict, unit: str) -> list:
     """Heat maps of gear TE and total TE, the best designs, and the paper's findings."""
-    rows = subsample(sw.i_values.size, TABLE_ROWS)
-    cols = subsample(sw.l_values.size, TABLE_COLS)
+    rows, k_i = every_kth(sw.i_values.size, TABLE_ROWS)
+    cols, k_l = every_kth(sw.l_values.size, TABLE_COLS)
     hold = "normal forces held" if sw.hold == "force" else "output torque held"
     snap = f", snapped to whole teeth at m = {sw.module:g} mm (min {sw.min_teeth} teeth)" if sw.module else ""
     involute = sw.spec.gear_pair.kinematics == "involute"
@@ -193,12 +217,12 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
                     unit, rows, cols)
     shown = []
     if rows.size < sw.i_values.size:
-        shown.append(f"{rows.size} of {sw.i_values.size} i values")
+        shown.append(_shown("i", sw.i_values, rows, k_i))
     if cols.size < sw.l_values.size:
-        shown.append(f"{cols.size} of {sw.l_values.size} l values")
+        shown.append(_shown("l", sw.l_values, cols, k_l))
     caption = f"{hold}{snap}"
     if shown:
-        caption += f"; showing {' and '.join(shown)} (all points: --format csv)"
+        caption += f"; showing {' and '.join(shown)}; all points: --format csv"
     if sw.module:
         caption += "; '-' = skipped (too few teeth)"
     g.caption = caption

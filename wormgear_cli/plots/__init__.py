@@ -13,7 +13,9 @@ from pathlib import Path
 from wormgear_cli.errors import UsageError
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
-INSTALL_HINT = "plotting needs matplotlib: pip install 'wormgear-cli[plot]'"
+#: the one install hint of plotting: the package is installed from a checkout (pip install .), not
+#: from the package index, so the hint names matplotlib itself (the 'plot' extra's one package)
+INSTALL_HINT = "plotting needs matplotlib: pip install matplotlib"
 
 #: resolution of PNG files [dots per inch]
 DPI = 120

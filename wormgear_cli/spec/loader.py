@@ -400,7 +400,11 @@ def load_spec(path: str | Path) -> Spec:
     if not text.strip():
         raise SpecError(f"{name}: file is empty, expected a TOML drive file (try `wormgear new`)")
     from wormgear_cli.errors import quote  # a file name holding control characters is shown, never run
+    from wormgear_cli.spec.filekind import first_line, looks_like_table
 
+    if looks_like_table(text):  # a measurement CSV where a drive belongs: say so, not a TOML syntax error
+        raise SpecError(f"{name}: a table of data (first line: {first_line(text)}), not a TOML drive file; "
+                        "give the drive spec here (wormgear new writes one)")
     return loads_spec(text, name, default_name=quote(path.stem))
 
 

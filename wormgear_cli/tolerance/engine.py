@@ -400,17 +400,26 @@ def reference_values(s: Setup) -> tuple[dict, dict]:
 # --- yield only (allocation, check) ----------------------------------------------------------
 
 
+def limit_yields(s: Setup, progress: Callable[[int], None] | None = None) -> dict[str, stats.Yield]:
+    """The fraction of the setup's samples meeting each sampled limit (keyed as :func:`limits`)
+    and every limit at once (``"all"``), streamed (nothing kept)."""
+    lim = limits(s)
+    counts = dict.fromkeys([*lim, "all"], 0)
+    n = 0
+    for block in blocks(s, progress):
+        every = np.ones(block.stop - block.start, dtype=bool)
+        for key, (metric, limit) in lim.items():
+            ok = block.metrics[metric] <= limit
+            counts[key] += int(np.count_nonzero(ok))
+            every &= ok
+        counts["all"] += int(np.count_nonzero(every))
+        n += block.stop - block.start
+    return {key: stats.binomial_yield(k, n) for key, k in counts.items()}
+
+
 def joint_yield(s: Setup) -> stats.Yield:
     """The fraction of the setup's samples meeting every limit, streamed (nothing kept)."""
-    lim = limits(s)
-    k = n = 0
-    for block in blocks(s):
-        ok = np.ones(block.stop - block.start, dtype=bool)
-        for metric, limit in lim.values():
-            ok &= block.metrics[metric] <= limit
-        k += int(np.count_nonzero(ok))
-        n += block.stop - block.start
-    return stats.binomial_yield(k, n)
+    return limit_yields(s)["all"]
 
 
 def metrics_for_limits(spec) -> str | None:

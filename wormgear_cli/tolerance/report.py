@@ -316,3 +316,30 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
     if allocation is not None:
         doc["allocation"] = allocation
     return doc
+
+
+def short_key(column: str) -> str:
+    """A varied column shortened to fit 80 columns: without the top section and the unit suffix
+    (assembly.wheel_eccentricity_mm -> wheel_eccentricity); the JSON keeps the full TOML path."""
+    head, _, rest = column.partition(".")
+    name = rest if head in ("gear_pair", "worm_pair", "assembly") and rest else column
+    return name.replace("_mm[", "[").removesuffix("_mm")
+
+
+#: a key's first-order share shown by the table and the plot when it reaches this in some metric
+SHARE_SHOWN = 0.005
+
+
+def variance_rows(sensitivity: dict) -> tuple[list[str], list[tuple[str, list[float]]]]:
+    """(metrics, rows) of the variance-share view of a tolerance document's ``sensitivity``: each
+    key whose first-order share reaches :data:`SHARE_SHOWN` in some metric, with its share per
+    metric, then ``remainder`` (1 - the shares shown: the rest and the interactions).  Metrics
+    without indices (None) are left out."""
+    sens = {m: v for m, v in sensitivity.items() if v is not None}
+    if not sens:
+        return [], []
+    keys = [k for k in next(iter(sens.values())) if k != "remainder"]
+    shown = [k for k in keys if any(sens[m].get(k, 0.0) >= SHARE_SHOWN for m in sens)]
+    rows = [(k, [sens[m][k] for m in sens]) for k in shown]
+    rows.append(("remainder", [1.0 - sum(sens[m][k] for k in shown) for m in sens]))
+    return list(sens), rows
