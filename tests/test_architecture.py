@@ -28,7 +28,6 @@ KNOWN_LONG: set[str] = {
     "wormgear_cli/diagnosis/scan.py::scan_residual",
     "wormgear_cli/diagnosis/selection.py::_diagnose",
     "wormgear_cli/cli/diagnose.py::_tables",
-    "wormgear_cli/measurement/reader.py::_parse_measurement",
     "wormgear_cli/measurement/orders.py::analyse_orders",
     "wormgear_cli/diagnosis/scoring.py::__init__",
     "wormgear_cli/analysis/synth.py::synthesize",

@@ -80,7 +80,7 @@ def test_no_direction_column_with_the_directions_restored(runner, tmp_path):
 
 
 def test_time_restarts_give_the_passes_of_the_run_column():
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     without = read_measurement(FIELD / "time-restarts-no-run.csv")
     with_run = read_measurement(FIELD / "time-restarts-with-run.csv")

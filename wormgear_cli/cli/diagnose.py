@@ -22,7 +22,13 @@ from wormgear_cli.cli.common import (
     stderr_is_terminal,
     terminal_console,
 )
-from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
+from wormgear_cli.cli.read_options import (
+    AngleUnitOption,
+    ErrorUnitOption,
+    InputFormatOption,
+    MapOption,
+    read_options,
+)
 
 #: rows above which a progress display is shown (when stderr is a terminal)
 PROGRESS_ROWS = 20_000
@@ -50,6 +56,7 @@ def diagnose(
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
+    input_format: InputFormatOption = "auto",
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs the 'plot' extra).", show_default=False)] = None,
@@ -79,7 +86,7 @@ def diagnose(
     """
     from wormgear_cli.diagnosis.report import run_diagnose
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.spec.loader import load_spec
 
     unit = getattr(unit, "value", unit)
@@ -106,7 +113,7 @@ def diagnose(
         raise UsageError(f"{write_spec}: --write-spec writes a drive spec; expected a file name ending in .toml")
 
     spec = load_spec(drive)
-    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit))
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
     options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
                    data_name=str(data), write_spec=None if write_spec is None else str(write_spec))
     if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():

@@ -20,7 +20,13 @@ from wormgear_cli.cli.common import (
     json_text,
     render,
 )
-from wormgear_cli.cli.read_options import AngleUnitOption, ErrorUnitOption, MapOption, read_options
+from wormgear_cli.cli.read_options import (
+    AngleUnitOption,
+    ErrorUnitOption,
+    InputFormatOption,
+    MapOption,
+    read_options,
+)
 
 #: per-target rows shown in the table format before it is left to --format csv
 MAX_TABLE_TARGETS = 100
@@ -48,6 +54,7 @@ def measure(
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
+    input_format: InputFormatOption = "auto",
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -85,7 +92,7 @@ def measure(
 
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    options = read_options(column_map, error_unit, angle_unit)
+    options = read_options(column_map, error_unit, angle_unit, input_format)
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
     few = len(result.figures.targets) <= MAX_TABLE_TARGETS

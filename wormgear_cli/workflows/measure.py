@@ -120,7 +120,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
     from wormgear_cli.measurement.orders import analyse_orders
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     physical: list = []
     priority = None

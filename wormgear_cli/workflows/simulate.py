@@ -132,7 +132,7 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     import io
 
     from wormgear_cli.analysis.simulate import simulate as run
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     data = read_measurement(at, require_error=False)
     phases = phase_map(spec, which)
