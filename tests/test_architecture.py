@@ -34,8 +34,6 @@ KNOWN_LONG: set[str] = {
     "wormgear_cli/diagnosis/report.py::_report",
     "wormgear_cli/measurement/harmonics.py::_solve_blocks_each",
     "wormgear_cli/cli/simulate.py::synth",
-    "wormgear_cli/cli/measure.py::_tables",
-    "wormgear_cli/workflows/measure.py::report",
     "wormgear_cli/cli/tolerance.py::tolerance",
     "wormgear_cli/cli/diagnose.py::diagnose",
 }

@@ -501,8 +501,12 @@ class MeasureResult:
 
     ``iso230_2``: the ISO 230-2 figures by name (A, B, E, M, R and their
     directional variants, see ``wormgear measure``) as :class:`Angle`, None
-    where withheld; ``orders``: tuple of :class:`Order`; ``residual_rms``:
-    :class:`Angle`; ``verdict``, ``warnings``, ``notes``: text.
+    where withheld or below the resolution of the data; ``orders``: tuple of
+    :class:`Order`; ``residual_rms``: :class:`Angle`; ``verdict``,
+    ``warnings``, ``notes``: text; ``resolution``: one step of the readings
+    (:class:`Angle`, None when it cannot be told); ``below_resolution``: the
+    names of the figures of ``iso230_2`` that are None because every reading
+    they come from is equal (their scatter is below one step, not zero).
     """
 
     source: str
@@ -515,7 +519,9 @@ class MeasureResult:
     verdict: str
     warnings: tuple
     notes: tuple
-    core: object = field(repr=False, compare=False)
+    resolution: Angle | None = None
+    below_resolution: tuple = ()
+    core: object = field(repr=False, compare=False, default=None)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear measure --format json --unit UNIT``."""
@@ -576,10 +582,11 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         c, d = it["common"], it["differential"]
         items.append(Order(it["order"], it["label"], it["status"], _angle(c["amplitude"]),
                            _angle(c["amplitude_stderr"]), c["phase_deg"], _angle(d["amplitude"]), d["phase_deg"]))
+    res = doc["resolution"] or {}
     return MeasureResult(doc["source"], doc["drive"], doc["rows"], doc["targets"],
                          {k: _angle(v) for k, v in doc["iso230_2"].items()}, tuple(items),
                          _angle(doc["orders"]["residual_rms"]), doc["verdict"], tuple(doc["warnings"]),
-                         tuple(doc["notes"]), core)
+                         tuple(doc["notes"]), _angle(res.get("step")), tuple(res.get("below", ())), core)
 
 
 # --- diagnose ------------------------------------------------------------------------------------------------

@@ -32,7 +32,11 @@ from wormgear_cli.cli.read_options import (
 MAX_TABLE_TARGETS = 100
 #: per-target CSV columns (angles in --unit; the column names carry the unit)
 TARGET_COLUMNS = ("target_deg", "n_forward", "n_reverse", "mean_forward", "s_forward", "mean_reverse", "s_reverse",
-                  "mean_bidirectional", "reversal", "R_forward", "R_reverse", "R")
+                  "mean_bidirectional", "reversal", "R_forward", "R_reverse", "R", "below_resolution")
+#: per-target CSV columns that are not angles (no unit in their name)
+PLAIN_COLUMNS = ("target_deg", "n_forward", "n_reverse", "below_resolution")
+#: a table cell for s or R below the resolution of the data (the step is in the notes)
+BELOW = "<1 step"
 
 DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, error_arcsec; optional direction, "
                                               "run, load_Nm, temperature_C, time_s; other headers via --map).",
@@ -111,7 +115,7 @@ def measure(
         typer.echo(f"note: {doc['verdict']}", err=True)
         for note in doc["notes"]:
             typer.echo(f"note: {note}", err=True)
-        cols = [c if c.startswith(("target_deg", "n_")) else f"{c}_{unit}" for c in TARGET_COLUMNS]
+        cols = [c if c in PLAIN_COLUMNS else f"{c}_{unit}" for c in TARGET_COLUMNS]
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:
         render(_tables(doc, len(result.figures.targets)), output, inputs)
@@ -158,26 +162,7 @@ def _tables(doc: dict, ntargets: int) -> list:
     def num(t: Table, name: str) -> None:
         t.add_column(name, justify="right", no_wrap=True)
 
-    iso = doc["iso230_2"]
-    out = [Text(doc["verdict"])]
-    fig_keys = ("A", "A_forward", "A_reverse", "E", "E_forward", "E_reverse", "R", "R_forward", "R_reverse", "M", "B",
-                "B_signed", "B_mean")
-    st = table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if any(iso[k] is None for k in fig_keys) else ""))
-    st.add_column("figure", overflow="fold")
-    for col in ("bidirectional", "forward", "reverse"):
-        num(st, col)
-
-    def na(x) -> str:
-        return "n/a" if x is None else fmt_angle(x, unit)
-
-    st.add_row("accuracy A", na(iso["A"]), na(iso["A_forward"]), na(iso["A_reverse"]))
-    st.add_row("systematic deviation E", na(iso["E"]), na(iso["E_forward"]), na(iso["E_reverse"]))
-    st.add_row("repeatability R", na(iso["R"]), na(iso["R_forward"]), na(iso["R_reverse"]))
-    st.add_row("mean bidirectional deviation M", na(iso["M"]), "", "")
-    st.add_row("reversal B = max |B_i|", na(iso["B"]), "", "")
-    st.add_row("  largest B_i, signed", na(iso["B_signed"]), "", "")
-    st.add_row("mean reversal B_mean", na(iso["B_mean"]), "", "")
-    out.append(st)
+    out = [Text(doc["verdict"]), _figures_table(doc, table, num)]
 
     od = doc["orders"]
     cov = doc["coverage"]
@@ -229,15 +214,19 @@ def _tables(doc: dict, ntargets: int) -> list:
         for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev"):
             num(tt, col)
         for r in rows:
-            tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]), a(r["s_forward"]),
-                       str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]))
+            fwd, rev = _below(r)
+            tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]),
+                       BELOW if fwd else a(r["s_forward"]), str(r["n_reverse"]), a(r["mean_reverse"]),
+                       BELOW if rev else a(r["s_reverse"]))
         out.append(tt)
         bt = table(f"per target bidirectional [{unit}; target deg]")
         for col in ("target", "mean bi", "B_i", "R fwd", "R rev", "R_i"):
             num(bt, col)
         for r in rows:
-            bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]), a(r["R_forward"]),
-                       a(r["R_reverse"]), a(r["R"]))
+            fwd, rev = _below(r)
+            bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]),
+                       BELOW if fwd else a(r["R_forward"]), BELOW if rev else a(r["R_reverse"]),
+                       BELOW if fwd and rev else a(r["R"]))
         out.append(bt)
     else:
         out.append(Text(f"{ntargets} targets: the per-target table is in --format csv or json"))
@@ -246,3 +235,36 @@ def _tables(doc: dict, ntargets: int) -> list:
     for note in doc["notes"]:
         out.append(Text(f"note: {note}"))
     return out
+
+
+def _below(row: dict) -> tuple[bool, bool]:
+    """Whether the forward and the reverse readings of a per-target row are all equal."""
+    b = row.get("below_resolution")
+    return b in ("forward", "both"), b in ("reverse", "both")
+
+
+def _figures_table(doc: dict, table, num):
+    """The ISO 230-2 figures: n/a where not applicable, '<1 step' where below the resolution of the data."""
+    unit = doc["unit"]
+    iso = doc["iso230_2"]
+    below = set((doc.get("resolution") or {}).get("below", ()))
+    fig_keys = ("A", "A_forward", "A_reverse", "E", "E_forward", "E_reverse", "R", "R_forward", "R_reverse", "M", "B",
+                "B_signed", "B_mean")
+    missing = any(iso[k] is None and k not in below for k in fig_keys)
+    st = table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if missing else ""))
+    st.add_column("figure", overflow="fold")
+    for col in ("bidirectional", "forward", "reverse"):
+        num(st, col)
+
+    def na(key: str) -> str:
+        x = iso[key]
+        return BELOW if key in below else "n/a" if x is None else fmt_angle(x, unit)
+
+    st.add_row("accuracy A", na("A"), na("A_forward"), na("A_reverse"))
+    st.add_row("systematic deviation E", na("E"), na("E_forward"), na("E_reverse"))
+    st.add_row("repeatability R", na("R"), na("R_forward"), na("R_reverse"))
+    st.add_row("mean bidirectional deviation M", na("M"), "", "")
+    st.add_row("reversal B = max |B_i|", na("B"), "", "")
+    st.add_row("  largest B_i, signed", na("B_signed"), "", "")
+    st.add_row("mean reversal B_mean", na("B_mean"), "", "")
+    return st

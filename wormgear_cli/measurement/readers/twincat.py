@@ -138,7 +138,7 @@ def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measuremen
     roles, said = _roles(names, props)
     meta_lines = [cells for _, cells in meta]
     export = next((c[1] for c in meta_lines if c and c[0] == "Name" and len(c) > 1), "")
-    notes = [f"TwinCAT Scope export {export!r}: metadata block skipped (lines 1-{meta[-1][0]}), {len(names)} "
+    notes = [f"TwinCAT Scope export {export!r}: metadata block skipped (lines 1-{first_line - 1}), {len(names)} "
              f"channels" + (f"; read {said} (another choice: --map angle_deg=CHANNEL --map actual_deg=CHANNEL)"
                             if said else "")]
     if not units and any(c in dict(roles) for c in ("angle_deg", "actual_deg")) and not options.angle_unit:
