@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.output.formats import csv_text, fmt_number, json_text
+from wormgear_cli.output.formats import csv_text, fmt_number, json_text, one_row_per_line
 from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import to_unit
 
@@ -125,9 +125,10 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     """The model at every row of the measurement CSV ``at`` (its load_Nm and temperature_C
     columns where present, else ``load_nm`` [N m] and ``temperature_c`` [degC]).
 
-    CSV: the file's comments, header and rows as they are, plus (or replacing) the column
-    simulated_error_<unit>; JSON: the simulated errors and, when the file has errors, the
-    mean and RMS of measured - simulated.  Raises the reader's errors for a bad file."""
+    CSV: the file's comments, preamble (as ``#`` comments), header and rows as they are (the rows
+    the reader kept), plus (or replacing) the column simulated_error_<unit>; JSON: the simulated
+    errors and, when the file has errors, the mean and RMS of measured - simulated.  Raises the
+    reader's errors for a bad file."""
     import csv
     import io
 
@@ -158,6 +159,8 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     buf = io.StringIO()
     for line in data.comments:
         buf.write(line + "\n")
+    for line in data.preamble:  # metadata without '#': written back as comments, so the file reads back plainly
+        buf.write("# " + line + "\n")
     w = csv.writer(buf, lineterminator="\n")
     if column in header:  # re-simulating a file that already has the column: replace it
         j = header.index(column)
@@ -168,4 +171,4 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
         w.writerow(header + [column])
         for row, v in zip(data.rows, values):
             w.writerow([*row, v])
-    return SimulationReport(buf.getvalue(), curves)
+    return SimulationReport(one_row_per_line(buf.getvalue()), curves)

@@ -44,10 +44,11 @@ def _data_like(cells: list[str]) -> bool:
 
 
 def find_header(lines: list[tuple[int, str]]) -> int:
-    """Index in ``lines`` ((line number, text) of the non-blank, non-``#`` lines) of the header: the
-    first line with no number among its cells followed by data lines with as many cells (under one of
-    tab, ``;``, ``,``); 0 when none is (the first line is the header, as without a preamble)."""
-    split = {}
+    """Index in ``lines`` ((line number, text) of the non-blank, non-``#`` lines) of the header: of the
+    lines with no number among their cells, the one followed by the longest run of data lines with as
+    many cells (under one of tab, ``;``, ``,``), at least :data:`DATA_AFTER_HEADER` of them (or all
+    that follow); 0 when none is (the first line is the header, as without a preamble)."""
+    best, best_run = 0, 0
     for d in ("\t", ";", ","):
         rows = []
         for _, text in lines:
@@ -55,15 +56,16 @@ def find_header(lines: list[tuple[int, str]]) -> int:
                 rows.append(next(csv.reader([text], delimiter=d)))
             except (csv.Error, StopIteration):
                 rows.append([])
-        split[d] = rows
-    for i in range(len(lines)):
-        for rows in split.values():
-            head = rows[i]
-            after = rows[i + 1:i + 1 + DATA_AFTER_HEADER]
-            if (len(head) >= 2 and _numbers(head) == 0 and after and all(len(r) == len(head) for r in after)
-                    and all(_data_like(r) for r in after)):
-                return i
-    return 0
+        data = [_data_like(r) for r in rows]
+        for i, head in enumerate(rows):
+            if len(head) < 2 or _numbers(head):
+                continue
+            run = 0
+            while i + 1 + run < len(rows) and data[i + 1 + run] and len(rows[i + 1 + run]) == len(head):
+                run += 1
+            if run > best_run and run >= min(DATA_AFTER_HEADER, len(rows) - i - 1):
+                best, best_run = i, run
+    return best
 
 
 def _preamble(text: str, name: str) -> tuple[int, int, list[str], list[str]]:
