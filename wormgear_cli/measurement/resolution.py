@@ -11,10 +11,12 @@ rather than print 0.00.
   the file's unit), unknown for readings written to full double precision;
 * a grid of counts: the readings at one target differ by whole steps of an encoder with 2^n counts
   per turn (n = 8 .. 24; the coarsest grid that at least :data:`ON_GRID` of the differences sit on,
-  at least :data:`MIN_EVIDENCE` of them, the step at least :data:`MIN_STEPS` digits) -- the target
-  itself need not be on the grid (error = actual - target);
+  at least :data:`MIN_EVIDENCE` of them, the step at least :data:`MIN_STEPS` digits, and the
+  distinct differences too many to sit on it by chance, :data:`CHANCE`) -- the target itself need
+  not be on the grid (error = actual - target);
 * otherwise a grid of the differences' greatest common step, on the same conditions, when it is
-  coarser than the digits written.
+  coarser than the digits written and the differences are whole steps of at least two sizes (one
+  repeated difference is an offset, such as a reversal, not a grid).
 
 Pure numpy, no I/O.  All angles in radians.
 """
@@ -37,6 +39,9 @@ MIN_EVIDENCE = 3
 MIN_STEPS = 5
 #: encoder counts per turn tried: 2^8 .. 2^24
 ENCODER_BITS = range(8, 25)
+#: largest chance that the distinct differences all sit on an encoder grid by accident ((2 tol / step)
+#: per distinct difference), over the grids tried
+CHANCE = 1e-4
 #: readings looked at (a strided sample beyond this)
 SAMPLE = 200_000
 
@@ -115,19 +120,26 @@ def reading_resolution(error, unit: str, target_index) -> Resolution | None:
         return None
     k = _digits(values)
     written = None if k is None else 10.0**-k
-    tol = (written if written is not None else 1e-9 * max(1.0, float(np.max(np.abs(values))))) / 2 + 1e-9
+    # a difference of two readings carries the rounding of both: up to one written digit
+    tol = (written if written is not None else 1e-9 * max(1.0, float(np.max(np.abs(values))))) + 1e-9
     diffs = within_target_differences(values, index)
     floor = MIN_STEPS * (written or 0.0)
     if diffs.size >= MIN_EVIDENCE:
         turn = 2.0 * math.pi / scale
+        distinct = np.unique(np.round(np.abs(diffs) / tol))  # distinct magnitudes, each a test of the grid
         for bits in ENCODER_BITS:
             step = turn / 2**bits
             if step >= floor and step > 2 * tol and _on_grid(diffs, step, tol) >= ON_GRID \
-                    and np.count_nonzero(np.abs(diffs) > tol) >= MIN_EVIDENCE:
+                    and (2 * tol / step) ** distinct.size <= CHANCE:
                 return Resolution(step * scale, True, f"whole counts of an encoder with {2**bits} counts per turn")
         step = _common_step(diffs, tol)
         if step >= max(floor, 2 * tol) and _on_grid(diffs, step, tol) >= ON_GRID:
-            return Resolution(step * scale, True, "the readings of a target differ by whole steps")
+            mult = np.round(diffs / step)
+            if np.unique(mult[mult != 0]).size >= 2:  # whole steps of more than one size: a grid, not one offset
+                step = float(np.sum(mult * diffs) / np.sum(mult * mult))  # least squares over every difference
+                if written is not None:
+                    step = round(step / written) * written
+                return Resolution(step * scale, True, "the readings of a target differ by whole steps")
     if written is None:
         return None
     return Resolution(written * scale, False, f"the readings are written to {k} decimal{'s' if k != 1 else ''}")

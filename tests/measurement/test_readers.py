@@ -1,0 +1,304 @@
+"""The readers as a registry, and files as instruments and spreadsheets write them: headers in any case,
+direction words, preambles without '#', target and actual positions, TwinCAT Scope exports, time units,
+velocity, encoder counts, quoted line breaks.
+
+The constructed cases write the hand-worked ISO 230-2 example (tests/support/iso230_hand.py: A 14, B 4,
+E 5, M 1.5, R 14 arcsec, worked out by hand) in each of these ways; each must give those figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import types
+
+import numpy as np
+import pytest
+
+from tests.support.iso230_hand import HAND
+from tests.support.paths import ROOT
+from wormgear_cli.cli import app
+from wormgear_cli.errors import DataError
+from wormgear_cli.measurement import readers
+from wormgear_cli.measurement.reader import ReadOptions
+from wormgear_cli.measurement.readers import FORMATS, InputFormat, detect_format, parse_measurement, read_measurement
+
+FIELD = ROOT / "tests" / "data" / "field"
+HAND_FIGURES = {"A": 14.0, "B": 4.0, "E": 5.0, "M": 1.5, "R": 14.0}
+
+
+def hand_rows():
+    """(angle_deg, error_arcsec, direction, run) of the hand example, in the order of an ISO cycle."""
+    rows = []
+    for run in range(3):
+        for d in (1, -1):
+            for target in (0.0, 120.0, 240.0) if d > 0 else (240.0, 120.0, 0.0):
+                rows.append((target, HAND[(target, d)][run], d, run))
+    return rows
+
+
+def figures(runner, path, *args):
+    result = runner.invoke(app, ["measure", str(path), "-f", "json", "--orders", "1", *args])
+    assert result.exit_code == 0, result.stderr
+    doc = json.loads(result.stdout)
+    return {k: doc["iso230_2"][k] for k in HAND_FIGURES}, doc, result.stderr
+
+
+# --- the registry ------------------------------------------------------------------------------------------------
+
+
+def test_every_registered_format_resolves_and_csv_comes_last():
+    assert FORMATS[-1].name == "csv"
+    for f in FORMATS:
+        assert callable(f.function("detect")) and callable(f.function("read"))
+    assert readers.format_names() == tuple(f.name for f in FORMATS)
+
+
+def test_the_format_is_detected_from_the_content_not_the_name(tmp_path):
+    scope = (FIELD / "twincat-scope-resolver.csv").read_text(encoding="utf-8")
+    assert detect_format(scope.replace("\r\n", "\n")).name == "twincat-scope"
+    assert detect_format((FIELD / "resolver-cyclic-error-deg.csv").read_text()).name == "csv"
+    renamed = tmp_path / "export.txt"
+    renamed.write_bytes((FIELD / "twincat-scope-resolver.csv").read_bytes())
+    assert read_measurement(renamed).input_format == "twincat-scope"
+
+
+def test_a_new_format_is_one_registration_line(monkeypatch):
+    # a toy format: "ANGLES" then one angle per line, error 0; registered the way the guide-log reader will be
+    module = types.ModuleType("toy_format")
+
+    def looks_like(head):
+        return head.startswith("ANGLES\n")
+
+    def read(text, name, options):
+        body = "angle_deg,error_arcsec\n" + "".join(f"{a},0\n" for a in text.split("\n")[1:] if a)
+        return parse_measurement(body, name, options.require_error, ReadOptions())
+
+    module.looks_like, module.read = looks_like, read
+    monkeypatch.setitem(sys.modules, "toy_format", module)
+    monkeypatch.setattr(readers, "FORMATS", (InputFormat("toy", "a toy", "toy_format", "looks_like", "read"),
+                                             *FORMATS))
+    m = parse_measurement("ANGLES\n10\n20\n30\n", "t.txt")
+    assert m.angle_deg == pytest.approx([10.0, 20.0, 30.0])
+    assert parse_measurement("angle_deg,error_arcsec\n0,1\n1,2\n", "c.csv").input_format == "csv"
+
+
+def test_an_explicit_input_format_is_used_and_checked(runner, tmp_path):
+    path = FIELD / "twincat-scope-resolver.csv"
+    result = runner.invoke(app, ["measure", str(path), "--input-format", "bogus"])
+    assert result.exit_code == 2
+    assert result.stderr == "error: --input-format bogus: expected one of auto, twincat-scope, csv\n"
+    # read as a plain table, the metadata is no header: refused, and no metadata value proposed as a column
+    result = runner.invoke(app, ["measure", str(path), "--input-format", "csv"])
+    assert result.exit_code == 2
+    assert "--map" not in result.stderr.split("(header has:", 1)[1].split(")", 1)[1].replace(
+        "name the columns with --map CANONICAL=HEADER", "")
+
+
+# --- headers in any case, direction words ------------------------------------------------------------------------
+
+
+def test_headers_in_another_case_are_read_not_ignored(runner, tmp_path):
+    text = "Angle_Deg,ERROR_ARCSEC,Direction,Run\n" + "".join(f"{a:g},{e},{d},{r}\n" for a, e, d, r in hand_rows())
+    path = tmp_path / "case.csv"
+    path.write_text(text)
+    got, doc, err = figures(runner, path)
+    assert got == pytest.approx(HAND_FIGURES)
+    assert doc["columns"] == {"angle_deg": "Angle_Deg", "error_arcsec": "ERROR_ARCSEC", "direction": "Direction",
+                              "run": "Run"}
+    assert err == ""
+
+
+@pytest.mark.parametrize("up, down", [("up", "down"), ("+", "-"), ("fwd", "rev"), ("Forward", "Reverse"),
+                                      ("POS", "NEG"), ("+1", "-1")])
+def test_direction_words_give_the_figures_of_plus_and_minus_one(runner, tmp_path, up, down):
+    text = "angle (deg);error (arcsec);direction;run\n" + "".join(
+        f"{a:g};{e};{up if d > 0 else down};{r}\n" for a, e, d, r in hand_rows())
+    path = tmp_path / "words.csv"
+    path.write_text(text)
+    got, _, _ = figures(runner, path)
+    assert got == pytest.approx(HAND_FIGURES)
+
+
+def test_clockwise_words_take_forward_from_the_data(tmp_path):
+    # forward runs visit 0, 120, 240 (angles rising): whichever word is written on those rows is forward
+    for fwd_word, rev_word in (("CW", "CCW"), ("CCW", "CW")):
+        text = "angle_deg,error_arcsec,direction,run\n" + "".join(
+            f"{a:g},{e},{fwd_word if d > 0 else rev_word},{r}\n" for a, e, d, r in hand_rows())
+        m = parse_measurement(text, "cw.csv")
+        assert list(m.direction) == [d for _, _, d, _ in hand_rows()]
+        assert f"the {fwd_word} rows move to larger angles, so {fwd_word} is forward (+1)" in "\n".join(m.notes)
+
+
+def test_clockwise_words_the_data_cannot_orient_are_said(tmp_path):
+    text = "angle_deg,error_arcsec,direction\n0,1,CW\n0,2,CCW\n0,1.5,CW\n0,2.5,CCW\n"
+    m = parse_measurement(text, "one.csv")
+    assert list(m.direction) == [-1.0, 1.0, -1.0, 1.0]
+    assert "CCW is taken as forward (+1, the right-hand rule about the axis)" in "\n".join(m.notes)
+
+
+def test_a_cell_that_is_no_direction_is_named(tmp_path):
+    with pytest.raises(DataError) as info:
+        parse_measurement("angle_deg,error_arcsec,direction\n0,1,up\n10,2,sideways\n", "d.csv")
+    assert info.value.problems == ["d.csv:3: column direction: expected +1 or -1 or a direction word (up/down, "
+                                   "forward/reverse, fwd/rev, +/-, pos/neg, CW/CCW), got 'sideways'"]
+
+
+# --- preamble without '#' --------------------------------------------------------------------------------------
+
+
+def test_a_preamble_without_hash_is_skipped_and_said(runner, tmp_path):
+    text = ("Rotary table test report;;;\nOperator;Hans;;\nDate;2024-03-01;;\nSerial number;1234;;\n\n"
+            "angle (deg);error (arcsec);direction;run\n"
+            + "".join(f"{a:g};{e};{d};{r}\n" for a, e, d, r in hand_rows()))
+    path = tmp_path / "preamble.csv"
+    path.write_text(text)
+    got, doc, err = figures(runner, path)
+    assert got == pytest.approx(HAND_FIGURES)
+    assert ("4 lines before the header skipped as a preamble (metadata without '#', up to line 5): "
+            "'Rotary table test report;;;'; 'Operator;Hans;;'; ...") in doc["notes"]
+    m = read_measurement(path)
+    assert m.preamble == ("Rotary table test report;;;", "Operator;Hans;;", "Date;2024-03-01;;",
+                          "Serial number;1234;;")
+
+
+def test_a_header_directly_followed_by_data_is_never_taken_for_a_preamble():
+    m = parse_measurement("angle_deg,error_arcsec\n0,1\n10,2\n", "p.csv")
+    assert m.preamble == () and m.notes == ()
+
+
+# --- target and actual positions instead of a deviation ----------------------------------------------------------
+
+
+def test_target_and_actual_positions_give_the_deviation_wrapped(runner, tmp_path):
+    # a laser-style export: targets and actual positions in degrees; the actual at 0 deg reads 359.99x
+    lines = ["Target (deg),Actual (deg),Direction,Run"]
+    for a, e, d, r in hand_rows():
+        lines.append(f"{a:g},{(a + e / 3600.0 - 3 / 3600.0) % 360.0:.9f},{d},{r}")
+    path = tmp_path / "laser.csv"
+    path.write_text("\n".join(lines) + "\n")
+    got, doc, err = figures(runner, path)
+    assert got == pytest.approx(HAND_FIGURES, abs=1e-5)
+    assert doc["iso230_2"]["E_forward"] == pytest.approx(5.0, abs=1e-5)
+    assert doc["input_units"] == {"angle": "deg", "error": "deg"}
+    notes = "\n".join(doc["notes"])
+    assert "error formed as actual - target: 'Actual (deg)' - 'Target (deg)', in deg, wrapped to +/-180 deg" in notes
+    assert "rows across 0/360 deg" in notes  # those at the 0 deg target that read below 0
+    assert err == ""
+
+
+def test_an_error_column_wins_over_an_actual_position(tmp_path):
+    m = parse_measurement("angle_deg,actual_deg,error_arcsec\n0,0.1,1\n10,10.1,2\n", "both.csv")
+    assert m.error_arcsec == pytest.approx([1.0, 2.0])
+    assert "column 'actual_deg' (actual position) not used: the file has an error column" in m.notes
+
+
+# --- velocity, time units --------------------------------------------------------------------------------------------
+
+
+def test_direction_from_velocity_with_standstill_rows_left_out_and_kept_out_of_the_rows():
+    text = ("angle_deg,actual_deg,velocity,time (ms)\n0,0,0,0\n0,0.001,5,10\n10,10.002,5,20\n10,10,0,30\n"
+            "10,9.999,-5,40\n0,0.0005,-5,50\n0,0,0,60\n")
+    m = parse_measurement(text, "v.csv")
+    assert list(m.direction) == [1.0, 1.0, -1.0, -1.0]
+    assert m.time == pytest.approx([0.01, 0.02, 0.04, 0.05])
+    assert m.error_arcsec == pytest.approx([3.6, 7.2, -3.6, 1.8])
+    assert "direction" in m.derived
+    assert ("direction from the sign of 'velocity'; 3 standstill rows (velocity 0) left out (lines 2, 5, 8)"
+            in m.notes)
+    assert [r[3] for r in m.rows] == ["10", "20", "40", "50"]  # simulate --at writes back only these
+
+
+# --- encoder counts --------------------------------------------------------------------------------------------------
+
+
+def test_counts_are_never_suggested_as_an_angle_nor_accepted_as_degrees(runner, tmp_path):
+    path = tmp_path / "counts.csv"
+    # 'Pos' is a position by its name, but its cells are whole numbers up to 4098: counts, not degrees
+    path.write_text("Position (counts),Pos,Deviation (arcsec)\n" + "".join(
+        f"{c},{c + 3},{k % 3}\n" for k, c in enumerate(range(0, 4096, 455))))
+    result = runner.invoke(app, ["measure", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: missing required column angle_deg (header has: Position (counts), "
+                             "Pos, Deviation (arcsec)); name the columns with --map CANONICAL=HEADER\n")
+    result = runner.invoke(app, ["measure", str(path), "--map", "angle_deg=Position (counts)"])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: column 'Position (counts)' holds encoder counts, not an angle: "
+                             "convert it to degrees (counts x 360 / counts per turn) in a column of its own and read "
+                             "that as angle_deg\n")
+    # counts under a name that does not say so are read as asked, with a warning
+    result = runner.invoke(app, ["measure", str(path), "--map", "angle_deg=Pos", "--orders", "1"])
+    assert result.exit_code == 0
+    assert "warning: the angles are whole numbers from 3 to 4098 read as degrees: if they are encoder counts" \
+        in result.stderr
+
+
+# --- quoted line breaks: refused by every reader, written by no writer ---------------------------------------------
+
+
+QUOTED = 'angle_deg,error_arcsec,note\n0,1,a\n90,"1\n2",b\n180,3,c\n'
+
+
+@pytest.mark.parametrize("command", ["measure", "diagnose", "simulate"])
+def test_a_quoted_line_break_is_refused_with_its_line_in_every_command(runner, tmp_path, command):
+    path = tmp_path / "q.csv"
+    path.write_text(QUOTED)
+    spec = ROOT / "configs" / "mch50.toml"
+    args = {"measure": ["measure", str(path)], "diagnose": ["diagnose", str(spec), str(path)],
+            "simulate": ["simulate", str(spec), "--at", str(path)]}[command]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert result.stdout == ""  # never 12, never written back joined
+    assert result.stderr == (f"error: {path}:3: a quoted cell runs over a line break; each row must be one line (a "
+                             "cell split over lines would be joined into another value): put the cell on one line\n")
+
+
+def test_a_quoted_line_break_in_a_header_or_an_instrument_export_is_refused():
+    with pytest.raises(DataError) as info:
+        parse_measurement('angle_deg,"error\narcsec"\n0,1\n1,2\n', "h.csv")
+    assert info.value.problems[0].startswith("h.csv:1: a quoted cell runs over a line break")
+    scope = (FIELD / "twincat-scope-resolver.csv").read_text().replace("\r\n", "\n").split("\n")
+    scope[40] = scope[40].replace(";0;0;", ';"0\n0";0;')
+    with pytest.raises(DataError) as info:
+        parse_measurement("\n".join(scope), "s.csv")
+    assert info.value.problems[0].startswith("s.csv:41: a quoted cell runs over a line break")
+
+
+def test_writers_refuse_a_cell_holding_a_line_break():
+    from wormgear_cli.output.formats import csv_text
+
+    assert csv_text(["a", "b"], [[1, "x,y"]]) == 'a,b\n1,"x,y"\n'  # quoted cells without a break are fine
+    with pytest.raises(DataError, match="a cell would hold a line break"):
+        csv_text(["a"], [["x\ny"]])
+
+
+# --- plots follow the arc --------------------------------------------------------------------------------------------
+
+
+def test_an_arc_through_zero_is_plotted_as_one_arc():
+    pytest.importorskip("matplotlib")
+    from wormgear_cli.measurement.iso230 import measurement_figures
+    from wormgear_cli.plots import pyplot
+    from wormgear_cli.plots.measure import deviation_figure
+
+    targets = (330, 345, 0, 15, 30, 200, 215, 230)  # two arcs: 330 .. 30 through 0, and 200 .. 230
+    text = "angle_deg,error_arcsec,direction,run\n" + "".join(
+        f"{t},{math.sin(math.radians(t)) + r},{d},{r}\n" for r in range(2) for d in (1, -1) for t in targets)
+    m = parse_measurement(text, "arc.csv")
+    fig = deviation_figure(measurement_figures(m), m, "arcsec")
+    try:
+        ax = fig.axes[0]
+        for line in ax.get_lines():
+            x = np.asarray(line.get_xdata(), dtype=float)
+            if line.get_linestyle() in ("-", "--") and x.size > 1:
+                steps = np.diff(x[np.isfinite(x)])
+                assert np.all(steps >= 0)
+                # no line across an unmeasured gap: consecutive drawn points at most 15 deg apart
+                finite_pairs = np.isfinite(x[1:]) & np.isfinite(x[:-1])
+                assert np.all(np.diff(x)[finite_pairs] <= 15.0 + 1e-9)
+        assert "along the arc, through 0" in ax.get_xlabel()
+        lo, hi = ax.get_xlim()
+        assert lo < -25 and hi < 260  # 330 deg drawn as -30 deg, before 0
+    finally:
+        pyplot().close(fig)
