@@ -24,7 +24,7 @@ def iso_table(rng, step_arcsec, decimals=3, targets=11, runs=5, noise=None):
     ``step_arcsec``; run-to-run scatter ``noise`` [arcsec] (default 0.6 steps)."""
     target = np.sort(rng.uniform(0, 360, targets))  # irregular, off the grid
     rows = []
-    for run in range(runs):
+    for _run in range(runs):
         for d in (1.0, -1.0):
             for t in target if d > 0 else target[::-1]:
                 true = 3600 * t + 40 * math.sin(math.radians(2 * t)) + 15 * d + rng.normal(0, 0.6 * step_arcsec if noise is None else noise)
