@@ -302,3 +302,56 @@ def test_an_arc_through_zero_is_plotted_as_one_arc():
         assert lo < -25 and hi < 260  # 330 deg drawn as -30 deg, before 0
     finally:
         pyplot().close(fig)
+
+
+# --- TwinCAT Scope exports: a constructed one ------------------------------------------------------------------------
+
+
+def scope_export(channels, rows, sep=";", comma=False):
+    """A TwinCAT Scope export as the instrument writes it (metadata block, channel properties, rows, EOF)."""
+    def num(x):
+        text = repr(float(x))
+        return text.replace(".", ",") if comma else text
+
+    lines = [f"Name{sep}constructed export{sep}", f"File{sep}C:\\\\scope\\\\test.csv{sep}",
+             f"Starttime of export{sep}133000000000000000{sep}Monday{sep}12:00:00.000", "", "",
+             sep.join(["Name", *channels]), sep.join(["SymbolComment", *(["x"] * len(channels))]),
+             sep.join(["Data-Type", *(["REAL64"] * len(channels))]), sep.join(["SampleTime", *(["10"] * len(channels))]),
+             sep.join(["SymbolName", *(f"MAIN.{c}" for c in channels)]), sep.join(["Unit", *(["°"] * len(channels))]),
+             "", ""]
+    lines += [sep.join([str(t), *(num(v) for v in r)]) for t, *r in rows]
+    return "\r\n".join(lines + ["EOF", ""])
+
+
+def test_a_constructed_scope_export_with_ms_time_and_decimal_comma():
+    # an axis from 350 deg through 0 to 10 deg and back; actual = set point + 20" sin(2 theta) + 5" lag
+    theta = np.concatenate([np.linspace(350, 370, 41), np.linspace(370, 350, 41)])
+    vel = np.concatenate([[0.0], np.full(39, 2.0), [0.0], [0.0], np.full(39, -2.0), [0.0]])
+    setp = np.mod(theta, 360.0)
+    err = 20 * np.sin(np.radians(2 * theta)) + 5 * np.sign(vel)
+    act = np.mod(theta + err / 3600, 360.0)
+    rows = [(10 * k, s, v, a) for k, (s, v, a) in enumerate(zip(setp, vel, act))]
+    text = scope_export(["fSetPos", "fActVelo", "fEncPos"], rows, comma=True)
+    m = parse_measurement(text, "scope.csv")
+    moving = vel != 0
+    assert m.input_format == "twincat-scope" and len(m) == int(moving.sum()) == 78
+    assert m.error_arcsec == pytest.approx(err[moving], abs=1e-6)
+    assert list(m.direction) == list(np.sign(vel[moving]))
+    assert m.time == pytest.approx(0.01 * np.flatnonzero(moving))  # ms from the first sample
+    assert dict(m.units) == {"angle": "deg", "error": "deg"}
+    assert m.stated_units == {"angle", "error"}  # the Unit line says degrees
+    assert "'fSetPos' as the target, 'fEncPos' as the actual position" in m.notes[0]
+    assert "wrapped to +/-180 deg (1 row across 0/360 deg)" in "\n".join(m.notes)
+
+
+def test_scope_channels_that_do_not_say_their_role_get_a_map_to_fill_in():
+    rows = [(k, 10.0 * k, 10.0 * k + 0.001, 1.0) for k in range(5)]
+    text = scope_export(["Axis1.fPos", "Axis2.fPos", "fActVelocity"], rows)
+    with pytest.raises(DataError) as info:
+        parse_measurement(text, "amb.csv")
+    assert info.value.problems[0].endswith(
+        "the channel names do not say which position is the target (a set point or counter) and which the actual "
+        "(a resolver or encoder): name them, e.g. --map angle_deg=Axis1.fPos --map actual_deg=Axis2.fPos")
+    m = parse_measurement(text, "amb.csv", options=ReadOptions(column_map=(("angle_deg", "Axis1.fPos"),
+                                                                           ("actual_deg", "Axis2.fPos"))))
+    assert m.error_arcsec == pytest.approx([3.6] * 5)

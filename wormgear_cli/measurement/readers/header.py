@@ -219,13 +219,14 @@ def _find_mapped(header: list[str], counts: Counter, cell: str) -> int | str:
 
 
 def resolve_header(header: list[str], column_map, name: str, line: int, required: tuple, defaults=(),
-                   sample=None) -> tuple[dict[str, int], dict[str, str | None]]:
+                   sample=None, hint: str = "") -> tuple[dict[str, int], dict[str, str | None]]:
     """Canonical column -> index, and the unit each column's header states.
 
     ``column_map``: (canonical, header cell) pairs of ``--map`` (they win); ``defaults``: the
     format's own assignment (canonical, header cell), used where neither a map nor a recognised
     header gives the column; ``required``: canonical columns that must be found (``error_arcsec``
-    is satisfied by ``actual_deg``); ``sample(j)``: cells of column ``j`` for the hint.
+    is satisfied by ``actual_deg``); ``sample(j)``: cells of column ``j`` for the hint; ``hint``: the
+    format's own advice when no ``--map`` can be guessed.
 
     Raises
     ------
@@ -277,8 +278,9 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
         raise DataError(sorted(set(problems), key=problems.index))
     missing = [c for c in required if c not in index and not (c == "error_arcsec" and "actual_deg" in index)]
     if missing:
-        hint = suggest_map(header, index, sample)
-        fix = f"; try {' '.join(hint)}" if hint else "; name the columns with --map CANONICAL=HEADER"
+        guessed = suggest_map(header, index, sample)
+        fix = (f"; try {' '.join(guessed)}" if guessed else f"; {hint}" if hint
+               else "; name the columns with --map CANONICAL=HEADER")
         raise DataError(f"{name}:{line}: missing required column{'s' if len(missing) > 1 else ''} "
                         f"{', '.join(missing)} (header has: "
                         f"{', '.join(_clipped(h) for h in header) or 'nothing'}){fix}")

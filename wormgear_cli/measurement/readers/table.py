@@ -59,7 +59,8 @@ class TableSource:
     ``preamble`` (metadata lines) before the header; ``notes`` about the layout; ``defaults``: the
     format's own (canonical, header cell) assignment, used where no map or recognised header gives
     the column; ``units``: canonical -> unit the format states (an instrument's unit row);
-    ``format_name``: the registry name."""
+    ``format_name``: the registry name; ``hint``: the format's advice for a missing column when no
+    ``--map`` can be guessed."""
 
     name: str
     header: list
@@ -72,6 +73,7 @@ class TableSource:
     defaults: tuple = ()
     units: dict = field(default_factory=dict)
     format_name: str = "csv"
+    hint: str = ""
 
 
 def _label(canon: str, header: list, index: dict) -> str:
@@ -300,7 +302,7 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
     """
     required = REQUIRED if options.require_error else REQUIRED[:1]
     index, hunit = resolve_header(src.header, options.column_map, src.name, src.header_line, required,
-                                  src.defaults, sample=src.body.sample_cells)
+                                  src.defaults, sample=src.body.sample_cells, hint=src.hint)
     cols = [c for c in CANONICAL if c in index]
     values = _cells(src, index, cols)
     notes: list = list(src.notes)

@@ -22,7 +22,7 @@ import re
 
 from wormgear_cli.errors import DataError
 from wormgear_cli.measurement.reader import Measurement, ReadOptions
-from wormgear_cli.measurement.readers.header import stated_unit
+from wormgear_cli.measurement.readers.header import quote, stated_unit
 from wormgear_cli.measurement.readers.table import TableSource, build_measurement
 from wormgear_cli.measurement.readers.text import NUMBER, DelimitedBody, decimal_comma, split_cells
 
@@ -88,8 +88,9 @@ def _channels(meta, name: str) -> tuple[int, list[str], dict]:
     return line, unique, props
 
 
-def _roles(names: list[str], props: dict) -> tuple[tuple, str]:
-    """The default (canonical, channel) assignment from the channel names, and a sentence naming it."""
+def _roles(names: list[str], props: dict) -> tuple[tuple, str, str]:
+    """The default (canonical, channel) assignment from the channel names, a sentence naming it, and
+    the advice when the target and the actual position cannot be told apart."""
     comments = props.get("SymbolComment", [""] * len(names))
     velocity = [n for n in names if _VELOCITY.search(n)]
     positions = [n for n in names if n not in velocity and _POSITION.search(n)]
@@ -108,7 +109,12 @@ def _roles(names: list[str], props: dict) -> tuple[tuple, str]:
             roles += [("angle_deg", ranked[0]), ("actual_deg", ranked[-1])]
     said = {"angle_deg": "target", "actual_deg": "actual position", "velocity": "velocity"}
     text = ", ".join(f"{n!r} as the {said[c]}" for c, n in roles)
-    return tuple(roles), text
+    hint = ""
+    if len(positions) >= 2 and "actual_deg" not in dict(roles):
+        hint = ("the channel names do not say which position is the target (a set point or counter) and which "
+                f"the actual (a resolver or encoder): name them, e.g. --map angle_deg={quote(positions[0])} "
+                f"--map actual_deg={quote(positions[1])}")
+    return tuple(roles), text, hint
 
 
 def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measurement:
@@ -135,7 +141,7 @@ def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measuremen
         stated.discard(None)
         if len(stated) == 1:
             units[canon] = stated.pop()
-    roles, said = _roles(names, props)
+    roles, said, hint = _roles(names, props)
     meta_lines = [cells for _, cells in meta]
     export = next((c[1] for c in meta_lines if c and c[0] == "Name" and len(c) > 1), "")
     notes = [f"TwinCAT Scope export {export!r}: metadata block skipped (lines 1-{first_line - 1}), {len(names)} "
@@ -149,5 +155,5 @@ def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measuremen
                       body=DelimitedBody(body, first_line, sep, len(header), name),
                       decimal_comma=decimal_comma(sample, sep), comments=(),
                       preamble=tuple(sep.join(cells) for cells in meta_lines), notes=notes, defaults=roles,
-                      units=units, format_name="twincat-scope")
+                      units=units, format_name="twincat-scope", hint=hint)
     return build_measurement(src, options)
