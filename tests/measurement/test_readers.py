@@ -355,3 +355,26 @@ def test_scope_channels_that_do_not_say_their_role_get_a_map_to_fill_in():
     m = parse_measurement(text, "amb.csv", options=ReadOptions(column_map=(("angle_deg", "Axis1.fPos"),
                                                                            ("actual_deg", "Axis2.fPos"))))
     assert m.error_arcsec == pytest.approx([3.6] * 5)
+
+
+def test_a_map_names_its_column_in_any_case_when_only_one_fits(runner, tmp_path):
+    path = tmp_path / "de.csv"
+    path.write_text("Position (deg);Abweichung (arcsec);Richtung;Lauf\n" + "".join(
+        f"{a:g};{e};{d};{r}\n" for a, e, d, r in hand_rows()))
+    got, doc, _ = figures(runner, path, "--map", "error_arcsec=abweichung (ARCSEC)", "--map", "direction=richtung",
+                          "--map", "run=LAUF")
+    assert got == pytest.approx(HAND_FIGURES)
+    assert doc["columns"]["direction"] == "Richtung"
+
+
+def test_the_api_reads_files_as_they_are():
+    import wormgear_cli as wg
+
+    m = wg.read_measurement(FIELD / "twincat-scope-resolver.csv")
+    assert len(m) == 2108 and m.columns["actual_deg"] == "fActPosition (Resolver)"
+    r = wg.measure(FIELD / "twincat-scope-resolver.csv", orders=[4])
+    assert r.iso230_2["E"].arcsec == pytest.approx(68943.70, abs=0.01)
+    from wormgear_cli.errors import UsageError
+
+    with pytest.raises(UsageError, match="--input-format nope: expected one of auto, twincat-scope, csv"):
+        wg.read_measurement(FIELD / "servo-quantised-backlash.csv", input_format="nope")

@@ -43,8 +43,9 @@ DiagnoseUnitOption = Annotated[AngleUnit, typer.Option(
 def diagnose(
     drive: DriveArgument,
     data: Annotated[Path, typer.Argument(
-        help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
-        "time_s).", show_default=False, metavar="DATA.csv")],
+        help="Measured data, read as it is (a table: angle_deg, error_arcsec or actual_deg; optional direction, "
+        "run, load_Nm, temperature_C, time_s, velocity; or an instrument export, see --input-format).",
+        show_default=False, metavar="DATA.csv")],
     output: OutputOption = None,
     write_spec: Annotated[Path | None, typer.Option(
         "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "

@@ -38,8 +38,10 @@ PLAIN_COLUMNS = ("target_deg", "n_forward", "n_reverse", "below_resolution")
 #: a table cell for s or R below the resolution of the data (the step is in the notes)
 BELOW = "<1 step"
 
-DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, error_arcsec; optional direction, "
-                                              "run, load_Nm, temperature_C, time_s; other headers via --map).",
+DataArgument = Annotated[Path, typer.Argument(help="Measurement file, read as it is: a delimited table (angle_deg, "
+                                              "error_arcsec or actual_deg; optional direction, run, load_Nm, "
+                                              "temperature_C, time_s, velocity; other headers via --map) or an "
+                                              "instrument export (see --input-format).",
                                               show_default=False, metavar="DATA.csv")]
 
 

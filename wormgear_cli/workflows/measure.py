@@ -103,9 +103,9 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     Parameters
     ----------
     data : str or Path
-        Measurement CSV (:func:`~wormgear_cli.measurement.reader.read_measurement`).
+        Measurement file in any input format (:func:`~wormgear_cli.measurement.readers.read_measurement`).
     options : ReadOptions or None
-        Column map and units.
+        Column map, units and input format.
     drive : str or Path or None
         Drive spec (TOML): its shaft and mesh orders (with ``harmonics``
         harmonics) are the default orders and label the matching ones.
