@@ -109,3 +109,39 @@ def test_one_repeated_difference_is_an_offset_not_a_grid():
     assert not res.quantised and res.step / ARCSEC == pytest.approx(1.0)  # written without decimals
     fig = iso230_figures(angle, error, np.tile([1.0, 1, 1, -1, -1, -1], 3))
     assert fig.below == ("R_up", "R_down")  # and every cell flagged: s below one written digit
+
+
+def test_a_dial_gauge_step_is_no_fine_encoder_grid():
+    # one-position test read off a dial indicator: 0.01 mm at 150 mm = 13.751 arcsec a division; three levels
+    # (-82.506, -68.755, -55.004) written to 3 decimals.  13.751 is within a digit of 89 counts of a 2^23
+    # encoder (0.1545 arcsec), but one distinct difference on so fine a grid is chance, not evidence
+    readings = np.array([-68.755, -55.004, -82.506, -68.755, -82.506, -55.004, -68.755, -55.004]) * ARCSEC
+    res = reading_resolution(readings, "arcsec", np.zeros(8, dtype=int))
+    assert res.quantised and res.step / ARCSEC == pytest.approx(13.751, abs=1e-9)
+    assert res.basis == "the readings of a target differ by whole steps"
+
+
+def test_full_precision_readings_on_an_encoder_grid_are_found():
+    # readings in degrees written to full precision, on whole counts of a 16-bit encoder, targets off the grid
+    rng = np.random.default_rng(7)
+    q = 360.0 / 2**16
+    target = np.repeat(rng.uniform(0, 360, 6), 8)
+    actual = np.round((target + rng.normal(0, 2 * q, target.size)) / q) * q
+    res = reading_resolution((actual - target) * RAD_PER_UNIT["deg"], "deg", np.repeat(np.arange(6), 8))
+    assert res.quantised and res.step / RAD_PER_UNIT["deg"] == pytest.approx(q, rel=1e-9)
+
+
+def test_long_columns_are_sampled_and_still_give_the_grid(monkeypatch):
+    from wormgear_cli.measurement import resolution
+
+    rng = np.random.default_rng(3)
+    angle, error, _ = iso_table(rng, 1296000.0 / 2**14, decimals=4, targets=40, runs=6)
+    monkeypatch.setattr(resolution, "SAMPLE", 97)  # every 5th of the 480 readings
+    res = reading_resolution(error, "arcsec", group_targets(angle)[0])
+    assert res.quantised and res.step / ARCSEC == pytest.approx(1296000.0 / 2**14, rel=1e-6)
+
+
+def test_one_decimal_is_said_in_the_singular_and_no_reading_gives_none():
+    res = reading_resolution(np.array([0.1, 0.3, 0.2]) * ARCSEC, "arcsec", np.arange(3))
+    assert res.basis == "the readings are written to 1 decimal" and not res.quantised
+    assert reading_resolution(np.array([np.nan, np.nan]), "arcsec", np.arange(2)) is None
