@@ -45,7 +45,11 @@ class InputFormat(NamedTuple):
         return getattr(importlib.import_module(self.module), getattr(self, which))
 
 
-#: the input formats, most specific first (the first whose detect accepts the file reads it)
+#: the input formats, most specific first (the first whose detect accepts the file reads it).  A PHD2
+#: guide log reader (wormgear_cli/measurement/guidelog.py) registers with the line
+#:     InputFormat("guidelog", "a PHD2 guide log", "wormgear_cli.measurement.guidelog",
+#:                 "looks_like_guidelog", "read_guidelog"),
+#: placed before "csv".
 FORMATS = (
     InputFormat("twincat-scope", "a TwinCAT Scope CSV export", "wormgear_cli.measurement.readers.twincat",
                 "looks_like_twincat_scope", "read_twincat_scope"),
