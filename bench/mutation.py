@@ -62,7 +62,8 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                    ("tests/measurement/test_resolution.py",), None),
     # cells to numbers: direction words, their orientation, the range checks
     "reader-values": (("wormgear_cli/measurement/readers/values.py",),
-                      ("tests/measurement/test_readers.py", "tests/measurement/test_reader.py"), None),
+                      ("tests/measurement/test_readers.py", "tests/measurement/test_reader.py",
+                       "tests/measurement/test_reader_formats.py"), None),
     # the aliasing decisions (correlations, groups, folding); the least-squares fits are left to
     # a later round (run them with a functions list of their own)
     "harmonics": (("wormgear_cli/measurement/harmonics.py",),

@@ -119,6 +119,14 @@ def test_direction_words_give_the_figures_of_plus_and_minus_one(runner, tmp_path
     path.write_text(text)
     got, _, _ = figures(runner, path)
     assert got == pytest.approx(HAND_FIGURES)
+    assert read_measurement(path).direction.tolist() == [float(d) for _, _, d, _ in hand_rows()]
+
+
+def test_numbers_and_words_mixed_in_one_direction_column():
+    text = "angle_deg;error_arcsec;direction\n0;1;up\n10;2;-1,0\n20;3;+1\n30;4;Down\n"
+    assert parse_measurement(text, "mixed.csv").direction.tolist() == [1.0, -1.0, 1.0, -1.0]
+    with pytest.raises(DataError, match="got '2'"):
+        parse_measurement("angle_deg,error_arcsec,direction\n0,1,up\n10,2,2\n", "two.csv")
 
 
 def test_clockwise_words_take_forward_from_the_data(tmp_path):
@@ -128,14 +136,27 @@ def test_clockwise_words_take_forward_from_the_data(tmp_path):
             f"{a:g},{e},{fwd_word if d > 0 else rev_word},{r}\n" for a, e, d, r in hand_rows())
         m = parse_measurement(text, "cw.csv")
         assert list(m.direction) == [d for _, _, d, _ in hand_rows()]
-        assert f"the {fwd_word} rows move to larger angles, so {fwd_word} is forward (+1)" in "\n".join(m.notes)
+        assert m.notes == (f"direction words CW/CCW: the {fwd_word} rows move to larger angles, so {fwd_word} is "
+                           "forward (+1)",)
+
+
+def test_clockwise_rows_alone_can_orient_the_words():
+    # the CW rows climb 0 -> 20 -> 40; the CCW rows all sit at 50 (a one-position return): CW is forward
+    text = "angle_deg,error_arcsec,direction\n0,1,CW\n20,2,CW\n40,3,CW\n50,4,CCW\n50,5,CCW\n"
+    assert parse_measurement(text, "cw1.csv").direction.tolist() == [1.0, 1.0, 1.0, -1.0, -1.0]
+    # falling CW rows in one run, but two runs each of one CW row: only rows of one run are compared
+    text = "angle_deg,error_arcsec,direction,run\n40,1,CW,0\n0,2,CW,1\n0,3,CCW,1\n"
+    m = parse_measurement(text, "cw2.csv")
+    assert m.direction.tolist() == [-1.0, -1.0, 1.0]  # the rows cannot tell: CCW forward, said
 
 
 def test_clockwise_words_the_data_cannot_orient_are_said(tmp_path):
     text = "angle_deg,error_arcsec,direction\n0,1,CW\n0,2,CCW\n0,1.5,CW\n0,2.5,CCW\n"
     m = parse_measurement(text, "one.csv")
     assert list(m.direction) == [-1.0, 1.0, -1.0, 1.0]
-    assert "CCW is taken as forward (+1, the right-hand rule about the axis)" in "\n".join(m.notes)
+    assert m.notes == ("direction words CW/CCW: the rows do not show which one moves to larger angles; CCW is taken "
+                       "as forward (+1, the right-hand rule about the axis): if CW is your forward direction, write "
+                       "+1/-1 instead",)
 
 
 def test_a_cell_that_is_no_direction_is_named(tmp_path):

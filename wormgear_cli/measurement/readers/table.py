@@ -125,7 +125,7 @@ def _directions(src: TableSource, index: dict, values: dict) -> tuple[np.ndarray
         return None, None
     raw = values["direction"]
     if raw.dtype.kind in "US":
-        value, rotation, _ = direction_tokens(raw)
+        value, rotation = direction_tokens(raw)
     else:
         value, rotation = np.where((raw == 1.0) | (raw == -1.0), raw, np.nan), np.zeros(raw.shape[0], dtype=bool)
     bad = np.flatnonzero(~np.isfinite(value))

@@ -67,20 +67,18 @@ def floats(name: str, col: str, cells: list[str], line_numbers: list[int], decim
         return arr
 
 
-def direction_tokens(tokens) -> tuple[np.ndarray, np.ndarray, bool]:
+def direction_tokens(tokens) -> tuple[np.ndarray, np.ndarray]:
     """Direction cells (strings) -> (values: +1, -1, or NaN where not a direction; rotation: True
-    where the cell is a rotation word, CW +1 and CCW -1 before :func:`orient_rotation`; whether any
-    cell was a word rather than a number)."""
+    where the cell is a rotation word, CW +1 and CCW -1 before :func:`orient_rotation`)."""
     tokens = np.asarray(tokens, dtype=str)
     uniq, inverse = np.unique(np.char.lower(np.char.strip(tokens)), return_inverse=True)
     value = np.full(uniq.size, np.nan)
     rotation = np.zeros(uniq.size, dtype=bool)
-    words = False
     for i, tok in enumerate(uniq.tolist()):
         if tok in FORWARD_WORDS or tok in REVERSE_WORDS:
-            value[i], words = (1.0 if tok in FORWARD_WORDS else -1.0), True
+            value[i] = 1.0 if tok in FORWARD_WORDS else -1.0
         elif tok in CLOCKWISE_WORDS or tok in COUNTER_WORDS:
-            value[i], rotation[i], words = (1.0 if tok in CLOCKWISE_WORDS else -1.0), True, True
+            value[i], rotation[i] = (1.0 if tok in CLOCKWISE_WORDS else -1.0), True
         else:
             try:
                 v = float(tok.replace(",", "."))
@@ -89,7 +87,7 @@ def direction_tokens(tokens) -> tuple[np.ndarray, np.ndarray, bool]:
             if v in (1.0, -1.0):
                 value[i] = v
     inverse = np.ravel(inverse)
-    return value[inverse], rotation[inverse], words
+    return value[inverse], rotation[inverse]
 
 
 def orient_rotation(direction: np.ndarray, rotation: np.ndarray, angle: np.ndarray, run: np.ndarray) -> tuple[
