@@ -399,3 +399,33 @@ def test_the_api_reads_files_as_they_are():
 
     with pytest.raises(UsageError, match="--input-format nope: expected one of auto, twincat-scope, csv"):
         wg.read_measurement(FIELD / "servo-quantised-backlash.csv", input_format="nope")
+
+
+# --- numbers: the slow path, ranges in the canonical unit ----------------------------------------------------------
+
+
+def test_decimal_commas_on_the_slow_path_and_their_messages():
+    # a '#' line between rows sends the file down the cell-by-cell path
+    m = parse_measurement("angle;error (arcsec)\n0;1,5\n# pause\n10;2,5\n", "dc.csv",
+                          options=ReadOptions(column_map=(("angle_deg", "angle"),)))
+    assert m.error_arcsec == pytest.approx([1.5, 2.5])
+    with pytest.raises(DataError) as info:
+        parse_measurement("angle_deg;error_arcsec\n0;1,5\n# pause\n10;1_0\n", "u.csv")
+    assert info.value.problems == ["u.csv:4: column error_arcsec: expected a number, got '1_0'"]
+    long = "x" * 60
+    with pytest.raises(DataError) as info:
+        parse_measurement(f"angle_deg;error_arcsec\n0;1,5\n# pause\n10;{long}\n", "l.csv")
+    assert info.value.problems == [f"l.csv:4: column error_arcsec: expected a number, got '{'x' * 40}'... (60 "
+                                   "characters)"]
+
+
+def test_ranges_are_judged_in_the_canonical_unit():
+    # 3000 deg of error is 1.08e7 arcsec: beyond the 1e7 arcsec an error column may hold, said in arcsec
+    with pytest.raises(DataError) as info:
+        parse_measurement("angle_deg,error (deg)\n0,1\n10,3000\n", "r.csv")
+    assert info.value.problems == ["r.csv:3: column error_arcsec ('error (deg)'): expected a number in [-1e+07, "
+                                   "1e+07] (arcsec), got '3000'"]
+    ok = parse_measurement("angle_deg,error (deg)\n0,1\n10,2700\n", "r.csv")  # 9.72e6 arcsec: inside
+    assert ok.error_arcsec[1] == pytest.approx(2700 * 3600)
+    edge = parse_measurement("angle_deg,error_arcsec,temperature_C\n0,1,-100\n10,2,300\n", "t.csv")
+    assert edge.temperature.tolist() == [-100.0, 300.0]  # the range is inclusive
