@@ -144,6 +144,12 @@ def test_clockwise_rows_alone_can_orient_the_words():
     # the CW rows climb 0 -> 20 -> 40; the CCW rows all sit at 50 (a one-position return): CW is forward
     text = "angle_deg,error_arcsec,direction\n0,1,CW\n20,2,CW\n40,3,CW\n50,4,CCW\n50,5,CCW\n"
     assert parse_measurement(text, "cw1.csv").direction.tolist() == [1.0, 1.0, 1.0, -1.0, -1.0]
+    # the CCW rows climb, the CW rows sit at one angle: CCW is forward
+    text = "angle_deg,error_arcsec,direction\n50,4,CW\n50,5,CW\n0,1,CCW\n20,2,CCW\n40,3,CCW\n"
+    assert parse_measurement(text, "ccw.csv").direction.tolist() == [-1.0, -1.0, 1.0, 1.0, 1.0]
+    # both words climb: the data contradict each other, so they do not orient the words
+    text = "angle_deg,error_arcsec,direction\n0,1,CW\n20,2,CW\n0,3,CCW\n20,4,CCW\n"
+    assert "the rows do not show which one moves to larger angles" in parse_measurement(text, "both.csv").notes[0]
     # falling CW rows in one run, but two runs each of one CW row: only rows of one run are compared
     text = "angle_deg,error_arcsec,direction,run\n40,1,CW,0\n0,2,CW,1\n0,3,CCW,1\n"
     m = parse_measurement(text, "cw2.csv")
