@@ -57,7 +57,7 @@ def current_kb():
         return next(int(l.split()[1]) for l in f if l.startswith("VmRSS:"))
 import numpy, scipy.special, scipy.linalg
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.measurement.readers import read_measurement
 from wormgear_cli.spec.loader import load_spec
 base = current_kb()
 spec = load_spec(Path(sys.argv[2]) / "configs" / "mch50.toml")

@@ -60,6 +60,13 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                  "param", "effect_error", "params_from_keys", "params_to_keys")),
     "iso230": (("wormgear_cli/measurement/iso230.py",),
                ("tests/measurement/test_iso230_hand.py",), None),
+    # the step of the readings (digits written, encoder grid, common step)
+    "resolution": (("wormgear_cli/measurement/resolution.py",),
+                   ("tests/measurement/test_resolution.py",), None),
+    # cells to numbers: direction words, their orientation, the range checks
+    "reader-values": (("wormgear_cli/measurement/readers/values.py",),
+                      ("tests/measurement/test_readers.py", "tests/measurement/test_reader.py",
+                       "tests/measurement/test_reader_formats.py"), None),
     # the aliasing decisions (correlations, groups, folding); the least-squares fits are left to
     # a later round (run them with a functions list of their own)
     "serial": (("wormgear_cli/measurement/serial.py",), ("tests/measurement/test_serial.py",), None),

@@ -423,22 +423,29 @@ class Measurement:
         return len(self.core)
 
 
-def _read_options(column_map, error_unit, angle_unit):
+def _read_options(column_map, error_unit, angle_unit, input_format=None):
     from wormgear_cli.measurement.reader import ReadOptions
 
     pairs = tuple((str(k), str(v)) for k, v in (column_map or {}).items())
-    return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit)
+    if input_format is not None and input_format != "auto":
+        from wormgear_cli.measurement.readers import find_format
+
+        find_format(input_format)
+    return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit,
+                       input_format=None if input_format in (None, "auto") else input_format)
 
 
 def read_measurement(path: PathLike, *, column_map: dict | None = None, error_unit: str | None = None,
-                     angle_unit: str | None = None, require_error: bool = True) -> Measurement:
-    """Read and validate a measurement CSV (as ``measure`` and ``diagnose`` read it).
+                     angle_unit: str | None = None, require_error: bool = True,
+                     input_format: str | None = None) -> Measurement:
+    """Read and validate a measurement file as it is (as ``measure`` and ``diagnose`` read it).
 
     Parameters
     ----------
     path : path-like
-        The CSV file (``angle_deg``, ``error_arcsec``; optional ``direction``,
-        ``run``, ``load_Nm``, ``temperature_C``, ``time_s``).
+        The file: a delimited table (``angle_deg``, ``error_arcsec`` or ``actual_deg``; optional
+        ``direction``, ``run``, ``load_Nm``, ``temperature_C``, ``time_s``, ``velocity``) or an
+        instrument's export (TwinCAT Scope), its format detected from its content.
     column_map : dict or None
         Canonical name -> header cell, as ``--map`` (e.g. ``{"angle_deg": "Position"}``).
     error_unit : str or None
@@ -447,6 +454,8 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
         Unit of the angle column (deg, rad); None: from the header, else deg.
     require_error : bool
         Whether the error column must be present.
+    input_format : str or None
+        A format name of ``wormgear measure --input-format`` (None or "auto": detected).
 
     Raises
     ------
@@ -459,9 +468,9 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
     >>> len(m), round(float(m.temperature_C.max()), 1)
     (720, 44.2)
     """
-    from wormgear_cli.measurement import reader as core
+    from wormgear_cli.measurement import readers as core
 
-    options = _read_options(column_map, error_unit, angle_unit)
+    options = _read_options(column_map, error_unit, angle_unit, input_format)
     m = core.read_measurement(path, require_error=require_error, options=options)
     return Measurement(m.source, AngleArray(m.angle), AngleArray(m.error), m.direction, m.run, m.load,
                        m.temperature, m.time, dict(m.columns), tuple(m.notes), tuple(m.warnings), m, path, options)
@@ -492,8 +501,12 @@ class MeasureResult:
 
     ``iso230_2``: the ISO 230-2 figures by name (A, B, E, M, R and their
     directional variants, see ``wormgear measure``) as :class:`Angle`, None
-    where withheld; ``orders``: tuple of :class:`Order`; ``residual_rms``:
-    :class:`Angle`; ``verdict``, ``warnings``, ``notes``: text.
+    where withheld or below the resolution of the data; ``orders``: tuple of
+    :class:`Order`; ``residual_rms``: :class:`Angle`; ``verdict``,
+    ``warnings``, ``notes``: text; ``resolution``: one step of the readings
+    (:class:`Angle`, None when it cannot be told); ``below_resolution``: the
+    names of the figures of ``iso230_2`` that are None because every reading
+    they come from is equal (their scatter is below one step, not zero).
     """
 
     source: str
@@ -506,7 +519,9 @@ class MeasureResult:
     verdict: str
     warnings: tuple
     notes: tuple
-    core: object = field(repr=False, compare=False)
+    resolution: Angle | None = None
+    below_resolution: tuple = ()
+    core: object = field(repr=False, compare=False, default=None)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear measure --format json --unit UNIT``."""
@@ -517,7 +532,7 @@ class MeasureResult:
 
 def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonics: int = 3,
             column_map: dict | None = None, error_unit: str | None = None,
-            angle_unit: str | None = None) -> MeasureResult:
+            angle_unit: str | None = None, input_format: str | None = None) -> MeasureResult:
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 
     Parameters
@@ -531,7 +546,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         Orders to fit (default: the drive's, else 1, 2, 3, 4).
     harmonics : int
         With ``drive``: harmonics of each shaft/mesh order (1 to 10).
-    column_map, error_unit, angle_unit
+    column_map, error_unit, angle_unit, input_format
         As for :func:`read_measurement` (ignored when ``data`` is a Measurement).
 
     Raises
@@ -551,7 +566,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     if isinstance(data, Measurement):
         path, options = data.path, data.options
     else:
-        path, options = data, _read_options(column_map, error_unit, angle_unit)
+        path, options = data, _read_options(column_map, error_unit, angle_unit, input_format)
     if drive is not None and not isinstance(drive, (str, os.PathLike)):
         raise UsageError("drive: expected the path of a drive spec (TOML)")
     if isinstance(harmonics, bool) or not 1 <= int(harmonics) <= 10:
@@ -567,10 +582,11 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         c, d = it["common"], it["differential"]
         items.append(Order(it["order"], it["label"], it["status"], _angle(c["amplitude"]),
                            _angle(c["amplitude_stderr"]), c["phase_deg"], _angle(d["amplitude"]), d["phase_deg"]))
+    res = doc["resolution"] or {}
     return MeasureResult(doc["source"], doc["drive"], doc["rows"], doc["targets"],
                          {k: _angle(v) for k, v in doc["iso230_2"].items()}, tuple(items),
                          _angle(doc["orders"]["residual_rms"]), doc["verdict"], tuple(doc["warnings"]),
-                         tuple(doc["notes"]), core)
+                         tuple(doc["notes"]), _angle(res.get("step")), tuple(res.get("below", ())), core)
 
 
 # --- diagnose ------------------------------------------------------------------------------------------------

@@ -98,7 +98,11 @@ def test_measure_csv_is_the_per_target_table(runner, tmp_path):
     rows = list(csv.DictReader(io.StringIO(result.stdout)))
     assert list(rows[0]) == ["target_deg", "n_forward", "n_reverse", "mean_forward_arcsec", "s_forward_arcsec",
                              "mean_reverse_arcsec", "s_reverse_arcsec", "mean_bidirectional_arcsec",
-                             "reversal_arcsec", "R_forward_arcsec", "R_reverse_arcsec", "R_arcsec"]
+                             "reversal_arcsec", "R_forward_arcsec", "R_reverse_arcsec", "R_arcsec",
+                             "below_resolution"]
+    # at 120 deg the three forward readings are all 4 (HAND): s there is below one step (1 arcsec), not 0
+    assert [r["below_resolution"] for r in rows] == ["", "forward", ""]
+    assert [r["s_forward_arcsec"] for r in rows][1] == ""
     assert [float(r["reversal_arcsec"]) for r in rows] == pytest.approx([2, 3, -4])
     assert [int(r["n_forward"]) for r in rows] == [3, 3, 3]
 

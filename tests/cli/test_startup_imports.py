@@ -13,7 +13,8 @@ import pytest
 from tests.support.paths import MCH50, ROOT
 
 HEAVY = ("scipy", "matplotlib", "wormgear_cli.diagnosis", "wormgear_cli.tolerance", "statsmodels",
-         "wormgear_cli.measurement.reader", "wormgear_cli.api")
+         "wormgear_cli.measurement.reader", "wormgear_cli.measurement.readers.", "wormgear_cli.api")
+# (the registry wormgear_cli.measurement.readers itself is names only: --help lists its formats)
 
 PROBE = f"""
 import json, sys
@@ -24,7 +25,8 @@ try:
 except SystemExit:
     pass
 heavy = sorted({{m.split(".")[0] if m.startswith(("scipy", "matplotlib", "statsmodels")) else m
-                for m in sys.modules if m.startswith({HEAVY!r})}})
+                for m in sys.modules if m.startswith({HEAVY!r})
+                and m != "wormgear_cli.measurement.readers"}})
 sys.stderr.write("LOADED " + json.dumps(heavy) + "\\n")
 """
 

@@ -12,7 +12,7 @@ from tests.support.paths import MCH50
 from tests.support.synth import csv_rows
 from wormgear_cli.analysis.synth import COLUMNS
 from wormgear_cli.cli import app
-from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.measurement.readers import read_measurement
 from wormgear_cli.spec.loader import load_spec
 
 

@@ -68,7 +68,7 @@ def test_time_going_backwards_starts_a_new_pass():
 
 def test_field_case_time_restarts_gives_the_noise_floor_of_the_run_column():
     # ../cases/field README: 0.62 arcsec with and without the run column (1.45 before the fix)
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(FIELD / "telescope-mount.toml")
@@ -83,7 +83,7 @@ def test_sessions_joined_without_a_run_column_keep_the_white_noise_floor(seed):
     # another drive, one direction, two sessions whose clocks both start at 0; the only noise is white
     # (0.3 arcsec, run offsets 0): the point-to-point floor must be about 0.3 whether or not the run
     # column is there (sorting both sessions by time would interleave them and inflate it)
-    from wormgear_cli.measurement.reader import parse_measurement
+    from wormgear_cli.measurement.readers import parse_measurement
     from wormgear_cli.spec.loader import load_spec
 
     spec = load_spec(CONFIGS / "rotary-table-precision.toml")

@@ -12,7 +12,7 @@ import pytest
 from tests.support.diagnosis_data import Plan, make_csv
 from tests.support.paths import CONFIGS
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.measurement.reader import parse_measurement
+from wormgear_cli.measurement.readers import parse_measurement
 from wormgear_cli.spec.loader import load_spec
 
 

@@ -18,7 +18,7 @@ from tests.support.paths import CONFIGS
 from wormgear_cli import diagnosis as dg
 from wormgear_cli.diagnosis import phases, runs, scan
 from wormgear_cli.measurement import harmonics
-from wormgear_cli.measurement.reader import read_measurement
+from wormgear_cli.measurement.readers import read_measurement
 from wormgear_cli.spec.loader import load_spec
 
 DEMO = CONFIGS / "mch50-warm.csv"

@@ -45,7 +45,7 @@ def test_the_default_limit_is_the_documented_constant():
 def test_measurement_from_an_endless_device_is_refused_at_once(device):
     if not os.path.exists(device):
         pytest.skip(f"no {device}")
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     with pytest.raises(DataError) as exc:
         read_measurement(device)

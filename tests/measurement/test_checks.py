@@ -75,7 +75,7 @@ def test_duplicate_count_matches_a_set_of_rows(tmp_path, seed):
     from collections import Counter
 
     from wormgear_cli.measurement.checks import duplicate_rows
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     rng = np.random.default_rng(seed)
     rows = [(int(rng.integers(0, 6)) * 30, int(rng.integers(0, 3)), int(rng.choice([-1, 1])), int(rng.integers(0, 2)))

@@ -16,7 +16,8 @@ import pytest
 
 from tests.support.paths import ROOT
 from wormgear_cli.errors import DataError
-from wormgear_cli.measurement.reader import MAX_FILE_BYTES, ReadOptions, read_measurement
+from wormgear_cli.measurement.reader import MAX_FILE_BYTES, ReadOptions
+from wormgear_cli.measurement.readers import read_measurement
 
 LIMIT_AS = 1536 * 1024 * 1024
 LIMIT_CPU = 60

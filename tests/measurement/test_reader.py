@@ -9,7 +9,7 @@ import pytest
 
 from wormgear_cli.cli import app
 from wormgear_cli.errors import DataError
-from wormgear_cli.measurement.reader import parse_measurement, read_measurement
+from wormgear_cli.measurement.readers import parse_measurement, read_measurement
 
 
 def write(tmp_path, text, name="data.csv", newline="\n"):
@@ -110,7 +110,8 @@ BAD = [
     ("single_row", "# one\nangle_deg,error_arcsec\n0,1\n", ":3: only one data row; at least two are needed"),
     ("cell_count", "angle_deg,error_arcsec\n0,1\n10,2,3\n", ":3: expected 2 cells as in the header, got 3"),
     ("direction", "angle_deg,error_arcsec,direction\n0,1,1\n10,2,0\n",
-     ":3: column direction: expected +1 or -1, got '0'"),
+     ":3: column direction: expected +1 or -1 or a direction word (up/down, forward/reverse, fwd/rev, +/-, "
+     "pos/neg, CW/CCW), got '0'"),
     ("run", "angle_deg,error_arcsec,run\n0,1,1\n10,2,1.5\n", ":3: column run: expected an integer, got '1.5'"),
     ("duplicate", "angle_deg,error_arcsec,angle_deg\n0,1,0\n10,2,10\n", ":1: column angle_deg appears twice"),
     # comment and blank lines count: the bad cell is on line 6 of the file
@@ -148,7 +149,7 @@ def test_missing_file_and_binary_file(runner, tmp_path):
 def test_unterminated_quote_is_a_data_error():
     with pytest.raises(DataError) as exc:
         parse_measurement('angle_deg,error_arcsec\n0,1\n10,"2\n', "q.csv")
-    assert exc.value.problems[0].startswith("q.csv:3: unreadable CSV line")
+    assert exc.value.problems[0].startswith("q.csv:3: a quoted cell runs over a line break")
 
 
 @pytest.mark.parametrize("cell, column, message", [
@@ -160,7 +161,7 @@ def test_unterminated_quote_is_a_data_error():
 ])
 def test_implausible_or_exotic_numbers_are_rejected_with_line_and_column(tmp_path, cell, column, message):
     from wormgear_cli.errors import DataError
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     cols = ["angle_deg", "error_arcsec", "run", "temperature_C"]
     row = {"angle_deg": "0", "error_arcsec": "1", "run": "1", "temperature_C": "20"}

@@ -16,7 +16,9 @@ import pytest
 from tests.support.iso230_hand import HAND
 from wormgear_cli.cli import app
 from wormgear_cli.errors import DataError, UsageError
-from wormgear_cli.measurement.reader import ReadOptions, detect_dialect, parse_measurement, read_measurement
+from wormgear_cli.measurement.reader import ReadOptions
+from wormgear_cli.measurement.readers import parse_measurement, read_measurement
+from wormgear_cli.measurement.readers.text import detect_dialect
 
 HAND_FIGURES = {"A": 14.0, "B": 4.0, "E": 5.0, "M": 1.5, "R": 14.0}
 URAD_PER_ARCSEC = math.pi / 648000.0 * 1e6  # 4.8481 urad
@@ -113,7 +115,7 @@ def test_map_errors_are_one_line_each(runner, tmp_path):
     with pytest.raises(UsageError) as info:
         ReadOptions(column_map=(("angle", "Pos"),))
     assert info.value.problems == ["--map angle=...: unknown column name 'angle', expected one of angle_deg, "
-                                   "error_arcsec, direction, run, load_Nm, temperature_C, time_s"]
+                                   "error_arcsec, direction, run, load_Nm, temperature_C, time_s, actual_deg, velocity"]
 
 
 def test_errors_in_degrees_read_as_arcsec_are_flagged(runner, tmp_path):
@@ -183,7 +185,8 @@ def test_time_restarts_make_passes_constructed(tmp_path):
 
 def test_an_option_reading_a_canonical_column_in_another_unit_is_noted(tmp_path):
     # the header's canonical name states a unit too: reading it in another is said (a note), not silent
-    from wormgear_cli.measurement.reader import ReadOptions, read_measurement
+    from wormgear_cli.measurement.reader import ReadOptions
+    from wormgear_cli.measurement.readers import read_measurement
 
     path = tmp_path / "d.csv"
     path.write_text("angle_deg,error_arcsec\n0,1\n90,2\n180,3\n270,4\n")

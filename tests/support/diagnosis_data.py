@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.diagnosis import diagnose, report
-from wormgear_cli.measurement.reader import parse_measurement
+from wormgear_cli.measurement.readers import parse_measurement
 from wormgear_cli.spec.loader import with_values
 from wormgear_cli.units import ARCSEC
 
@@ -145,7 +145,7 @@ def _cell(v) -> str:
 
 
 def make_measurement(spec, plan: Plan, **kw):
-    from wormgear_cli.measurement.reader import parse_measurement
+    from wormgear_cli.measurement.readers import parse_measurement
 
     text, truth = make_csv(spec, plan, **kw)
     return parse_measurement(text, "<test>"), truth

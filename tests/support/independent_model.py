@@ -142,7 +142,7 @@ def noise(design: Design, run, d, rng) -> np.ndarray:
 def measurement(design: Design, hidden: dict, seed: int):
     """A :class:`~wormgear_cli.measurement.reader.Measurement` of the perfect drive with ``hidden``
     effects ({name: catalogue-unit parameters}) and the design's noise, via the CSV reader."""
-    from wormgear_cli.measurement.reader import parse_measurement
+    from wormgear_cli.measurement.readers import parse_measurement
 
     theta, d, run, load, temp = rows(design, seed)
     rng = np.random.default_rng(10_000 + seed)

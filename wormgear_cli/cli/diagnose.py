@@ -30,6 +30,7 @@ from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
     ErrorUnitOption,
+    InputFormatOption,
     MapOption,
     check_rows_memory,
     read_options,
@@ -51,8 +52,9 @@ DiagnoseUnitOption = Annotated[AngleUnit, typer.Option(
 def diagnose(
     drive: DriveArgument,
     data: Annotated[Path, typer.Argument(
-        help="Measured data (CSV: angle_deg, error_arcsec; optional direction, run, load_Nm, temperature_C, "
-        "time_s).", show_default=False, metavar="DATA.csv")],
+        help="Measured data, read as it is (a table: angle_deg, error_arcsec or actual_deg; optional direction, "
+        "run, load_Nm, temperature_C, time_s, velocity; or an instrument export, see --input-format).",
+        show_default=False, metavar="DATA.csv")],
     output: OutputOption = None,
     write_spec: Annotated[Path | None, typer.Option(
         "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "
@@ -64,6 +66,7 @@ def diagnose(
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
+    input_format: InputFormatOption = "auto",
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
@@ -94,7 +97,7 @@ def diagnose(
     """
     from wormgear_cli.diagnosis.report import run_diagnose
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.spec.filekind import kind_of_file
     from wormgear_cli.spec.loader import load_spec
 
@@ -126,7 +129,7 @@ def diagnose(
 
     spec = load_spec(drive)
     check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
-    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit))
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
     options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
                    jobs=jobs_count(jobs),
                    data_name=str(data), write_spec=None if write_spec is None else str(write_spec))

@@ -27,6 +27,7 @@ from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
     ErrorUnitOption,
+    InputFormatOption,
     MapOption,
     check_rows_memory,
     read_options,
@@ -40,10 +41,16 @@ MEASURE_BYTES_PER_ROW = 300
 MAX_TABLE_TARGETS = 100
 #: per-target CSV columns (angles in --unit; the column names carry the unit)
 TARGET_COLUMNS = ("target_deg", "n_forward", "n_reverse", "mean_forward", "s_forward", "mean_reverse", "s_reverse",
-                  "mean_bidirectional", "reversal", "R_forward", "R_reverse", "R")
+                  "mean_bidirectional", "reversal", "R_forward", "R_reverse", "R", "below_resolution")
+#: per-target CSV columns that are not angles (no unit in their name)
+PLAIN_COLUMNS = ("target_deg", "n_forward", "n_reverse", "below_resolution")
+#: a table cell for s or R below the resolution of the data (the step is in the notes)
+BELOW = "<1 step"
 
-DataArgument = Annotated[Path, typer.Argument(help="Measurement CSV (angle_deg, error_arcsec; optional direction, "
-                                              "run, load_Nm, temperature_C, time_s; other headers via --map).",
+DataArgument = Annotated[Path, typer.Argument(help="Measurement file, read as it is: a delimited table (angle_deg, "
+                                              "error_arcsec or actual_deg; optional direction, run, load_Nm, "
+                                              "temperature_C, time_s, velocity; other headers via --map) or an "
+                                              "instrument export (see --input-format).",
                                               show_default=False, metavar="DATA.csv")]
 
 
@@ -62,6 +69,7 @@ def measure(
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
+    input_format: InputFormatOption = "auto",
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -104,7 +112,7 @@ def measure(
 
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    options = read_options(column_map, error_unit, angle_unit)
+    options = read_options(column_map, error_unit, angle_unit, input_format)
     check_rows_memory(data, MEASURE_BYTES_PER_ROW, "measure")
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
@@ -124,7 +132,7 @@ def measure(
         say(f"note: {doc['verdict']}")
         for note in doc["notes"]:
             say(f"note: {note}")
-        cols = [c if c.startswith(("target_deg", "n_")) else f"{c}_{unit}" for c in TARGET_COLUMNS]
+        cols = [c if c in PLAIN_COLUMNS else f"{c}_{unit}" for c in TARGET_COLUMNS]
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:
         render(_tables(doc, len(result.figures.targets)), output, inputs)
@@ -212,22 +220,29 @@ class _View:
         t.add_column(name, justify="right", no_wrap=True)
 
 
+
 def _iso_table(doc: dict, view: _View):
-    iso, unit, na = doc["iso230_2"], view.unit, view.na
+    """The ISO 230-2 figures: n/a where not applicable, '<1 step' where below the resolution of the data."""
+    iso, unit = doc["iso230_2"], view.unit
+    below = set((doc.get("resolution") or {}).get("below", ()))
     fig_keys = ("A", "A_forward", "A_reverse", "E", "E_forward", "E_reverse", "R", "R_forward", "R_reverse", "M", "B",
                 "B_signed", "B_mean")
-    st = view.table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if any(iso[k] is None for k in fig_keys)
-                                                      else ""))
+    missing = any(iso[k] is None and k not in below for k in fig_keys)
+    st = view.table(f"ISO 230-2 figures [{unit}]" + (" (n/a: see notes)" if missing else ""))
     st.add_column("figure", overflow="fold")
     for col in ("bidirectional", "forward", "reverse"):
         view.num(st, col)
-    st.add_row("accuracy A", na(iso["A"]), na(iso["A_forward"]), na(iso["A_reverse"]))
-    st.add_row("systematic deviation E", na(iso["E"]), na(iso["E_forward"]), na(iso["E_reverse"]))
-    st.add_row("repeatability R", na(iso["R"]), na(iso["R_forward"]), na(iso["R_reverse"]))
-    st.add_row("mean bidirectional deviation M", na(iso["M"]), "", "")
-    st.add_row("reversal B = max |B_i|", na(iso["B"]), "", "")
-    st.add_row("  largest B_i, signed", na(iso["B_signed"]), "", "")
-    st.add_row("mean reversal B_mean", na(iso["B_mean"]), "", "")
+
+    def na(key: str) -> str:
+        return BELOW if key in below else view.na(iso[key])
+
+    st.add_row("accuracy A", na("A"), na("A_forward"), na("A_reverse"))
+    st.add_row("systematic deviation E", na("E"), na("E_forward"), na("E_reverse"))
+    st.add_row("repeatability R", na("R"), na("R_forward"), na("R_reverse"))
+    st.add_row("mean bidirectional deviation M", na("M"), "", "")
+    st.add_row("reversal B = max |B_i|", na("B"), "", "")
+    st.add_row("  largest B_i, signed", na("B_signed"), "", "")
+    st.add_row("mean reversal B_mean", na("B_mean"), "", "")
     return st
 
 
@@ -334,12 +349,22 @@ def _target_tables(doc: dict, ntargets: int, view: _View) -> list:
     for col in ("target", "n fwd", "mean fwd", "s fwd", "n rev", "mean rev", "s rev"):
         view.num(tt, col)
     for r in rows:
-        tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]), a(r["s_forward"]),
-                   str(r["n_reverse"]), a(r["mean_reverse"]), a(r["s_reverse"]))
+        fwd, rev = _below(r)
+        tt.add_row(f"{r['target_deg']:.4f}", str(r["n_forward"]), a(r["mean_forward"]),
+                   BELOW if fwd else a(r["s_forward"]), str(r["n_reverse"]), a(r["mean_reverse"]),
+                   BELOW if rev else a(r["s_reverse"]))
     bt = view.table(f"per target bidirectional [{unit}; target deg]")
     for col in ("target", "mean bi", "B_i", "R fwd", "R rev", "R_i"):
         view.num(bt, col)
     for r in rows:
-        bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]), a(r["R_forward"]),
-                   a(r["R_reverse"]), a(r["R"]))
+        fwd, rev = _below(r)
+        bt.add_row(f"{r['target_deg']:.4f}", a(r["mean_bidirectional"]), a(r["reversal"]),
+                   BELOW if fwd else a(r["R_forward"]), BELOW if rev else a(r["R_reverse"]),
+                   BELOW if fwd and rev else a(r["R"]))
     return [tt, bt]
+
+
+def _below(row: dict) -> tuple[bool, bool]:
+    """Whether the forward and the reverse readings of a per-target row are all equal."""
+    b = row.get("below_resolution")
+    return b in ("forward", "both"), b in ("reverse", "both")

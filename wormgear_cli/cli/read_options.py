@@ -31,7 +31,8 @@ class InputAngleUnit(str, Enum):
 MapOption = Annotated[list[str] | None, typer.Option(
     "--map", help="Column of the file to read as a canonical column, CANONICAL=HEADER (repeatable), e.g. "
     "--map angle_deg=Position --map error_arcsec=Deviation. Canonical names: angle_deg, error_arcsec, "
-    "direction, run, load_Nm, temperature_C, time_s.", show_default=False)]
+    "direction, run, load_Nm, temperature_C, time_s; actual_deg (an actual position: the error is actual - "
+    "angle_deg) and velocity (its sign gives the direction).", show_default=False)]
 ErrorUnitOption = Annotated[ErrorUnit | None, typer.Option(
     "--error-unit", help="Unit of the error column (default: the unit in its header, e.g. 'error (arcmin)', "
     "else arcsec).", case_sensitive=False, show_default=False)]
@@ -40,7 +41,18 @@ AngleUnitOption = Annotated[InputAngleUnit | None, typer.Option(
     case_sensitive=False, show_default=False)]
 
 
-def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None):
+def _format_help() -> str:
+    from wormgear_cli.measurement.readers import FORMATS
+
+    return ("Format of the data file: auto (detected from its content) or one of "
+            + ", ".join(f"{f.name} ({f.title})" for f in FORMATS) + ".")
+
+
+InputFormatOption = Annotated[str, typer.Option(
+    "--input-format", help=_format_help(), show_default=True, metavar="NAME")]
+
+
+def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None, input_format: str = "auto"):
     """:class:`~wormgear_cli.measurement.reader.ReadOptions` from the option values; UsageError (one line
     per bad ``--map``) otherwise.  (The measurement module is imported here, not at start-up.)"""
     from wormgear_cli.errors import UsageError
@@ -56,8 +68,13 @@ def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None)
         pairs.append((canon.strip(), header.strip()))
     if problems:
         raise UsageError(problems)
+    if input_format != "auto":
+        from wormgear_cli.measurement.readers import find_format
+
+        find_format(input_format)
     return ReadOptions(column_map=tuple(pairs), error_unit=getattr(error_unit, "value", error_unit),
-                       angle_unit=getattr(angle_unit, "value", angle_unit))
+                       angle_unit=getattr(angle_unit, "value", angle_unit),
+                       input_format=None if input_format == "auto" else input_format)
 
 
 def check_rows_memory(data, bytes_per_row: int, command: str) -> None:

@@ -431,7 +431,8 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> 
     scale = float(np.exp(np.mean(np.log(ratios)))) if ratios else None
     units = None
     read = dict(meas.units).get("error", "arcsec")
-    if ratios and len(ratios) == len(items) and read in RAD_PER_UNIT:
+    if ratios and len(ratios) == len(items) and read in RAD_PER_UNIT and "error" not in meas.stated_units:
+        # (never against a unit the file states: a header 'error (deg)' is taken at its word)
         # every item scaled alike, by the ratio of two units: a column in unit c read as unit `read`
         for c in ERROR_UNITS:
             unit_ratio = RAD_PER_UNIT[read] / RAD_PER_UNIT[c]

@@ -1,6 +1,9 @@
 """The measurement layer: measured (or planned) data and what can be read from it.
 
-:mod:`~wormgear_cli.measurement.reader` (the record and the CSV reader),
+:mod:`~wormgear_cli.measurement.reader` (the record and what every input format shares),
+:mod:`~wormgear_cli.measurement.readers` (the input formats as a registry: delimited tables,
+TwinCAT Scope exports, ...),
+:mod:`~wormgear_cli.measurement.resolution` (the resolution of the readings),
 :mod:`~wormgear_cli.measurement.iso230` (ISO 230-2 figures),
 :mod:`~wormgear_cli.measurement.harmonics` (least squares at exact orders),
 :mod:`~wormgear_cli.measurement.coverage` (the span covered, trends) and
@@ -19,12 +22,19 @@ _OLD_NAMES = frozenset({
 })
 
 
+#: old names whose home is now another module than ``reader``
+_ELSEWHERE = {"read_measurement": "readers", "parse_measurement": "readers", "detect_dialect": "readers.text",
+              "suggest_map": "readers.header", "plausibility": "readers.plausibility",
+              "PLAUSIBLE_ERROR_P2P": "readers.plausibility", "RANGES": "readers.values"}
+
+
 def __getattr__(name: str):
     if name in _OLD_NAMES:
         import importlib
 
         from wormgear_cli.errors import moved
 
-        moved(f"wormgear_cli.measurement.{name}", f"wormgear_cli.measurement.reader.{name}")
-        return getattr(importlib.import_module("wormgear_cli.measurement.reader"), name)
+        home = f"wormgear_cli.measurement.{_ELSEWHERE.get(name, 'reader')}"
+        moved(f"wormgear_cli.measurement.{name}", f"{home}.{name}")
+        return getattr(importlib.import_module(home), name)
     raise AttributeError(f"module 'wormgear_cli.measurement' has no attribute {name!r}")

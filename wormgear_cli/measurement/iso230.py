@@ -46,6 +46,8 @@ import numpy as np
 
 #: default target grouping tolerance [rad] (1e-6 deg)
 TARGET_TOL = math.radians(1e-6)
+#: a standard deviation at most this [rad] comes from readings that are all equal (1e-12 rad = 2e-7 arcsec)
+EQUAL = 1e-12
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,9 @@ class TargetTable:
     ``target`` [rad]; ``n_up``, ``n_down`` runs per direction; ``mean_up``,
     ``mean_down`` x_i [rad]; ``s_up``, ``s_down`` [rad]; ``mean_bi``
     (x_i(up) + x_i(down)) / 2; ``reversal`` B_i; ``r_up``, ``r_down``, ``r_bi``
-    R_i(up), R_i(down), R_i [rad].  NaN where undefined.
+    R_i(up), R_i(down), R_i [rad].  NaN where undefined.  ``equal_up``,
+    ``equal_down``: the cell has at least two readings and all are equal
+    (s = 0 below the resolution of the data).
     """
 
     target: np.ndarray
@@ -70,6 +74,8 @@ class TargetTable:
     r_up: np.ndarray
     r_down: np.ndarray
     r_bi: np.ndarray
+    equal_up: np.ndarray | None = None
+    equal_down: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.target)
@@ -84,7 +90,10 @@ class Iso230Figures:
     (signed); ``E``, ``E_up``, ``E_down``: systematic deviation; ``M``: mean
     bidirectional deviation; ``R``, ``R_up``, ``R_down``: repeatability.
     ``targets``: table per target; ``rows``: rows used; ``notes``: plain
-    sentences on what was undefined and why.
+    sentences on what was undefined and why; ``below``: names of the axis
+    figures (``R_up``, ``R_down``, ``R``) that are zero only because every
+    cell they come from has all its readings equal (below the resolution of
+    the data, not zero).
     """
 
     A: float
@@ -103,6 +112,7 @@ class Iso230Figures:
     targets: TargetTable
     rows: int
     notes: tuple[str, ...]
+    below: tuple[str, ...] = ()
 
     def axis(self) -> dict:
         """Axis figures as name -> value [rad]."""
@@ -187,7 +197,9 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=No
     r_up = 4.0 * s_up
     r_dn = 4.0 * s_dn
     r_bi = np.maximum(np.maximum(2.0 * s_up + 2.0 * s_dn + np.abs(reversal), r_up), r_dn)  # NaN propagates
-    table = TargetTable(target, n_up, n_dn, mean_up, mean_dn, s_up, s_dn, mean_bi, reversal, r_up, r_dn, r_bi)
+    equal_up, equal_dn = (n_up >= 2) & (s_up <= EQUAL), (n_dn >= 2) & (s_dn <= EQUAL)
+    table = TargetTable(target, n_up, n_dn, mean_up, mean_dn, s_up, s_dn, mean_bi, reversal, r_up, r_dn, r_bi,
+                        equal_up, equal_dn)
 
     notes = []
     has_up, has_dn = bool(np.any(n_up > 0)), bool(np.any(n_dn > 0))
@@ -240,9 +252,10 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=No
     E_dn = _span(mean_dn) if has_dn else nan
     if one_target:
         A = A_up = A_dn = E = E_up = E_dn = M = nan
+    below = tuple(k for k, v in (("R_up", R_up), ("R_down", R_dn), ("R", R)) if math.isfinite(v) and v <= 4 * EQUAL)
     return Iso230Figures(
         A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean, E=E, E_up=E_up, E_down=E_dn,
-        M=M, R=R, R_up=R_up, R_down=R_dn, targets=table, rows=int(angle.shape[0]), notes=tuple(notes))
+        M=M, R=R, R_up=R_up, R_down=R_dn, targets=table, rows=int(angle.shape[0]), notes=tuple(notes), below=below)
 
 
 def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
@@ -258,10 +271,12 @@ def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
     nan = math.nan
     t = figures.targets
     blank = np.full(len(t), np.nan)
+    none = np.zeros(len(t), dtype=bool)
     table = dataclasses.replace(t, s_up=blank, s_down=blank, r_up=blank, r_down=blank, r_bi=blank,
-                                mean_up=blank, mean_down=blank, mean_bi=blank, reversal=blank)
+                                mean_up=blank, mean_down=blank, mean_bi=blank, reversal=blank, equal_up=none,
+                                equal_down=none)
     return dataclasses.replace(figures, A=nan, A_up=nan, A_down=nan, E=nan, E_up=nan, E_down=nan, R=nan,
-                               R_up=nan, R_down=nan, targets=table, notes=figures.notes + (reason,))
+                               R_up=nan, R_down=nan, targets=table, notes=figures.notes + (reason,), below=())
 
 
 def measurement_figures(measurement, tol: float = TARGET_TOL) -> Iso230Figures:

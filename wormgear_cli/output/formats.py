@@ -70,7 +70,9 @@ def fmt_number(x) -> str:
 
 
 def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) -> str:
-    """CSV text (stdlib csv, "\\n" line ends) of ``rows``, numbers by :func:`fmt_number`."""
+    """CSV text (stdlib csv, "\\n" line ends) of ``rows``, numbers by :func:`fmt_number`.
+
+    Raises DataError for a cell holding a line break (:func:`one_row_per_line`)."""
     import csv  # only the CSV paths pay for it (start-up of ``analyze --format json``)
     import io
 
@@ -80,7 +82,23 @@ def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) 
         w.writerow(columns)
     for row in rows:
         w.writerow([fmt_number(v) for v in row])
-    return buf.getvalue()
+    return one_row_per_line(buf.getvalue())
+
+
+def one_row_per_line(text: str) -> str:
+    """``text`` (CSV) unchanged, or DataError when a quoted cell holds a line break.
+
+    Every reader of the tool refuses such a cell with its line number (a cell split over lines would
+    be joined into another value: ``"1<newline>2"`` read as 12), so no writer writes one.  Checked only
+    where the text holds a quote (a cell with a line break is always quoted)."""
+    if '"' in text:
+        for k, line in enumerate(text.split("\n"), start=1):
+            if line.count('"') % 2:
+                from wormgear_cli.errors import DataError
+
+                raise DataError(f"CSV output line {k}: a cell would hold a line break ({line[:40]!r}...); each "
+                                "row must be one line for the file to read back")
+    return text
 
 
 def fmt_angle(x: float, unit: str) -> str:

@@ -19,7 +19,9 @@ def draw(diag, doc: dict, unit: str):
     plt = pyplot()
     factor = ARCSEC / RAD_PER_UNIT[unit]
     meas = diag.meas
-    x = meas.angle_deg
+    from wormgear_cli.plots.arc import arc_degrees
+
+    x, moved = arc_degrees(meas.angle)  # an arc through 0 deg drawn as one arc
     d = meas.direction
     y = meas.error_arcsec * factor
     fitted = {"before": diag.before.fitted * factor, "after": diag.augmented_fitted * factor}
@@ -49,7 +51,7 @@ def draw(diag, doc: dict, unit: str):
         top.set_title(title, fontsize=10)
         bottom.set_title(f"residual, RMS {rms:.3g} {unit}", fontsize=10)
         bottom.axhline(0.0, color="0.5", lw=0.5)
-        bottom.set_xlabel("output angle [deg]")
+        bottom.set_xlabel("output angle [deg]" + (" (along the arc, through 0)" if moved else ""))
         for ax in (top, bottom):
             ax.grid(True, lw=0.3)
     axes[0, 0].set_ylabel(f"error [{unit}]")

@@ -42,7 +42,8 @@ class MeasureResult:
     ``figures`` (:class:`~wormgear_cli.measurement.iso230.Iso230Figures`, one-direction
     values withheld when the directions are mixed), ``analysis``
     (:class:`~wormgear_cli.measurement.orders.OrdersAnalysis`), ``drive_name``,
-    ``findings`` (tuple of :class:`Finding`), ``mixed_directions``, ``dominant``
+    ``findings`` (tuple of :class:`Finding`), ``mixed_directions``, ``resolution``
+    (:class:`~wormgear_cli.measurement.resolution.Resolution` of the error readings, or None), ``dominant``
     (:class:`~wormgear_cli.measurement.dominant.Dominant`: the strongest orders of the
     data, scanned up to the Nyquist limit of the spacing), ``outside`` (the strongest
     orders left outside the fitted ones when the residual is far above the noise).
@@ -56,6 +57,7 @@ class MeasureResult:
     mixed_directions: bool
     dominant: object = None
     outside: tuple = ()
+    resolution: object = None
 
     @property
     def verdict(self) -> str:
@@ -106,9 +108,9 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     Parameters
     ----------
     data : str or Path
-        Measurement CSV (:func:`~wormgear_cli.measurement.reader.read_measurement`).
+        Measurement file in any input format (:func:`~wormgear_cli.measurement.readers.read_measurement`).
     options : ReadOptions or None
-        Column map and units.
+        Column map, units and input format.
     drive : str or Path or None
         Drive spec (TOML): its shaft and mesh orders (with ``harmonics``
         harmonics) are the default orders and label the matching ones.
@@ -123,7 +125,8 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
         Bad file, bad spec, bad option.
     """
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
+    from wormgear_cli.measurement.resolution import reading_resolution
 
     order_list, labels, priority, physical, drive_name = _orders_asked(drive, orders, harmonics)
     m = read_measurement(data, options=options)
@@ -131,6 +134,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
     figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
+    resolution = reading_resolution(m.error, dict(m.units)["error"], target_index)
     repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
     findings, mixed = structure_findings(m, target_index, repeated=repeated)
     if mixed:
@@ -138,7 +142,7 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
                                        "run): one-direction figures withheld")
     analysis, dominant = _orders_and_dominant(m, order_list, labels, priority, physical, unique)
     outside = _left_outside(m, analysis)
-    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant, outside)
+    return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant, outside, resolution)
 
 
 def _orders_asked(drive, orders, harmonics):
@@ -314,7 +318,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
     t = figures.targets
     findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
                                                     _excess_finding(analysis, result.outside, unit)) if f]
-    notes = list(figures.notes) + _order_notes(analysis)
+    notes = list(figures.notes) + _resolution_notes(result, unit) + _order_notes(analysis)
     runs_f = t.n_up[t.n_up > 0]
     runs_r = t.n_down[t.n_down > 0]
     cov = analysis.coverage
@@ -344,43 +348,93 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
             "trend_degree": analysis.trend_degree,
         },
         "iso230_2": _iso_doc(figures, a),
+        "resolution": _resolution_doc(result, a),
         "orders": _orders_doc(analysis, a),
         "dominant": _dominant_doc(result.dominant, a),
         "warnings": [f.text for f in findings if f.warning],
         "checks": [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in findings],
-        "per_target": _per_target_rows(t, unit) if per_target else [],
+        "per_target": _target_rows(t, unit) if per_target else [],
         "notes": notes + [f.text for f in findings if not f.warning and f.text],
     }
 
 
-def _per_target_rows(t, unit: str) -> list[dict]:
+#: names of the axis figures in the document
+_AXIS_NAMES = {"R_up": "R_forward", "R_down": "R_reverse", "R": "R"}
+
+
+def _target_rows(t, unit: str) -> list[dict]:
+    """The per-target list of the document: numbers in ``unit``; s and R of a cell whose readings are all
+    equal are None (below the resolution of the data), said by ``below_resolution``."""
     from wormgear_cli.units import to_unit
 
-    def column(values) -> list:
+    def column(values, blank=None) -> list:
         # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
-        return np.asarray(to_unit(np.asarray(values, dtype=float), unit)).tolist()
+        values = np.asarray(values, dtype=float)
+        if blank is not None and np.any(blank):
+            values = np.where(blank, np.nan, values)
+        return np.asarray(to_unit(values, unit)).tolist()
 
+    eq_up = t.equal_up if t.equal_up is not None else np.zeros(len(t), dtype=bool)
+    eq_dn = t.equal_down if t.equal_down is not None else np.zeros(len(t), dtype=bool)
+    below = np.array([None, "forward", "reverse", "both"], dtype=object)[eq_up.astype(int) + 2 * eq_dn.astype(int)]
     # rounded to 1e-9 deg: removes the rad -> deg round-off, far below the grouping tolerance
     cols = {
         "target_deg": np.round(np.degrees(t.target), 9).tolist(),
         "n_forward": t.n_up.tolist(),
         "n_reverse": t.n_down.tolist(),
         "mean_forward": column(t.mean_up),
-        "s_forward": column(t.s_up),
+        "s_forward": column(t.s_up, eq_up),
         "mean_reverse": column(t.mean_down),
-        "s_reverse": column(t.s_down),
+        "s_reverse": column(t.s_down, eq_dn),
         "mean_bidirectional": column(t.mean_bi),
         "reversal": column(t.reversal),
-        "R_forward": column(t.r_up),
-        "R_reverse": column(t.r_down),
-        "R": column(t.r_bi),
+        "R_forward": column(t.r_up, eq_up),
+        "R_reverse": column(t.r_down, eq_dn),
+        "R": column(t.r_bi, eq_up & eq_dn),
+        "below_resolution": below.tolist(),
     }
     names = list(cols)
     return [dict(zip(names, row)) for row in zip(*cols.values())]
 
 
+def _resolution_doc(result: MeasureResult, a) -> dict | None:
+    """``resolution`` of the document: the step of the readings (in the document's unit), whether they
+    are quantised, how the step was found, the axis figures and the cells below it."""
+    res, t = result.resolution, result.figures.targets
+    up = int(np.count_nonzero(t.equal_up)) if t.equal_up is not None else 0
+    dn = int(np.count_nonzero(t.equal_down)) if t.equal_down is not None else 0
+    if res is None and not (up or dn):
+        return None
+    return {"step": None if res is None else a(res.step), "quantised": bool(res is not None and res.quantised),
+            "basis": None if res is None else res.basis,
+            "below": [_AXIS_NAMES[k] for k in result.figures.below],
+            "cells_below": {"forward": up, "reverse": dn}}
+
+
+def _resolution_notes(result: MeasureResult, unit: str) -> list[str]:
+    """A sentence for the cells whose readings are all equal: their s and R are below the resolution."""
+    from wormgear_cli.units import to_unit
+
+    t = result.figures.targets
+    if t.equal_up is None or not (np.any(t.equal_up) or np.any(t.equal_down)):
+        return []
+    res = result.resolution
+    step = ("one step unknown: the readings carry full precision" if res is None
+            else f"one step = {float(to_unit(res.step, unit)):.6g} {unit}: {res.basis}")
+    parts = []
+    for name, eq, n in (("forward", t.equal_up, t.n_up), ("reverse", t.equal_down, t.n_down)):
+        k = int(np.count_nonzero(eq))
+        if not k:
+            continue
+        if len(t) == 1:
+            parts.append(f"all {int(n[0])} {name} readings are equal")
+        else:
+            parts.append(f"at {k} target{'s' if k > 1 else ''} all {name} readings are equal")
+    return [f"{' and '.join(parts)}: their s and R are below the resolution of the data ({step}), not zero"]
+
+
 def _iso_doc(figures, a) -> dict:
-    ax = figures.axis()
+    ax = {k: (math.nan if k in figures.below else v) for k, v in figures.axis().items()}
     return {
         "A": a(ax["A"]), "A_forward": a(ax["A_up"]), "A_reverse": a(ax["A_down"]),
         "B": a(ax["B"]), "B_signed": a(ax["B_signed"]), "B_mean": a(ax["B_mean"]),

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.output.formats import csv_text, fmt_number, json_text
+from wormgear_cli.output.formats import csv_text, fmt_number, json_text, one_row_per_line
 from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import to_unit
 
@@ -149,16 +149,17 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     """The model at every row of the measurement CSV ``at`` (its load_Nm and temperature_C
     columns where present, else ``load_nm`` [N m] and ``temperature_c`` [degC]).
 
-    CSV: the file's comments, header and rows as they are, plus (or replacing) the column
-    simulated_error_<unit>; JSON: the simulated errors and, when the file has errors, the
-    mean and RMS of measured - simulated.  ``jobs`` > 1: the CSV rows are formatted by that many
-    worker processes (the same text).  Raises the reader's errors for a bad file."""
+    CSV: the file's comments, preamble (as ``#`` comments), header and rows as they are (the rows
+    the reader kept), plus (or replacing) the column simulated_error_<unit>; JSON: the simulated
+    errors and, when the file has errors, the mean and RMS of measured - simulated.  ``jobs`` > 1:
+    the CSV rows are formatted by that many worker processes (the same text).  Raises the
+    reader's errors for a bad file."""
     import csv
     import io
 
     from wormgear_cli.analysis.simulate import simulate as run
     from wormgear_cli.batch.pool import ordered_map
-    from wormgear_cli.measurement.reader import read_measurement
+    from wormgear_cli.measurement.readers import read_measurement
 
     data = read_measurement(at, require_error=False)
     phases = phase_map(spec, which)
@@ -183,10 +184,12 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     buf = io.StringIO()
     for line in data.comments:
         buf.write(line + "\n")
+    for line in data.preamble:  # metadata without '#': written back as comments, so the file reads back plainly
+        buf.write("# " + line + "\n")
     w = csv.writer(buf, lineterminator="\n")
     j = header.index(column) if column in header else None  # re-simulating a file that has the column: replaced
     w.writerow(header if j is not None else header + [column])
     spans = [(a, min(len(sim), a + AT_ROWS_PER_TASK)) for a in range(0, len(sim), AT_ROWS_PER_TASK)]
     for text in ordered_map(_at_lines, (data.rows, sim, j), spans, jobs):
         buf.write(text)
-    return SimulationReport(buf.getvalue(), curves)
+    return SimulationReport(one_row_per_line(buf.getvalue()), curves)
