@@ -786,6 +786,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     _choice("hold", hold, ("force", "torque"))
     if min_pinion_teeth is not None and module_mm is None:
         raise UsageError("min_pinion_teeth applies only with module_mm")
+    core.check_train(spec)
     gp = spec.gear_pair
     i_values = _axis(i, "--i") if i is not None else [gp.output_gear.teeth / gp.pinion.teeth]
     l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth

@@ -70,8 +70,8 @@ def _legacy(spec) -> tuple:
 
     if spec.gear_pair is None:
         kinds = ", ".join(s.kind for s in spec.stages)
-        raise SpecError(f"{spec.source}: this needs a drive of one worm stage followed by one spur stage; this "
-                        f"drive's stages are {kinds}")
+        raise SpecError(f"{spec.source}: this calculation is available for a drive of one worm stage followed by "
+                        f"one spur stage; this drive has the stages {kinds}")
     return legacy_stages(spec)
 
 

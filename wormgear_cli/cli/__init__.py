@@ -16,7 +16,7 @@ import sys
 
 #: command name -> module registering it (the one table of commands)
 COMMAND_MODULES = {
-    "analyze": "analyze", "check": "analyze", "new": "analyze",
+    "analyze": "analyze", "check": "analyze", "new": "analyze", "upgrade": "analyze",
     "sweep": "sweep",
     "simulate": "simulate", "synth": "simulate",
     "measure": "measure",

@@ -245,26 +245,69 @@ def new(
     path: Annotated[Path, typer.Argument(help="File to create (must not exist).", show_default=False,
                                            metavar="NEW.toml")],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
+    stages: Annotated[str, typer.Option("--stages", help="The stages' kinds from the motor to the output, comma "
+                                        "separated: worm, spur, belt (e.g. worm | belt,worm | spur,worm | "
+                                        "worm,spur).", metavar="KINDS")] = "worm,spur",
 ):
     """Write a complete, commented drive template to start from.
 
-    The template is the paper's MCH50 drive (the values of configs/mch50.toml:
-    Table 1, the paper's loads, and that file's assumptions); derived keys are
-    comments holding their derived value.  It never overwrites an existing file.
+    One [[stage]] table per kind in --stages, listed from the motor to the
+    output.  Worm and spur stages hold the paper's MCH50 values (those of
+    configs/mch50.toml: Table 1, the paper's loads, and that file's
+    assumptions), a belt stage an EQ6-class mount's motor reduction; every
+    value says its source, derived keys are comments holding their derived
+    value.  The default, worm,spur, is the MCH50 drive.  It never overwrites an
+    existing file.
 
-    Example: wormgear new my-table.toml && wormgear analyze my-table.toml
+    Example: wormgear new my-mount.toml --stages belt,worm && wormgear analyze my-mount.toml
     """
     from wormgear_cli.errors import UsageError
     from wormgear_cli.files import atomic_write
+    from wormgear_cli.spec.stages import MAX_STAGES, STAGE_KINDS
     from wormgear_cli.spec.template import template
 
     if path.exists() or path.is_symlink():
         raise UsageError(f"{path}: already exists; wormgear new never overwrites a file")
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    kinds = tuple(k.strip() for k in stages.split(","))
+    for k in kinds:
+        if k not in STAGE_KINDS:
+            raise UsageError(f"--stages: unknown stage kind {k!r} in {stages!r}; expected kinds from "
+                             f"{', '.join(STAGE_KINDS)}, comma separated, e.g. belt,worm")
+    if len(kinds) > MAX_STAGES:
+        raise UsageError(f"--stages: at most {MAX_STAGES} stages, got {len(kinds)}")
     from wormgear_cli.cli.common import announce_written
     from wormgear_cli.files import after_commit
 
-    atomic_write(path, template(name or path.stem))
+    atomic_write(path, template(name or path.stem, kinds))
     announce_written(path)
     after_commit(lambda: typer.echo(f"edit it, then run: wormgear check {path}", err=True))
+
+
+@app.command()
+def upgrade(
+    drive: Annotated[Path, typer.Argument(help="Drive spec of the legacy two-table form (TOML).", show_default=False,
+                                          metavar="OLD.toml")],
+    output: OutputOption = None,
+):
+    """Rewrite a drive file of the legacy two-table form as [[stage]] tables.
+
+    The [gear_pair], [worm_pair], [assembly] and [loads] tables become two
+    [[stage]] tables listed from the motor to the output (the worm pair, then
+    the spur pair); every value is kept as written, comments travel with their
+    keys, and the result is checked to give the same drive.  The output goes to
+    stdout, or to -o FILE (never the input).
+
+    Example: wormgear upgrade configs/mch50.toml -o mch50-stages.toml
+    """
+    from wormgear_cli.errors import SpecError
+    from wormgear_cli.files import read_text_file
+    from wormgear_cli.spec.toml import MAX_SPEC_BYTES
+    from wormgear_cli.spec.upgrade import upgrade_text
+
+    text = read_text_file(drive, "a TOML drive file", SpecError, encoding="utf-8-sig", max_bytes=MAX_SPEC_BYTES)
+    result = upgrade_text(text, str(drive))
+    if result.note:
+        typer.echo(f"note: {drive}: {result.note}", err=True)
+    emit(result.text, output, [drive])

@@ -94,32 +94,36 @@ class Order(NamedTuple):
     label: str
 
 
+def _of(t: Train, st) -> str:
+    """`` of NAME`` when the train has more than one stage of ``st``'s kind (names then tell them apart)."""
+    return f" of {st.name}" if sum(1 for s in t.stages if s.kind == st.kind) > 1 else ""
+
+
 def shaft_label(t: Train, s: int) -> str:
-    """A shaft's name from what sits on it: ``output shaft (gear)``, ``motor shaft (worm)``,
-    ``shaft 1 (wheel and pinion)``."""
+    """A shaft's name from what sits on it: ``output shaft (wheel)``, ``motor shaft (driving pulley)``,
+    ``shaft 1 (driven pulley, worm)``."""
     on = []
     if s >= 1:
-        on.append(f"{MEMBER_NAMES[t.stages[s - 1].kind][1]} of {t.stages[s - 1].name}")
+        on.append(MEMBER_NAMES[t.stages[s - 1].kind][1] + _of(t, t.stages[s - 1]))
     if s < len(t.stages):
-        on.append(f"{MEMBER_NAMES[t.stages[s].kind][0]} of {t.stages[s].name}")
+        on.append(MEMBER_NAMES[t.stages[s].kind][0] + _of(t, t.stages[s]))
     where = "motor shaft" if s == 0 else "output shaft" if s == len(t.stages) else f"shaft {s}"
-    return f"{where} ({' and '.join(on)})"
+    return f"{where} ({', '.join(on)})"
 
 
 def orders(t: Train) -> list[Order]:
-    """Every shaft's and every mesh's order at the output, shafts first (motor -> output), then each
-    stage's meshes (motor -> output)."""
-    out = [Order(t.turns[s], "shaft", s, shaft_label(t, s)) for s in range(len(t.stages) + 1)]
-    for st in t.stages:
-        after = t.after(st)
+    """Every shaft's and every mesh's order at the output, shafts first (output -> motor), then each
+    stage's meshes (output -> motor)."""
+    out = [Order(t.turns[s], "shaft", s, shaft_label(t, s)) for s in range(len(t.stages), -1, -1)]
+    for st in t.stages[::-1]:
+        after, of = t.after(st), _of(t, st)
         if st.kind == "worm":
-            out.append(Order(st.wheel.teeth * after, "mesh", st.index, f"worm mesh of {st.name}"))
+            out.append(Order(st.wheel.teeth * after, "mesh", st.index, f"worm mesh{of}"))
         elif st.kind == "spur":
-            out.append(Order(st.gear.teeth * after, "mesh", st.index, f"tooth mesh of {st.name}"))
+            out.append(Order(st.gear.teeth * after, "mesh", st.index, f"spur mesh{of}"))
         else:
-            out.append(Order(st.driven.teeth * after, "mesh", st.index, f"belt tooth mesh of {st.name}"))
-            out.append(Order(st.driven.teeth * after / st.belt_teeth, "belt", st.index,
-                             f"belt revolution of {st.name}"))
+            out.append(Order(st.driven.teeth * after, "mesh", st.index, f"belt tooth mesh{of}"))
+            out.append(Order(st.driven.teeth * after / st.belt_teeth, "belt", st.index, f"belt revolution{of}"))
     return out
 
 
@@ -145,10 +149,11 @@ def drive_geometry(spec, t: Train | None = None):
     else:
         r_base, teeth = r_out, last.driven.teeth
     worms = [s for s in t.stages if s.kind == "worm"]
+    labels = () if t.kinds == ("worm", "spur") else tuple((o.order, o.label) for o in orders(t))
     if worms:
         w = worms[-1]
         worm_diameter = w.worm.starts * w.module / math.tan(w.lead_angle)
         return DriveGeometry(r_out, r_base, w.output_radius, t.after(w), t.before(w), teeth,
                              w.transverse_pressure_angle, (worm_diameter + 2.0 * w.output_radius) / 2.0,
-                             w.worm.starts)
-    return DriveGeometry(r_out, r_base, r_out, t.before(last), t.turns[0], teeth, 0.0, 0.0, 1)
+                             w.worm.starts, labels)
+    return DriveGeometry(r_out, r_base, r_out, t.before(last), t.turns[0], teeth, 0.0, 0.0, 1, labels)

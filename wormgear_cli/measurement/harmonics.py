@@ -667,6 +667,8 @@ def _physical(geometry, harmonics: int, worm_starts: int | None, rel_tol: float)
     else:
         bases.append((n_w, "worm shaft"))
         bases.append((n_w * worm_starts, "worm mesh"))
+    if getattr(geometry, "labels", ()):  # any other train: its shafts and meshes (drive.train.orders)
+        bases = [(float(k), name) for k, name in geometry.labels]
     merged: list[tuple[float, list[str], int]] = []
     for h in range(1, harmonics + 1):
         for k, name in bases:

@@ -19,7 +19,9 @@ class DriveGeometry(NamedTuple):
     ``gear_ratio`` i_c = z1/z2 [-], ``worm_order`` n_w = i_c z3 / z_worm [-]
     (worm revolutions per output revolution), ``output_teeth`` z1,
     ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm],
-    ``worm_starts`` z_worm (the worm mesh is at z_worm n_w; 1: worm shaft and mesh coincide).
+    ``worm_starts`` z_worm (the worm mesh is at z_worm n_w; 1: worm shaft and mesh coincide),
+    ``labels``: ((order, label), ...) of every shaft and mesh of a drive other than the legacy
+    worm + spur one, from its train (empty: the legacy drive's named orders).
     """
 
     output_pitch_radius: float
@@ -31,3 +33,4 @@ class DriveGeometry(NamedTuple):
     axial_pressure_angle: float
     worm_centre_distance: float
     worm_starts: int = 1
+    labels: tuple = ()

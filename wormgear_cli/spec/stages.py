@@ -580,7 +580,8 @@ def _defaults(s: StageInput, model_default: str, label: str, problems: list[str]
             v["face_width_mm"] = 10.0 * v["module_mm"]
         if v["stiffness_model"] is MISSING:
             v["stiffness_model"] = model_default
-        if "residual_lost_motion_arcsec" in s.written and v["anti_backlash"] == "none":
+        if "residual_lost_motion_arcsec" in s.written and v["anti_backlash"] == "none" and \
+                v["residual_lost_motion_arcsec"] not in (0.0, MISSING):
             problems.append(f"{label}: residual_lost_motion_arcsec: only with an anti-backlash arrangement; set "
                             f"anti_backlash = \"{ANTI_BACKLASH[s.kind][1]}\" or remove the key")
     if s.kind == "worm" and v["transverse_pressure_angle_deg"] is MISSING:
@@ -783,8 +784,8 @@ def legacy_path(stages, path: str) -> str:
 
 def new_path(stages, path: str) -> str:
     """A legacy key as the stage-form path of a [worm, spur] train (``gear_pair.module_mm`` ->
-    ``stage.2.module_mm``); other paths unchanged."""
+    ``stage.2.module_mm``); other paths unchanged.  ``stages`` None: the legacy form's train."""
     hit = LEGACY_KEYS.get(path)
-    if hit is None or not is_legacy_train(stages):
+    if hit is None or (stages is not None and not is_legacy_train(stages)):
         return path
     return stage_path(LEGACY_TRAIN.index(hit[0]) + 1, hit[1])
