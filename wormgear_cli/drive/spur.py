@@ -132,8 +132,10 @@ def _eccentricity_source(stage, t, origin) -> Source:
         def lost(theta, phase):
             return (static + de * math.tan(alpha) * (1.0 + np.sin(o_p * theta + phase))) / r2 / after
 
+        counts = 1.0 if de == stage.eccentricity else 0.0  # involute: only an eccentricity the spec states
+
         def size(v):
-            return v("eccentricity_mm") / r_b / after
+            return counts * v("eccentricity_mm") / r_b / after
     return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
                   curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
                   stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0)

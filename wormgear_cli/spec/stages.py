@@ -507,8 +507,11 @@ def _walk(table: dict, kind: str, prefix: str, problems: list[str], label: str) 
             if rel in NOT_COVERED and kind == "worm":
                 problems.append(f"{label}: {rel}: {NOT_COVERED[rel]}")
                 continue
-            hint = (did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
-                    or did_you_mean(rel, list(STAGE_FIELD_BY_KEY[kind]), cutoff=0.75) or _other_kind(rel, kind))
+            # a key of another kind first (it is exactly that), else the nearest key of this table, else the
+            # nearest path of this kind (a misplaced key)
+            hint = (_other_kind(rel, kind)
+                    or did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
+                    or did_you_mean(rel, list(STAGE_FIELD_BY_KEY[kind]), cutoff=0.75))
             what = "table" if isinstance(value, dict) else "key"
             problems.append(f"{label}: {rel}: unknown {what}{hint}")
             continue

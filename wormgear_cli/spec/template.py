@@ -106,10 +106,18 @@ def _document(name: str, kinds: tuple[str, ...]) -> dict:
             (table.setdefault(head, {}) if tail else table)[tail or head] = list(value) if isinstance(
                 value, tuple) else value
         doc["stage"].append(table)
-    for path, (value, _) in DRIVE_EXAMPLES.items():
+    for path, (value, _) in _drive_examples(kinds).items():
         section, key = path.split(".")
         doc.setdefault(section, {})[key] = value
     return doc
+
+
+def _drive_examples(kinds: tuple[str, ...]) -> dict:
+    """The drive-level values: the MCH50's requirements only for the MCH50's own train (its measured
+    spans would mean nothing for another drive; there they are commented examples)."""
+    if kinds == ("worm", "spur"):
+        return DRIVE_EXAMPLES
+    return {k: v for k, v in DRIVE_EXAMPLES.items() if not k.startswith("requirements.")}
 
 
 def _key_lines(f: Field, key: str, value, source: str, derived) -> list[str]:
@@ -192,7 +200,7 @@ def template(name: str = "my drive", stages=("worm", "spur")) -> str:
         if f.section != section:
             section = f.section
             lines += ["", f"[{section}]"]
-        value, source = DRIVE_EXAMPLES.get(f.path, (None, ""))
+        value, source = _drive_examples(kinds).get(f.path, (None, ""))
         derived = float(f"{_contact_ratio(spec):.6g}") if f.path == "stiffness.contact_ratio" else None
         lines += _key_lines(f, f.key, value, source, derived)
     lines += ["", "# Effects the stage models lack (none is on by default); see the effect catalogue.",

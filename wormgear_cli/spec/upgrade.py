@@ -130,9 +130,9 @@ def _scan(text: str) -> tuple[list, dict, list]:
         key = km.group(1).strip('"')
         end = _value_end(lines, k)
         value = line.split("=", 1)[1].split("#", 1)[0].strip()
-        if value.startswith("{") or ("." in key and table != "statistics") or (table.split(".")[0] in (
-                "gear_pair", "worm_pair") and key in ("output_gear", "pinion", "worm", "wheel")):
-            raise _Unscannable
+        if table.split(".")[0] in ("gear_pair", "worm_pair", "assembly", "loads", "requirements") and (
+                value.startswith("{") or "." in key):
+            raise _Unscannable  # a stage's keys written as an inline table or dotted keys
         items.append(_Item(table, key, lines[k:end], pending, []))
         pending, k = [], end
     if pending and items:
