@@ -4,8 +4,6 @@ Typed named tuples (immutable, fields by name), not frozen dataclasses: they are
 ``analyze`` starts (0.1 ms against 0.6 ms each; docs/development.md, "Start-up").  Angles [rad].
 """
 
-from __future__ import annotations
-
 from collections.abc import Callable
 from typing import NamedTuple
 

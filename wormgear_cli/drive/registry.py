@@ -18,8 +18,6 @@ term stage by stage from the output back to the motor, then the full budget's on
 additions, then its mesh-order ones.  A name used by two stages is prefixed ``stageN_``.
 """
 
-from __future__ import annotations
-
 import math
 from typing import NamedTuple
 

@@ -18,8 +18,6 @@ Source: the reference facts' "Drive trains of several stages" (the aggregation i
 Delta phi = sum_h Delta phi_h / i_h).
 """
 
-from __future__ import annotations
-
 import math
 from typing import NamedTuple
 

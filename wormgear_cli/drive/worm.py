@@ -20,8 +20,6 @@ sqrt(S2^2 + C2^2) / (2 cos(alpha_2)) at A; each / (r_w A): the paper's +/- half-
 The wheel's cumulative pitch deviation F_p / (2 r_w) / A at A (the full budget).
 """
 
-from __future__ import annotations
-
 import math
 from typing import NamedTuple
 

@@ -58,11 +58,12 @@ class Field(NamedTuple):
 
     @property
     def section(self) -> str:
-        return self.path.rsplit(".", 1)[0]
+        """The table holding the key ("" for a key at the top of a stage table)."""
+        return self.path.rsplit(".", 1)[0] if "." in self.path else ""
 
     @property
     def key(self) -> str:
-        return self.path.rsplit(".", 1)[1]
+        return self.path.rsplit(".", 1)[-1]
 
     def expected(self) -> str:
         """Human description of what the key takes."""

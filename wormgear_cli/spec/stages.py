@@ -17,8 +17,6 @@ behind loading the old form, ``wormgear upgrade`` and the old attribute names.
 Problems are reported by position and kind: ``FILE: stage 2 (spur): module_mm: expected ...``.
 """
 
-from __future__ import annotations
-
 import math
 from types import MappingProxyType
 from typing import Any, NamedTuple
