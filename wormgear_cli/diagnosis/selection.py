@@ -358,7 +358,8 @@ def _diagnose(spec, meas, alpha, fit_phases, max_effects, resamples, progress) -
     try:
         from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
-        thermal = float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
+        predicted = predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio)
+        thermal = None if predicted is None else float(predicted)  # None: a drive without a worm stage
     except (ImportError, AttributeError):
         thermal = None
     return Diagnosis(spec, meas, groups, info, sources, fit_phases, alpha, y - simulated_spec, simulated_spec,
