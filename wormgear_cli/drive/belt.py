@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
+from wormgear_cli.spec.stages import record_values
 
 
 def stretch(stage, tension) -> float:
@@ -65,8 +66,6 @@ def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:
     """The stage's TE and backlash at the driven pulley's shaft: TE = stretch + the sum over orders of
     the root-sum-square of the sources at one order (sources of one order add as vectors, different
     orders peak together somewhere in a turn); backlash = clearance + 2 stretch."""
-    from wormgear_cli.spec.stages import record_values
-
     v = record_values(stage)
     r = stage.output_radius
     by_order: dict[float, float] = {}
@@ -86,8 +85,6 @@ def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:
 def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:
     """(periodic sources, static terms, constant clearances) of the stage at the output (module
     docstring).  ``origin(stage, keys)``: the origin of a size read from ``keys``."""
-    from wormgear_cli.spec.stages import record_values
-
     after = t.after(stage)
     own = record_values(stage)
     out = []

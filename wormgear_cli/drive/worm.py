@@ -29,6 +29,7 @@ from wormgear_cli.drive import stiffness
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
 from wormgear_cli.physics import worm as model
 from wormgear_cli.physics.spur import pitch_arc_to_angle
+from wormgear_cli.spec.stages import record_values
 
 #: the paper's names of the worm stage's TE and backlash
 SYMBOLS = ("Delta phi_wc", "Delta phi_wh")
@@ -51,8 +52,6 @@ class WormParts(NamedTuple):
 
 def values(stage):
     """``value(key)`` -> the stage's own value of a stage key (internal units)."""
-    from wormgear_cli.spec.stages import record_values
-
     table = record_values(stage)
     return table.__getitem__
 

@@ -321,11 +321,6 @@ class Spec:
     stages: tuple = ()
     form: str = "legacy"
 
-    def stage(self, kind: str, which: int = -1):
-        """The stage of kind ``kind`` (the last one by default, ``which=0`` the first), or None."""
-        found = [s for s in self.stages if s.kind == kind]
-        return found[which] if found else None
-
 
 def raw_copy(spec: Spec) -> dict:
     """A mutable deep copy of the TOML document behind ``spec``."""
