@@ -58,7 +58,7 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     # the drive layer: the train's ratios, turns and orders; the belt stage (by hand in tests/drive)
     "train": (("wormgear_cli/drive/train.py",), ("tests/drive/test_train.py",),
               ("train", "_teeth", "orders", "_of", "shaft_label")),
-    "belt": (("wormgear_cli/drive/belt.py",), ("tests/drive/test_train.py", "tests/drive/test_registry.py"), None),
+    "belt": (("wormgear_cli/drive/belt.py",), ("tests/drive/test_belt.py", "tests/drive/test_train.py"), None),
     "iso230": (("wormgear_cli/measurement/iso230.py",),
                ("tests/measurement/test_iso230_hand.py",), None),
     # the aliasing decisions (correlations, groups, folding); the least-squares fits are left to

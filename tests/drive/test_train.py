@@ -211,3 +211,22 @@ def test_a_stage_name_repeating_gets_its_stage_in_the_source_names():
     assert len(names) == len(set(names))
     assert "stage1_gear_eccentricity" in names and "stage2_gear_eccentricity" in names
     assert [s.name for s in two_spurs.stages] == ["gear1", "gear2"]
+
+
+def test_every_shaft_and_mesh_is_named():
+    """EQ6 class: the motor (driving pulley) at 705, the worm shaft (driven pulley and worm) and the worm
+    mesh at 180, the RA axis (wheel) at 1; the belt's teeth at 47 x 180 and the belt at 47 x 180 / 80."""
+    spec = load_spec(CONFIGS / "eq6-belt-worm.toml")
+    t = train_mod.of(spec)
+    assert t.ratios == pytest.approx((47 / 12, 180.0)) and t.total_ratio == pytest.approx(705.0)
+    got = [(o.order, o.kind, o.stage, o.label) for o in train_mod.orders(t)]
+    assert got == [(1.0, "shaft", 2, "output shaft (wheel)"),
+                   (180.0, "shaft", 1, "shaft 1 (driven pulley, worm)"),
+                   (pytest.approx(705.0), "shaft", 0, "motor shaft (driving pulley)"),
+                   (180.0, "mesh", 2, "worm mesh"),
+                   (47 * 180.0, "mesh", 1, "belt tooth mesh"),
+                   (pytest.approx(47 * 180 / 80), "belt", 1, "belt revolution")]
+    two = train_mod.of(loads_spec(WORM + WORM))
+    labels = [o.label for o in train_mod.orders(two)]
+    assert labels == ["output shaft (wheel of worm2)", "shaft 1 (wheel of worm1, worm of worm2)",
+                      "motor shaft (worm of worm1)", "worm mesh of worm2", "worm mesh of worm1"]
