@@ -58,12 +58,21 @@ def test_belt_sources_at_the_output():
         assert s.phase_path == f"stage.1.{key}" and s.phase == pytest.approx(math.radians(phase)), name
         assert s.curve(math.pi / (2 * order), -0.0) == pytest.approx(amp, rel=1e-12), name  # a sine of that order
         assert s.origin == "spec" and s.lost_motion is None, name
+        key_of_size = {"driver_pulley_eccentricity": "driver.eccentricity_mm",
+                       "driven_pulley_eccentricity": "driven.eccentricity_mm", "belt_pitch_error": "pitch_error_mm",
+                       "belt_tooth_mesh": "tooth_mesh_error_mm"}[name]
+        assert s.size_keys == (key_of_size,) and s.size_paths == (f"stage.1.{key_of_size}",), name
+        assert s.size(lambda k: 2.0 if k == key_of_size else math.nan) == pytest.approx(
+            2.0 * amp / {"driver_pulley_eccentricity": 0.012, "driven_pulley_eccentricity": 0.005,
+                         "belt_pitch_error": 0.04, "belt_tooth_mesh": 0.006}[name], rel=1e-12), name
+        assert s.tier == (2 if kind == "mesh" else 1), name
     stretch = 50.0 * L / (2 * 10000.0)
     (static,) = [x for x in reg.statics if x.stage_kind == "belt"]
-    assert (static.name, static.origin) == ("belt_stretch", "spec")
+    assert (static.name, static.origin, static.stage, static.stage_index) == ("belt_stretch", "spec", "belt", 1)
+    assert static.size_paths == ("stage.1.effective_tension_N", "stage.1.tensile_stiffness_N")
     assert static.amplitude == pytest.approx(stretch / R / A, rel=1e-12)
     (clear,) = [c for c in reg.clearances if c.stage_kind == "belt"]
-    assert (clear.name, clear.stage) == ("belt_backlash", "belt")
+    assert (clear.name, clear.stage, clear.stage_index) == ("belt_backlash", "belt", 1)
     assert clear.amount == pytest.approx(0.03 / R / A, rel=1e-12)
 
 
@@ -75,7 +84,7 @@ def test_belt_stage_at_its_own_shaft():
     r = a.stages[0]
     stretch = 50.0 * L / (2 * 10000.0) / R
     periodic = math.hypot(0.012, 0.005) / R + 0.02 / R + 0.003 / R
-    assert (r.kind, r.name, r.ratio, r.after) == ("belt", "belt", 1.0, A)
+    assert (r.index, r.kind, r.name, r.ratio, r.after) == (1, "belt", "belt", 1.0, A)
     assert r.te_parts == pytest.approx({"stretch": stretch, "periodic": periodic}, rel=1e-12)
     assert r.transmission_error == pytest.approx(stretch + periodic, rel=1e-12)
     assert r.backlash_parts == pytest.approx({"clearance": 0.03 / R, "stretch": 2 * stretch}, rel=1e-12)
@@ -100,3 +109,14 @@ def test_a_belt_source_without_size_is_left_out_of_simulate():
     assert "belt_tooth_mesh" not in names and "driven_pulley_eccentricity" not in names
     assert "driver_pulley_eccentricity" in names and "belt_pitch_error" in names
     assert "belt_tooth_mesh" in [s.name for s in periodic_sources(spec, all_budget_sources=True)]
+
+
+@pytest.mark.parametrize("drop, origin", [("effective_tension_N = 50.0\n", "spec"),
+                                          ("tensile_stiffness_N = 10000.0\n", "spec"),
+                                          ("effective_tension_N = 50.0\ntensile_stiffness_N = 10000.0\n", "default")])
+def test_the_stretch_line_says_where_its_size_comes_from(drop, origin):
+    """Either key written (the tension or the belt's stiffness) makes the stretch a spec value."""
+    text = DRIVE.replace("tensile_stiffness_N = 10000.0\neffective_tension_N = 50.0\n",
+                         "effective_tension_N = 50.0\ntensile_stiffness_N = 10000.0\n").replace(drop, "")
+    (static,) = [x for x in build(loads_spec(text)).statics if x.stage_kind == "belt"]
+    assert static.origin == origin

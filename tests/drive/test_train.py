@@ -226,6 +226,11 @@ def test_every_shaft_and_mesh_is_named():
                    (180.0, "mesh", 2, "worm mesh"),
                    (47 * 180.0, "mesh", 1, "belt tooth mesh"),
                    (pytest.approx(47 * 180 / 80), "belt", 1, "belt revolution")]
+    three = [(o.kind, o.stage, o.label) for o in train_mod.orders(train_mod.of(loads_spec(THREE)))]
+    assert three[4:] == [("mesh", 3, "worm mesh"), ("mesh", 2, "spur mesh"), ("mesh", 1, "belt tooth mesh"),
+                         ("belt", 1, "belt revolution")]
+    mch50 = {(o.kind, o.stage): o.order for o in train_mod.orders(train_mod.of(loads_spec(WORM + SPUR)))}
+    assert mch50[("mesh", 1)] == 240.0 and mch50[("mesh", 2)] == 144.0  # worm mesh z3 i_c, spur mesh z1
     two = train_mod.of(loads_spec(WORM + WORM))
     labels = [o.label for o in train_mod.orders(two)]
     assert labels == ["output shaft (wheel of worm2)", "shaft 1 (wheel of worm1, worm of worm2)",
