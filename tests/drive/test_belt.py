@@ -62,7 +62,7 @@ def test_belt_sources_at_the_output():
                        "driven_pulley_eccentricity": "driven.eccentricity_mm", "belt_pitch_error": "pitch_error_mm",
                        "belt_tooth_mesh": "tooth_mesh_error_mm"}[name]
         assert s.size_keys == (key_of_size,) and s.size_paths == (f"stage.1.{key_of_size}",), name
-        assert s.size(lambda k: 2.0 if k == key_of_size else math.nan) == pytest.approx(
+        assert s.size(lambda k, key=key_of_size: 2.0 if k == key else math.nan) == pytest.approx(
             2.0 * amp / {"driver_pulley_eccentricity": 0.012, "driven_pulley_eccentricity": 0.005,
                          "belt_pitch_error": 0.04, "belt_tooth_mesh": 0.006}[name], rel=1e-12), name
         assert s.tier == (2 if kind == "mesh" else 1), name
