@@ -116,14 +116,15 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     n_w = t.before(stage)
     lam, a2 = stage.lead_angle, stage.transverse_pressure_angle
     ident = {"stage_index": stage.index, "stage_kind": "worm"}
+    own = values(stage)
 
     def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None):
-        amp = float(size(values(stage)))
+        amp = float(size(own))
         return sine_source(name, stage.paths[key_phase], order, amp, phase, stage.name, "shaft",
                            tuple(stage.paths[k] for k in keys), lost, part=part, origin=origin(stage, keys),
                            size_keys=keys, size=size, tier=tier, **ident)
 
-    lost = _lost_motion(stage, after, to_out) if stage.anti_backlash == "none" else None
+    lost = _lost_motion(stage, after, to_out, own) if stage.anti_backlash == "none" else None
     out = [
         src("worm_lead_error", "lead_error_phase_deg", n_w, lambda v: v("lead_error_mm") * (0.5 * to_out),
             ("lead_error_mm",), "worm", stage.lead_error_phase),
@@ -149,11 +150,11 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     return out, static, clear
 
 
-def _lost_motion(stage, after: float, to_out: float):
+def _lost_motion(stage, after: float, to_out: float, own):
     """max(Delta j_central(no load) + h_j sin(A theta + psi), 0) / r_w / A  [rad] at the output, the
     paper's Delta j +/- its half-width varying with the wheel's runout.  Clipped at zero: a clearance
     cannot be negative (only matters when the half-width exceeds the central backlash)."""
-    p = paper(stage, 0.0)
+    p = paper(stage, 0.0, own)
     central = float(p.backlash_profile + p.backlash_thickness)
     h_j = float(p.backlash_halfwidth)
     return lambda theta, phase: np.maximum(central + h_j * np.sin(after * theta + phase), 0.0) * to_out
