@@ -58,6 +58,10 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                 ("output_gear_runout", "intermediate_shaft_runout", "worm_runout", "gear_mesh_error",
                  "thermal_backlash", "thermal_drift", "torsional_compliance", "bearing_clearance", "make",
                  "param", "effect_error", "params_from_keys", "params_to_keys")),
+    # the drive layer: the train's ratios, turns and orders; the belt stage (by hand in tests/drive)
+    "train": (("wormgear_cli/drive/train.py",), ("tests/drive/test_train.py",),
+              ("train", "_teeth", "orders", "_of", "shaft_label")),
+    "belt": (("wormgear_cli/drive/belt.py",), ("tests/drive/test_belt.py", "tests/drive/test_train.py"), None),
     "iso230": (("wormgear_cli/measurement/iso230.py",),
                ("tests/measurement/test_iso230_hand.py",), None),
     # the step of the readings (digits written, encoder grid, common step)

@@ -74,7 +74,7 @@ def test_analyze_matches_cli(runner, unit):
     assert r.to_dict(unit) == doc
     assert r.transmission_error.to(unit) == doc["total"]["transmission_error"]
     assert r.backlash.to(unit) == doc["total"]["backlash"]
-    g, w = doc["stages"]["gear"], doc["stages"]["worm"]
+    w, g = doc["stages"]  # motor -> output: the worm stage, then the spur (gear) stage
     assert r.gear.transmission_error.to(unit) == g["transmission_error"]
     assert r.worm.backlash.to(unit) == w["backlash"]
     assert r.worm.parts["backlash"]["profile"].to(unit) == w["backlash_parts"]["profile"]

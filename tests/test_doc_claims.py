@@ -62,6 +62,16 @@ def paper_results_deg() -> dict:
             "worm_transmission_error": float(rows["Δφwc"]), "worm_backlash": float(rows["Δφwh"])}
 
 
+def _stage(doc: dict, name: str) -> dict:
+    """The stage of analyze's document named ``name`` ("gear", "worm" in a worm + spur drive)."""
+    return next(s for s in doc["stages"] if s["name"] == name)
+
+
+def _order_lines(source: str, order: float) -> float:
+    """Linear sum of the budget lines at ``order`` [arcsec]."""
+    return sum(ln["amplitude"] for ln in report(source)["budget"] if ln["order"] == order)
+
+
 def _line(source: str, name: str) -> dict:
     return next(ln for ln in report(source, 5)["budget"] if ln["source"] == name)
 
@@ -104,7 +114,7 @@ CLAIMS = [
                    report(RT)["total_with_budget"]["transmission_error_linear"])),
     Claim("configs/rotary-table-precision.toml",
           r"the tooth-thickness allowances \(15 \+ 12 um = ([\d.]+) arcsec of the ~([\d.]+)\)",
-          lambda: (report(RT)["stages"]["gear"]["backlash_parts"]["thickness"], report(RT)["total"]["backlash"])),
+          lambda: (_stage(report(RT), "gear")["backlash_parts"]["thickness"], report(RT)["total"]["backlash"])),
     Claim("configs/rotary-table-precision.toml", r"ISO 1328-2:1997 grade 5 for a cylindrical gear of the wheel's "
           r"m = 3, d = 135 mm .*?F_i'' = ([\d.]+) um", lambda: (radial_composite(5, 3.0, 135.0).F_i2T,)),
     Claim("configs/radar-pedestal-2start.toml", r"ISO 1328-2:1997 grade 6 for a cylindrical gear of the wheel's "
@@ -112,10 +122,12 @@ CLAIMS = [
     # the paper, reproduced: the assumptions' effect on the gear stage and the worm stage
     Claim("configs/mch50.toml", r"delta1 = ([\d.]+) um at 666 N: gear TE \+([\d.]+) %, gear backlash -([\d.]+) % "
           r"against the paper",
-          lambda: (report(MCH50)["stages"]["gear"]["deflection_um"], _deviation_pct("gear_transmission_error"),
+          lambda: (_stage(report(MCH50), "gear")["deflection_um"], _deviation_pct("gear_transmission_error"),
                    -_deviation_pct("gear_backlash"))),
     Claim("configs/mch50.toml", r"Only delta2 depends on it \(([\d.]+) um at 85 N",
-          lambda: (report(MCH50)["stages"]["worm"]["deflection_um"],)),
+          lambda: (_stage(report(MCH50), "worm")["deflection_um"],)),
+    Claim("configs/eq6-belt-worm.toml", r"the order-180 lines of the budget, about ([\d.]+) arcsec zero to peak",
+          lambda: (_order_lines("configs/eq6-belt-worm.toml", 180.0),)),
     # docs/budget.md: the pitch lines of the rotary table's gears in class 5
     Claim("docs/budget.md", r"gives 0.025/180 rad = ([\d.]+)″ peak to peak, ([\d.]+)″ amplitude, at order 1; its "
           r"pinion \(d = 40 mm\) in class 5 \(F_pT = 17 µm\) ([\d.]+)″ peak to peak at order 9",
@@ -127,6 +139,8 @@ CLAIMS = [
 #: arcsec figures in config comments that are not the tool's (targets and limits), by file
 NOT_TOOL_FIGURES = {
     "rotary-table-precision.toml": {"20 arcsec table", "10-20 arcsec indexing", "against 20 arcsec"},
+    "rotary-table-worm.toml": {"10-20 arcsec indexing", "8 arcsec at"},
+    "eq6-belt-worm.toml": {"15-30 arcsec being"},
 }
 
 

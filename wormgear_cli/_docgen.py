@@ -7,7 +7,7 @@ when a committed page differs):
 * ``docs/reference/cli.md``: the ``--help`` text of ``wormgear`` and of every
   command, rendered by click at a fixed width of 78 columns (what
   ``COLUMNS=80 wormgear CMD --help`` prints), without colour;
-* ``docs/reference/spec.md``: every key of :data:`wormgear_cli.spec.loader.FIELDS`;
+* ``docs/reference/spec.md``: every key of the drive-level tables, of each stage kind and of the legacy form;
 * ``docs/reference/effects.md``: every entry of
   :data:`wormgear_cli.physics.effects.EFFECTS`.
 
@@ -141,35 +141,71 @@ def _unit(unit: str) -> str:
     return "-" if unit in ("", "-") else unit
 
 
-def render_spec() -> str:
-    """The drive-spec key reference page (Markdown), one table per TOML section."""
-    from wormgear_cli.spec.loader import FIELDS
+def _rows(fields, key=lambda f: f.key, extra=None) -> list[str]:
+    head = "| key | unit | default | range | Table 1 | meaning |" + (" stage form |" if extra else "")
+    out = [head, "|---|---|---|---|---|---|" + ("---|" if extra else "")]
+    for f in fields:
+        row = (f"| `{key(f)}` | {_cell(_unit(f.unit))} | {_cell(_default(f))} | {_cell(_range(f))} | "
+               f"{_cell(f.table1 or '—')} | {_cell(f.doc)} |")
+        out.append(row + (f" {_cell(extra(f))} |" if extra else ""))
+    return out
 
-    sections: dict[str, list] = {}
-    for f in FIELDS:
-        sections.setdefault(f.section, []).append(f)
+
+def render_spec() -> str:
+    """The drive-spec key reference page (Markdown): the drive-level tables, each stage kind's keys,
+    then the legacy two-table form with where each of its keys goes in the stage form."""
+    from wormgear_cli.spec.loader import DRIVE_FIELDS, FIELDS, LEGACY_TABLES
+    from wormgear_cli.spec.stages import LEGACY_KEYS, MEMBERS, STAGE_FIELDS
+
     out = [
         "# Drive spec keys",
         "",
-        GENERATED_NOTE.format(source="`wormgear_cli.spec.loader.FIELDS`"),
+        GENERATED_NOTE.format(source="`wormgear_cli.spec.loader.DRIVE_FIELDS`, "
+                              "`wormgear_cli.spec.stages.STAGE_FIELDS` and `wormgear_cli.spec.loader.FIELDS`"),
         "",
-        "Every key of a drive spec, section by section, in the order `wormgear new` writes them. "
-        "*unit* is the unit the key's value is in (it is also the key's suffix); *range* the values "
-        "it accepts (a parenthesis excludes the bound); *Table 1* the MCH50 value of the paper's "
-        "Table 1 (or of its text, for the loads). How a spec is written and checked: "
-        "[the drive spec](../spec.md). Optional `[effects.NAME]` tables: "
+        "Every key of a drive spec, table by table, in the order `wormgear new` writes them: the drive-level "
+        "tables, then the keys of a `[[stage]]` table of each kind (listed from the motor to the output, each "
+        "with `kind = \"worm\" | \"spur\" | \"belt\"`), then the legacy two-table form. *unit* is the "
+        "unit the key's value is in (it is also the key's suffix); *range* the values it accepts (a parenthesis "
+        "excludes the bound); *Table 1* the MCH50 value of the paper's Table 1 (or of its text, for the loads). "
+        "How a spec is written and checked: [the drive spec](../spec.md). Optional `[effects.NAME]` tables: "
         "[effect catalogue](effects.md).",
-        "",
-        "Sections: " + ", ".join(f"`[{s}]`" for s in sections) + ".",
     ]
-    for section, fields in sections.items():
-        out += ["", f"## `[{section}]`", "",
-                "| key | unit | default | range | Table 1 | meaning |",
-                "|---|---|---|---|---|---|"]
-        for f in fields:
-            out.append(f"| `{f.key}` | {_cell(_unit(f.unit))} | {_cell(_default(f))} | {_cell(_range(f))} | "
-                       f"{_cell(f.table1 or '—')} | {_cell(f.doc)} |")
+    drive: dict[str, list] = {}
+    for f in DRIVE_FIELDS:
+        drive.setdefault(f.section, []).append(f)
+    legacy_requirements = [f for f in FIELDS if f.section == "requirements" and f.path in LEGACY_KEYS]
+    out += ["", "## `[drive]`", "", *_rows(drive.pop("drive"))]
+    for kind, fields in STAGE_FIELDS.items():
+        top = [f for f in fields if "." not in f.path]
+        out += ["", f"## `[[stage]]` with `kind = \"{kind}\"`", "", *_rows(top)]
+        for member in MEMBERS[kind]:
+            out += ["", f"### `[stage.{member}]` ({kind} stage)", "",
+                    *_rows([f for f in fields if f.path.startswith(member + ".")], key=lambda f: f.key)]
+    for section, fields in drive.items():
+        rows = fields + (legacy_requirements if section == "requirements" else [])
+        out += ["", f"## `[{section}]`", "", *_rows(rows, extra=lambda f: _stage_form(f, LEGACY_KEYS))]
+    out += ["", "## The legacy two-table form", "",
+            "A file without `[[stage]]` tables describes the paper's drive, one worm stage followed by one spur "
+            "stage, in the tables below (and the drive-level tables above); it loads as the train [worm, spur] "
+            "with every number unchanged. `wormgear upgrade` rewrites it as `[[stage]]` tables; the last column "
+            "says where each key goes."]
+    legacy: dict[str, list] = {}
+    for f in FIELDS:
+        if f.section.split(".")[0] in LEGACY_TABLES:
+            legacy.setdefault(f.section, []).append(f)
+    for section, fields in legacy.items():
+        out += ["", f"## `[{section}]`", "", *_rows(fields, extra=lambda f: _stage_form(f, LEGACY_KEYS))]
     return "\n".join(out) + "\n"
+
+
+def _stage_form(field, legacy_keys) -> str:
+    hit = legacy_keys.get(field.path)
+    if hit is None:
+        return "—" if field.path != "drive.output_torque_Nm" else "stage form only"
+    kind, key = hit
+    member, _, name = key.rpartition(".")
+    return f"`{name}` of the {kind} stage" + (f" (`[stage.{member}]`)" if member else "")
 
 
 # --- docs/reference/effects.md --------------------------------------------------------------------------------------
@@ -292,7 +328,8 @@ def refresh_session(text: str, root: Path) -> str:
 #: Hand-written pages whose command outputs :func:`refresh_session` fills in.
 SESSION_PAGES = ("tutorial.md", "commands/analyze.md", "commands/check.md", "commands/sweep.md",
                  "commands/simulate.md", "commands/synth.md", "commands/measure.md", "commands/diagnose.md",
-                 "commands/compare.md")
+                 "commands/compare.md",
+                 "commands/upgrade.md")
 
 
 # --- driver ---------------------------------------------------------------------------------------------------------

@@ -145,15 +145,21 @@ class Stage:
     """One stage's result at its own output shaft (as the paper reports it).
 
     ``transmission_error`` and ``backlash``: the maxima; ``parts``: their
-    components by name (gear: eccentricity, deformation; worm: central
-    parts and the envelope half-widths); ``at_output``: the stage's share
-    at the drive output (gear: itself; worm: divided by i_c).
+    components by name (spur: eccentricity, deformation; worm: central
+    parts and the envelope half-widths; belt: stretch, periodic, clearance);
+    ``at_output``: the stage's contribution at the drive output (its values
+    divided by the product of the ratios after it); ``index`` (1-based from
+    the motor), ``name``, ``kind`` (worm, spur, belt), ``ratio``.
     """
 
     transmission_error: Angle
     backlash: Angle
     parts: dict
     at_output: dict
+    index: int = 0
+    name: str = ""
+    kind: str = ""
+    ratio: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -165,9 +171,14 @@ class Analysis:
     drive : str
     transmission_error, backlash : Angle
         Totals at the drive output.
+    stages : tuple of Stage
+        Every stage from the motor to the output.
     gear, worm : Stage
+        The spur stage and the worm stage of a drive with one of each (the
+        paper's names; for other drives read ``stages``).
     ratios : dict
-        ``gear`` (i_c = z1/z2), ``worm`` (z3/z_worm), ``total``.
+        ``total`` and ``stages`` (each stage's ratio); for a worm + spur
+        drive also ``gear`` (i_c = z1/z2) and ``worm`` (z3/z_worm).
     metrics : dict
         The flat columns of ``analyze --format csv`` and ``sweep --param``:
         angle columns as :class:`Angle`, the others as float or None.
@@ -178,12 +189,27 @@ class Analysis:
     drive: str
     transmission_error: Angle
     backlash: Angle
-    gear: Stage
-    worm: Stage
+    stages: tuple
     ratios: dict
     metrics: dict
     core: object = field(repr=False, compare=False)
     spec: object = field(repr=False, compare=False, default=None)
+
+    def _only(self, kind: str) -> Stage:
+        found = [s for s in self.stages if s.kind == kind]
+        if len(found) != 1:
+            raise AttributeError(f"this drive has {len(found)} {kind} stages; read Analysis.stages")
+        return found[0]
+
+    @property
+    def gear(self) -> Stage:
+        """The spur stage (the paper's gear stage) of a drive with exactly one."""
+        return self._only("spur")
+
+    @property
+    def worm(self) -> Stage:
+        """The worm stage of a drive with exactly one."""
+        return self._only("worm")
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear analyze --format json --unit UNIT``."""
@@ -191,7 +217,7 @@ class Analysis:
 
 
 def analyze(spec) -> Analysis:
-    """Transmission error and backlash of each stage and of the whole drive (the paper's model).
+    """Transmission error and backlash of each stage and of the whole drive.
 
     Parameters
     ----------
@@ -201,9 +227,10 @@ def analyze(spec) -> Analysis:
     Returns
     -------
     Analysis
-        Totals at the output: Delta phi_c = Delta phi_cc + Delta phi_wc / i_c
-        and Delta phi_h = Delta phi_ch + Delta phi_wh / i_c (the paper's
-        stage equations, i_c = z1/z2); stage values at each stage's shaft.
+        Totals at the output: each stage's value at its own output shaft
+        divided by the product of the ratios after it (for the paper's worm
+        + spur drive Delta phi_c = Delta phi_cc + Delta phi_wc / i_c and
+        Delta phi_h = Delta phi_ch + Delta phi_wh / i_c, i_c = z1/z2).
 
     Examples
     --------
@@ -212,31 +239,31 @@ def analyze(spec) -> Analysis:
     Angle(53... arcsec)
     >>> r.backlash > r.transmission_error
     True
+    >>> [s.kind for s in r.stages]
+    ['worm', 'spur']
     """
-    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
     from wormgear_cli.analysis.accuracy import analyze as run
 
     spec = _spec(spec)
     core = run(spec)
     a, i = {k: Angle(v) for k, v in core.angles.items()}, core.info
     rad = core.report("rad")  # the CLI's document in radians: one source for the structure
-    gear, worm = rad["stages"]["gear"], rad["stages"]["worm"]
 
     def angles(d: dict) -> dict:
         return {k: Angle(v) for k, v in d.items() if isinstance(v, float) and not k.endswith("_pct")}
 
-    metrics = {c: a[c] for c in METRIC_COLUMNS}
-    metrics.update({c: (None if i[c] is None else float(i[c])) for c in INFO_COLUMNS})
+    angle_cols, info_cols = core.columns
+    metrics = {c: a[c] for c in angle_cols}
+    metrics.update({c: (None if i[c] is None else float(i[c])) for c in info_cols})
+    stages = tuple(Stage(Angle(st["transmission_error"]), Angle(st["backlash"]),
+                         {"transmission_error": angles(st["transmission_error_parts"]),
+                          "backlash": angles(st["backlash_parts"])}, angles(st["contribution"]),
+                         st["stage"], st["name"], st["kind"], st["ratio"]) for st in rad["stages"])
     return Analysis(
         drive=core.drive,
         transmission_error=a["total_transmission_error"],
         backlash=a["total_backlash"],
-        gear=Stage(a["gear_transmission_error"], a["gear_backlash"],
-                   {"transmission_error": angles(gear["transmission_error_parts"]),
-                    "backlash": angles(gear["backlash_parts"])}, angles(gear["contribution"])),
-        worm=Stage(a["worm_transmission_error"], a["worm_backlash"],
-                   {"transmission_error": angles(worm["transmission_error_parts"]),
-                    "backlash": angles(worm["backlash_parts"])}, angles(worm["contribution"])),
+        stages=stages,
         ratios=dict(rad["ratios"]),
         metrics=metrics,
         core=core,
@@ -786,6 +813,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     _choice("hold", hold, ("force", "torque"))
     if min_pinion_teeth is not None and module_mm is None:
         raise UsageError("min_pinion_teeth applies only with module_mm")
+    core.check_train(spec)
     gp = spec.gear_pair
     i_values = _axis(i, "--i") if i is not None else [gp.output_gear.teeth / gp.pinion.teeth]
     l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth

@@ -223,7 +223,8 @@ def test_report_by_hand():
     r = b.report("arcsec")
     assert r["budget"][0] == {"source": "x", "stage": "gear", "kind": "shaft", "order": 1.0,
                               "amplitude": pytest.approx(3.0, rel=1e-12), "origin": "spec",
-                              "phase_deg": pytest.approx(28.6479, abs=1e-4), "share_pct": pytest.approx(75.0)}
+                              "phase_deg": pytest.approx(28.6479, abs=1e-4), "share_pct": pytest.approx(75.0),
+                              "stage_index": 0, "stage_kind": "", "part": ""}
     assert r["budget"][1]["share_pct"] == pytest.approx(25.0) and r["budget"][1]["phase_deg"] == 0.0
     assert r["total_with_budget"] == pytest.approx({"transmission_error_linear": 4.0, "transmission_error_rss": 3.5,
                                                     "transmission_error_peak": 3.8}, rel=1e-12)

@@ -51,7 +51,9 @@ def report(tmp_path_factory):
 
 
 def value(report, stage, quantity):
-    return report["total"][quantity] if stage == "total" else report["stages"][stage][quantity]
+    kind = {"gear": "spur", "worm": "worm"}.get(stage)
+    return report["total"][quantity] if stage == "total" else next(
+        s for s in report["stages"] if s["kind"] == kind)[quantity]
 
 
 #: deviation of the tool from the paper [%], as documented in the comparison table (current model:

@@ -14,11 +14,12 @@ import pytest
 from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
 
+# stages are a list from the motor to the output: the MCH50's worm stage 1, its spur (gear) stage 2
 CONTRACT = [
-    ("stages", "gear", "transmission_error"),
-    ("stages", "gear", "backlash"),
-    ("stages", "worm", "transmission_error"),
-    ("stages", "worm", "backlash"),
+    ("stages", 1, "transmission_error"),
+    ("stages", 1, "backlash"),
+    ("stages", 0, "transmission_error"),
+    ("stages", 0, "backlash"),
     ("total", "transmission_error"),
     ("total", "backlash"),
 ]
@@ -36,10 +37,19 @@ def run_json(runner, *args):
     return json.loads(result.stdout)
 
 
+def stage(doc, kind):
+    """The stage of ``kind`` in analyze's JSON (a drive with one of it)."""
+    (found,) = [s for s in doc["stages"] if s["kind"] == kind]
+    return found
+
+
 def test_analyze_json_contract(runner):
     doc = run_json(runner, "analyze", str(MCH50), "--format", "json", "--unit", "arcsec")
+    assert doc["schema_version"] == 2
     assert doc["drive"] == "MCH50 rotary table"
     assert doc["unit"] == "arcsec"
+    assert [(s["stage"], s["kind"], s["name"], s["ratio"], s["ratio_after"]) for s in doc["stages"]] == [
+        (1, "worm", "worm", 30.0, 8.0), (2, "spur", "gear", 8.0, 1.0)]
     for path in CONTRACT:
         assert isinstance(dig(doc, path), float) and dig(doc, path) > 0
 
@@ -55,7 +65,7 @@ def test_units_are_consistent_across_the_output(runner, unit, per_deg):
 
 def test_stage_shares_and_parts_add_up(runner):
     doc = run_json(runner, "analyze", str(MCH50), "-f", "json")
-    g, w = doc["stages"]["gear"], doc["stages"]["worm"]
+    g, w = stage(doc, "spur"), stage(doc, "worm")
     assert g["contribution"]["transmission_error_pct"] + w["contribution"]["transmission_error_pct"] == \
         pytest.approx(100.0)
     assert g["transmission_error_parts"]["eccentricity"] + g["transmission_error_parts"]["deformation"] == \
@@ -72,7 +82,7 @@ def test_analyze_csv_is_one_row_with_named_columns(runner):
     assert len(rows) == 1
     doc = run_json(runner, "analyze", str(MCH50), "-f", "json", "-u", "arcsec")
     assert float(rows[0]["total_backlash"]) == doc["total"]["backlash"]
-    assert float(rows[0]["gear_transmission_error"]) == doc["stages"]["gear"]["transmission_error"]
+    assert float(rows[0]["gear_transmission_error"]) == stage(doc, "spur")["transmission_error"]
     assert rows[0]["unit"] == "arcsec"
 
 
@@ -192,7 +202,7 @@ def test_new_dash_writes_the_template_to_stdout(runner, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     r = runner.invoke(app, ["new", "-", "--name", "bench table"])
     assert r.exit_code == 0 and r.stderr == ""
-    assert r.stdout.startswith("# wormgear drive spec.") and 'name = "bench table"' in r.stdout
+    assert r.stdout.startswith("# wormgear drive spec") and 'name = "bench table"' in r.stdout
     assert list(tmp_path.iterdir()) == []
     spec = tmp_path / "from-stdout.toml"
     spec.write_text(r.stdout)
@@ -280,8 +290,8 @@ def test_load_share_is_undefined_without_eccentricity(runner, tmp_path):
     drive = tmp_path / "no-ecc.toml"
     drive.write_text(text)
     doc = run_json(runner, "analyze", str(drive), "-f", "json")
-    assert doc["stages"]["gear"]["load_share_pct"] is None
-    assert doc["stages"]["gear"]["transmission_error"] > 0  # all of it from the load
+    assert stage(doc, "spur")["load_share_pct"] is None
+    assert stage(doc, "spur")["transmission_error"] > 0  # all of it from the load
     table = runner.invoke(app, ["analyze", str(drive)]).stdout
     assert "load adds n/a (no eccentric part)" in table
     row = next(csv.DictReader(io.StringIO(runner.invoke(app, ["analyze", str(drive), "-f", "csv"]).stdout)))

@@ -58,5 +58,6 @@ def test_json_text_is_strict_json_with_null_for_undefined():
 
     doc = {"b": float("nan"), "a": [np.float64(1.25), float("-inf")], "c": (1, 2)}
     text = json_text(doc)
-    assert json.loads(text) == {"b": None, "a": [1.25, None], "c": [1, 2]}
-    assert list(json.loads(text)) == ["b", "a", "c"]  # key order as built
+    assert json.loads(text) == {"schema_version": 2, "b": None, "a": [1.25, None], "c": [1, 2]}
+    assert list(json.loads(text)) == ["schema_version", "b", "a", "c"]  # the version first, then as built
+    assert json.loads(json_text([1, 2])) == [1, 2]  # only a document (a dict) carries the version

@@ -178,11 +178,18 @@ def test_bad_files(tmp_path):
 
 
 def test_template_is_complete_and_valid():
+    from wormgear_cli.spec.loader import DRIVE_FIELDS
+    from wormgear_cli.spec.stages import STAGE_FIELDS
+
     text = template("t")
     spec = loads_spec(text, "t.toml")
     assert spec.drive.name == "t"
-    for f in FIELDS:  # every key of the schema appears in the template, commented or set
-        assert f.key in text, f.path
+    keys = {line.lstrip("# ").split(" = ")[0] for line in text.splitlines() if " = " in line}
+    for f in DRIVE_FIELDS:  # every drive-level key and every key of each stage appears, commented or set
+        assert f.key in keys, f.path
+    for kind in ("worm", "spur"):
+        for f in STAGE_FIELDS[kind]:
+            assert f.path.rpartition(".")[2] in keys, f.path
 
 
 def test_toml_round_trip_through_tomli_w(mch50_spec):

@@ -1,15 +1,18 @@
 """The full error budget of a drive: every source as a line at the output, and three totals.
 
-No I/O.  The periodic lines are exactly :func:`wormgear_cli.analysis.simulate.periodic_sources`
-(same names, orders, sizes and phases that ``simulate``, ``synth`` and ``diagnose``
-use); the static lines are the two tooth deflections of ``analyze`` (the paper's
-deformation parts of Delta phi_cc and Delta phi_wc / i_c).
+No I/O.  The lines are the drive's registry (:mod:`wormgear_cli.drive.registry`): its
+periodic sources (the same names, orders, sizes and phases that ``simulate``, ``synth``
+and ``diagnose`` use) and its static terms (each gear stage's tooth deflection, the
+paper's deformation parts of Delta phi_cc and Delta phi_wc, and a belt's stretch, each
+divided by the ratios after its stage).
 
-Each line: ``source``, ``stage`` (gear / worm), ``kind`` (shaft: once per turn of a
-shaft; mesh: a tooth-mesh order; static: load, no order), ``order`` (cycles per
-output revolution: 1, i_c, z1, n_w ...; 0 for static), ``amplitude`` [rad at the
-output: the largest value of the line's curve over a turn, the amplitude for a
-sinusoid], ``origin`` (spec / grade / default), ``phase`` [rad].
+Each line: ``source``, ``stage`` (the stage's name: gear / worm / belt ...), ``kind``
+(shaft: once per turn of a shaft; mesh: a tooth-mesh order; belt: once per belt
+revolution; static: load, no order), ``order`` (cycles per output revolution: 1, i_c,
+z1, n_w ...; 0 for static), ``amplitude`` [rad at the output: the largest value of the
+line's curve over a turn, the amplitude for a sinusoid], ``origin`` (spec / grade /
+default), ``phase`` [rad], ``stage_index`` (1-based from the motor), ``stage_kind``,
+``part``.
 
 Combination rules (:class:`Rule`), all for the transmission error at the output:
 
@@ -57,6 +60,9 @@ class BudgetLine(NamedTuple):
     amplitude: float
     origin: str
     phase: float = 0.0
+    stage_index: int = 0
+    stage_kind: str = ""
+    part: str = ""
 
 
 #: samples per cycle of the highest order when searching the phased curve's peak; the
@@ -87,47 +93,37 @@ class Budget:
         lines = [{"source": ln.source, "stage": ln.stage, "kind": ln.kind, "order": float(ln.order),
                   "amplitude": float(to_unit(ln.amplitude, unit)), "origin": ln.origin,
                   "phase_deg": math.degrees(ln.phase),
-                  "share_pct": float(100.0 * ln.amplitude / lin) if lin > 0 else 0.0}
+                  "share_pct": float(100.0 * ln.amplitude / lin) if lin > 0 else 0.0,
+                  "stage_index": ln.stage_index, "stage_kind": ln.stage_kind, "part": ln.part}
                  for ln in self.lines]
         return {"budget": lines,
                 "total_with_budget": {"transmission_error_" + r.value: float(to_unit(self.total(r), unit))
                                       for r in Rule}}
 
 
-def _origin(spec, paths) -> str:
-    from wormgear_cli.spec.loader import value_origin
-
-    origins = {value_origin(spec, p) for p in paths}
-    for o in ("grade", "spec"):
-        if o in origins:
-            return o
-    return "default"
-
-
 def budget(spec, analysis=None) -> Budget:
     """Every error source of ``spec`` as a :class:`BudgetLine` and the three totals.
 
     ``analysis``: the spec's :func:`wormgear_cli.analysis.accuracy.analyze` result (computed when
-    omitted); its deformation parts give the static lines.
+    omitted); its registry gives the lines.
     """
     from wormgear_cli.analysis.accuracy import analyze
-    from wormgear_cli.analysis.simulate import periodic_sources
+    from wormgear_cli.drive.records import Static
 
     a = analysis if analysis is not None else analyze(spec)
-    sources = periodic_sources(spec, all_budget_sources=True)
-    i_c = a.info["gear_ratio"]
-    lines = [BudgetLine(s.name, s.stage, s.kind, float(s.order), float(s.peak if s.peak is not None else s.amplitude),
-                        _origin(spec, s.size_paths), float(s.phase)) for s in sources]
-    static = [
-        BudgetLine("gear_deflection", "gear", "static", 0.0, float(a.angles["gear_te_deformation"]),
-                   _origin(spec, ("loads.gear_normal_force_N",))),
-        BudgetLine("worm_deflection", "worm", "static", 0.0, float(a.angles["worm_te_deformation"]) / i_c,
-                   _origin(spec, ("loads.worm_normal_force_N",))),
-    ]
-    all_lines = tuple(lines[:1] + static[:1] + lines[1:5] + static[1:] + lines[5:])
+    reg = a.registry
+    sources = reg.periodic(all_budget_sources=True)
+    all_lines = tuple(
+        BudgetLine(x.name, x.stage, "static", 0.0, float(x.amplitude), x.origin, 0.0, x.stage_index, x.stage_kind,
+                   "") if isinstance(x, Static) else
+        BudgetLine(x.name, x.stage, x.kind, float(x.order), float(x.peak if x.peak is not None else x.amplitude),
+                   x.origin, float(x.phase), x.stage_index, x.stage_kind, x.part)
+        for x in reg.lines)
+    static = [ln for ln in all_lines if ln.kind == "static"]
+    periodic = [ln for ln in all_lines if ln.kind != "static"]
     s_static = sum(ln.amplitude for ln in static)
     linear = sum(ln.amplitude for ln in all_lines)
-    rss = s_static + math.sqrt(sum(ln.amplitude ** 2 for ln in lines))
+    rss = s_static + math.sqrt(sum(ln.amplitude ** 2 for ln in periodic))
     peak = s_static + phased_peak(sources)
     return Budget(a.drive, all_lines, float(linear), float(rss), float(peak))
 

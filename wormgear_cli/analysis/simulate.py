@@ -1,9 +1,13 @@
 """The drive's error as a curve over the output angle (the model behind ``simulate``).
 
 Conventions: output angle theta [rad], direction d = +1 forward / -1
-reverse, error = actual - target at the output [rad].  The intermediate
-shaft (pinion + wheel) turns i_c = z1/z2 times per output turn, the worm
-n_w = i_c z3 / z_worm times.
+reverse, error = actual - target at the output [rad].  Every periodic
+source, static term, clearance and compliance comes from the drive's
+registry (:mod:`wormgear_cli.drive.registry`, built from its train of
+stages): :func:`periodic_sources` is a view of it.  Below, for the paper's
+[worm, spur] drive: the intermediate shaft (pinion + wheel) turns i_c = z1/z2
+times per output turn, the worm n_w = i_c z3 / z_worm times; every other
+train is the same model stage by stage (docs/models.md).
 
 The simulated error is
 
@@ -26,7 +30,8 @@ The simulated error is
     mesh order z1.  With ``gear_pair.kinematics = "involute"`` the gear
     eccentricity is the sinusoid e/r_b1 sin(i_c theta + psi) instead of the
     paper's curve, and e is only an eccentricity the spec states.
-* lost motion (reversal), never negative (each part is clipped at 0):
+* lost motion (reversal), never negative (each part is clipped at 0; a belt's
+  tooth clearance and an anti-backlash arrangement's residual are constants):
   - gear: Delta e tan(alpha) (1 + sin phi) / R2, between 0 and the paper's
     eccentric Delta phi_ch part;
   - worm: (Delta j_central + h_j sin(i_c theta + psi_Fi)) / r_wheel / i_c, the
@@ -66,182 +71,32 @@ Relation to ``analyze`` (tested in tests/analysis/test_simulate.py):
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
-from typing import TYPE_CHECKING, NamedTuple
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wormgear_cli.analysis.accuracy import deflections, gear_eccentricity, geometry
-from wormgear_cli.physics import spur as gear_model
-from wormgear_cli.physics import worm as worm_model
-from wormgear_cli.physics.geometry import DriveGeometry
+from wormgear_cli.drive.records import Compliance, Source, sine  # noqa: F401  (re-exported: their old home)
+from wormgear_cli.drive.registry import build
 
 if TYPE_CHECKING:
     from wormgear_cli.physics.effects import Signals
 
 
-# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
-# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
-class Source(NamedTuple):
-    """A periodic error source of the spec.
+def periodic_sources(spec, all_budget_sources: bool = False, registry=None) -> list[Source]:
+    """The spec's periodic sources, in a fixed order: a view of the drive's registry.
 
-    ``name``: identifier; ``phase_path``: TOML path of its phase key;
-    ``order``: cycles per output revolution; ``amplitude`` [rad at the
-    output] (for the non-sinusoidal gear curve: its first-harmonic size);
-    ``phase`` [rad] as specified; ``curve(theta, phase)`` -> [rad], the
-    common-mode contribution; ``lost_motion(theta, phase)`` -> [rad] or None.
-    """
-
-    name: str
-    phase_path: str
-    order: float
-    amplitude: float
-    phase: float
-    curve: Callable
-    lost_motion: Callable | None = None
-    #: ``"gear"`` or ``"worm"``: the stage the source belongs to
-    stage: str = "gear"
-    #: ``"shaft"`` (once per turn of a shaft) or ``"mesh"`` (tooth-mesh order)
-    kind: str = "shaft"
-    #: spec keys its size comes from (for the budget's origin: spec / grade / default)
-    size_paths: tuple = ()
-    #: largest value of ``curve`` over a turn [rad] (the amplitude for a sinusoid)
-    peak: float | None = None
-
-
-def _sine(amplitude, order):
-    def curve(theta, phase):
-        return amplitude * np.sin(order * theta + phase)
-
-    curve.sine = (amplitude, order)  # a pure sinusoid: the budget's peak adds these as phasors
-    return curve
-
-
-#: the full budget's sources beyond the paper's five (docs/budget.md)
-BUDGET_SOURCES = ("output_gear_cumulative_pitch", "pinion_cumulative_pitch", "wheel_cumulative_pitch",
-                  "output_gear_single_pitch", "pinion_single_pitch")
-
-
-def periodic_sources(spec, all_budget_sources: bool = False) -> list[Source]:
-    """The spec's periodic sources, in a fixed order.
-
-    The paper's five sources are always listed (zero-amplitude ones included); the
-    budget's pitch-deviation sources (:data:`BUDGET_SOURCES`) only when the spec gives
-    them a size, or always with ``all_budget_sources`` (the budget lists every line).
-    So a spec without pitch deviations simulates, synthesises and diagnoses exactly
-    as before they existed."""
-    g = geometry(spec)
-    gp, wp, asm = spec.gear_pair, spec.worm_pair, spec.assembly
-    z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
-    r1, r2 = gp.module * z2 / 2.0, gp.module * z1 / 2.0  # pinion R1, gear R2 (paper's notation)
-    de, alpha, i_c = gear_eccentricity(spec), gp.pressure_angle, g.gear_ratio
-    to_out = 1.0 / (g.wheel_pitch_radius * i_c)  # mm of arc on the wheel pitch circle -> rad at the output
-    ecc_paths = ("assembly.gear_eccentricity_mm", "assembly.gear_centre_distance_error_mm")
-
-    if gp.kinematics == "paper":
-        def gear_curve(theta, phase):
-            return gear_model.gear_kinematic_te(i_c * theta + phase, r1, r2, de, alpha)
-
-        def gear_lost(theta, phase):
-            return de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase)) / r2
-
-        gear_amp = _first_harmonic(lambda phi: gear_model.gear_kinematic_te(phi, r1, r2, de, alpha))
-        gear_peak = float(gear_model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0])
-    else:
-        # involute: e/r_b at the pinion's order, i.e. e/r_b1 at the output (models.gear.involute_stage);
-        # the static part of the lost motion (centre distance, thickness allowances) is constant
-        gear_amp = gear_peak = de / g.output_base_radius
-        gear_curve = _sine(gear_amp, i_c)
-        static = (2.0 * asm.gear_centre_distance_error * math.tan(alpha)
-                  + gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
-        ecc_paths = ("assembly.gear_eccentricity_mm",)
-
-        def gear_lost(theta, phase):
-            return (static + de * math.tan(alpha) * (1.0 + np.sin(i_c * theta + phase))) / r2
-
-    worm_ecc = math.hypot(asm.worm_eccentricity, asm.worm_bearing_clearance) / math.cos(wp.lead_angle)
-    wheel_ecc = math.hypot(asm.wheel_eccentricity, asm.wheel_bearing_clearance) / math.cos(
-        wp.transverse_pressure_angle)
-    og, pn, wh = gp.output_gear, gp.pinion, wp.wheel
-
-    def sine_source(name, phase_path, order, amplitude, phase, stage, kind, paths, lost=None):
-        return Source(name, phase_path, order, amplitude, phase, _sine(amplitude, order), lost, stage, kind,
-                      paths, amplitude)
-
-    out = [
-        Source("gear_eccentricity", "assembly.gear_eccentricity_phase_deg", i_c, gear_amp,
-               asm.gear_eccentricity_phase, gear_curve, gear_lost, "gear", "shaft", ecc_paths, gear_peak),
-        sine_source("worm_lead_error", "worm_pair.lead_error_phase_deg", g.worm_order,
-                    wp.lead_error / 2.0 * to_out, wp.lead_error_phase, "worm", "shaft",
-                    ("worm_pair.lead_error_mm",)),
-        sine_source("worm_eccentricity", "assembly.worm_eccentricity_phase_deg", g.worm_order,
-                    worm_ecc / 2.0 * to_out, asm.worm_eccentricity_phase, "worm", "shaft",
-                    ("assembly.worm_eccentricity_mm", "assembly.worm_bearing_clearance_mm")),
-        sine_source("wheel_radial_composite", "worm_pair.wheel.radial_composite_phase_deg", i_c,
-                    wh.radial_composite_error / 2.0 * to_out, wh.radial_composite_phase, "worm", "shaft",
-                    ("worm_pair.wheel.radial_composite_error_mm",), _worm_lost_motion(spec, g)),
-        sine_source("wheel_eccentricity", "assembly.wheel_eccentricity_phase_deg", i_c, wheel_ecc / 2.0 * to_out,
-                    asm.wheel_eccentricity_phase, "worm", "shaft",
-                    ("assembly.wheel_eccentricity_mm", "assembly.wheel_bearing_clearance_mm")),
-        # --- the full budget's sources (docs/budget.md): pitch deviations, each F_p a once-per-turn
-        # TE of peak-to-peak F_p / r (amplitude F_p / (2 r)) at its shaft, reduced by the ratios
-        sine_source("output_gear_cumulative_pitch", "gear_pair.output_gear.cumulative_pitch_phase_deg", 1.0,
-                    og.cumulative_pitch_deviation / (2.0 * r2), og.cumulative_pitch_phase, "gear", "shaft",
-                    ("gear_pair.output_gear.cumulative_pitch_deviation_mm",)),
-        sine_source("pinion_cumulative_pitch", "gear_pair.pinion.cumulative_pitch_phase_deg", i_c,
-                    pn.cumulative_pitch_deviation / (2.0 * r1) / i_c, pn.cumulative_pitch_phase, "gear", "shaft",
-                    ("gear_pair.pinion.cumulative_pitch_deviation_mm",)),
-        sine_source("wheel_cumulative_pitch", "worm_pair.wheel.cumulative_pitch_phase_deg", i_c,
-                    wh.cumulative_pitch_deviation / (2.0 * g.wheel_pitch_radius) / i_c, wh.cumulative_pitch_phase,
-                    "worm", "shaft", ("worm_pair.wheel.cumulative_pitch_deviation_mm",)),
-        # single pitch deviation f_p: a tooth-to-tooth TE of peak-to-peak f_p on that gear's pitch circle,
-        # at the mesh order z1 (both gears: z2 i_c = z1); f_p / (2 r2) = f_p,pinion / (2 R1 i_c) at the output
-        sine_source("output_gear_single_pitch", "gear_pair.output_gear.single_pitch_phase_deg", float(z1),
-                    og.single_pitch_deviation / (2.0 * r2), og.single_pitch_phase, "gear", "mesh",
-                    ("gear_pair.output_gear.single_pitch_deviation_mm",)),
-        sine_source("pinion_single_pitch", "gear_pair.pinion.single_pitch_phase_deg", float(z1),
-                    pn.single_pitch_deviation / (2.0 * r1) / i_c, pn.single_pitch_phase, "gear", "mesh",
-                    ("gear_pair.pinion.single_pitch_deviation_mm",)),
-    ]
-    return [src for src in out if all_budget_sources or src.name not in BUDGET_SOURCES or src.amplitude != 0.0]
-
-
-def _first_harmonic(curve, samples: int = 256) -> float:
-    """Size of the once-per-turn Fourier component of a 2 pi-periodic ``curve(phi)``.
-
-    Exact for the gear curve (which is smooth, so 256 samples resolve its
-    harmonics far beyond the first).  For small Delta e it approaches
-    Delta e sqrt(1 + 4 tan^2 alpha) / (2 R2), with mean Delta e tan(alpha) / R2.
-    """
-    phi = np.arange(samples) * (2.0 * np.pi / samples)
-    c = 2.0 / samples * np.sum(curve(phi) * np.exp(-1j * phi))
-    return float(abs(c))
-
-
-def _worm_lost_motion(spec, g: DriveGeometry):
-    """max(Delta j_central(no load) + h_j sin(i_c theta + psi), 0) / r_wheel / i_c  [rad].
-
-    Clipped at zero: a clearance cannot be negative (only matters for
-    specs whose envelope half-width exceeds the central backlash)."""
-    wp, asm = spec.worm_pair, spec.assembly
-    _, prof, thk = worm_model.worm_backlash_central(0.0, wp.worm.profile_error, wp.wheel.profile_error,
-                                                    wp.worm.thickness_deviation, wp.wheel.thickness_deviation,
-                                                    wp.lead_angle)
-    h_j = worm_model.worm_backlash_halfwidth(wp.worm.profile_error, wp.wheel.profile_error,
-                                             wp.worm.thickness_deviation, wp.wheel.thickness_deviation,
-                                             sum(e * e for e in asm.worm_pair_errors), wp.lead_error,
-                                             asm.worm_centre_distance_error, wp.wheel.radial_composite_error,
-                                             wp.lead_angle, wp.transverse_pressure_angle)
-    to_out = 1.0 / (g.wheel_pitch_radius * g.gear_ratio)
-    central = float(prof + thk)
-    return lambda theta, phase: np.maximum(central + h_j * np.sin(g.gear_ratio * theta + phase), 0.0) * to_out
+    The model's own sources are always listed (zero-amplitude ones included); the full
+    budget's additions (pitch deviations; a belt's sources) only when the spec gives them a
+    size, or always with ``all_budget_sources`` (the budget lists every line).  So a spec
+    without pitch deviations simulates, synthesises and diagnoses exactly as before they
+    existed.  ``registry``: the spec's :func:`wormgear_cli.drive.registry.build`, built when
+    omitted."""
+    return (registry or build(spec)).periodic(all_budget_sources)
 
 
 def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
-    """Source phases [rad] that make the sources peak together at theta = 0.
-
-    (The budget's pitch-deviation sources are sinusoids: phase 90 deg.)
+    """Source phases [rad] that make the sources peak together at theta = 0
+    (:func:`wormgear_cli.drive.registry.aligned_phases`).
 
     ``quantity="error"``: every sinusoidal source at phase 90 deg and the
     gear eccentricity at the pinion angle of its kinematic maximum, so the
@@ -251,50 +106,18 @@ def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
     reaches analyze's total backlash at theta = 0 (the other sources at
     90 deg too).
     """
-    if quantity not in ("error", "reversal"):
-        raise ValueError(f"quantity must be 'error' or 'reversal', got {quantity!r}")
-    out = {src.name: 0.5 * math.pi for src in periodic_sources(spec)}
-    if quantity == "error":
-        gp = spec.gear_pair
-        r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-        if gp.kinematics == "paper":
-            _, phi_star = gear_model.gear_te_max_fast(r1, r2, gear_eccentricity(spec), gp.pressure_angle, 0.0)
-            out["gear_eccentricity"] = float(phi_star)
-    return out
+    from wormgear_cli.drive.registry import aligned_phases as aligned
 
-
-# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
-# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
-class Compliance(NamedTuple):
-    """Tooth-stiffness terms [rad]: ``process_lag`` per direction under the
-    spec's loads, ``per_Nm`` output wind-up per N m of external torque."""
-
-    process_lag: float
-    per_Nm: float
+    return aligned(spec, quantity)
 
 
 def compliance(spec) -> Compliance:
-    g = geometry(spec)
-    gp, wp = spec.gear_pair, spec.worm_pair
-    r2 = gp.module * gp.output_gear.teeth / 2.0
-    i_c, r_w = g.gear_ratio, g.wheel_pitch_radius
-    spec_defl = deflections(spec)
-    # mm per N about the operating point (ISO 6336-1's c' held at the spec's line load)
-    unit_defl = deflections(spec, gear_force=1.0, worm_force=1.0, linear_at_spec_load=True)
-    # paper: 2 delta1 on the pitch arc (its Delta phi_ch); involute: along the line of action, 1/r_b1
-    gear_angle_per_mm = 1.0 / r2 if gp.kinematics == "paper" else 1.0 / g.output_base_radius
-    worm_angle_per_mm = 1.0 / (math.cos(wp.lead_angle) * r_w * i_c)
-    lag = spec_defl.gear * gear_angle_per_mm + spec_defl.worm * worm_angle_per_mm
-    # external torque T [N m] on the output: gear normal force T/r_b1, worm normal force from the wheel torque
-    t_mm = 1000.0  # N m -> N mm
-    f_gear = t_mm / g.output_base_radius
-    f_worm = t_mm / i_c / (r_w * math.cos(wp.normal_pressure_angle) * math.cos(wp.lead_angle))
-    per_nm = unit_defl.gear * f_gear * gear_angle_per_mm + unit_defl.worm * f_worm * worm_angle_per_mm
-    return Compliance(float(lag), float(per_nm))
+    """Tooth-stiffness terms [rad] of the drive, referred to the output (the registry's)."""
+    return build(spec).compliance
 
 
 def components(spec, signals: Signals, phases: dict | None = None,
-               effects: dict | None = None) -> dict[str, np.ndarray]:
+               effects: dict | None = None, registry=None) -> dict[str, np.ndarray]:
     """Every contribution to the simulated error [rad], keyed by name.
 
     Keys: each periodic source's name (common mode), ``lost_motion``
@@ -304,20 +127,24 @@ def components(spec, signals: Signals, phases: dict | None = None,
     internal parameters) replaces the spec's ``[effects.*]`` when given.
     """
     phases = phases or {}
+    reg = registry or build(spec)
     out: dict[str, np.ndarray] = {}
     d = signals.direction
     lost = np.zeros_like(signals.theta)
-    for src in periodic_sources(spec):
+    for src in reg.periodic():
         ph = phases.get(src.name, src.phase)
         out[src.name] = src.curve(signals.theta, ph)
         if src.lost_motion is not None:
             lost = lost + src.lost_motion(signals.theta, ph)
-    comp = compliance(spec)
+    for c in reg.clearances:
+        lost = lost + c.amount
+    comp = reg.compliance
     out["lost_motion"] = -d * lost / 2.0
     out["deformation"] = -d * comp.process_lag + comp.per_Nm * signals.load
-    g = geometry(spec)
+    from wormgear_cli.drive.train import drive_geometry
     from wormgear_cli.physics.effects import EFFECTS  # the catalogue: not needed by ``analyze``
 
+    g = drive_geometry(spec, reg.train)
     for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
     return out

@@ -215,6 +215,7 @@ class RatioDistanceSweep:
         from wormgear_cli.analysis.accuracy import analyze, gear_eccentricity
         from wormgear_cli.physics import spur as gear
 
+        check_train(spec)
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
         if module is not None:
@@ -479,11 +480,21 @@ def _chunk(sweep: RatioDistanceSweep, span: tuple[int, int]) -> dict:
     return sweep.chunk(*span)
 
 
+def check_train(spec) -> None:
+    """UsageError unless ``spec`` is a drive of one worm stage followed by one spur stage: the (i, l)
+    surface is of that spur stage (read through the legacy sections)."""
+    if spec.gear_pair is None:
+        kinds = ", ".join(s.kind for s in spec.stages)
+        raise UsageError(f"--i/--l-mm: the ratio and centre-distance sweep varies the spur stage of a drive of "
+                         f"one worm stage followed by one spur stage; {spec.source} has the stages {kinds}")
+
+
 def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | None,
                          hold: str | None = None, module: float | None = None,
                          min_teeth: int | None = None) -> RatioDistanceSweep:
     """The (i, l) sweep of ``spec`` over checked ranges; an axis not given is the spec's own
     value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold`` None means "force"."""
+    check_train(spec)
     gp = spec.gear_pair
     i_values = i_range.values() if i_range is not None else np.array([gp.output_gear.teeth / gp.pinion.teeth])
     l_values = l_range.values() if l_range is not None else \

@@ -37,11 +37,11 @@ def analyze(
     """Transmission error and backlash of each stage and of the whole drive.
 
     Stage values are at each stage's own output shaft, as the paper reports
-    them; totals are at the drive output (worm stage divided by i_c = z1/z2).
+    them; totals are at the drive output (each stage divided by the product
+    of the ratios after it: for the paper's drive, the worm stage by i_c).
 
     Example: wormgear analyze configs/mch50.toml --unit deg --format json
     """
-    from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
     from wormgear_cli.analysis.accuracy import analyze as run
     from wormgear_cli.output.analyze import document
     from wormgear_cli.spec.loader import load_spec
@@ -53,7 +53,7 @@ def analyze(
     fmt = output_format(format, output)
     if fmt == "csv":
         m = result.metrics(unit)
-        cols = ["drive", "unit", *METRIC_COLUMNS, *INFO_COLUMNS]
+        cols = ["drive", "unit", *result.columns[0], *result.columns[1]]
         emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
         return
     report = document(spec, result, unit)
@@ -68,8 +68,9 @@ def _budget_tables(r: dict, unit: str) -> list:
     from rich.table import Table
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
-    bt = Table(title=escape(f"full error budget, TE at the output [{unit}] ({r['stages']['gear']['kinematics']} "
-                            "kinematics)"), title_justify="left")
+    spurs = [st for st in r["stages"] if st["kind"] == "spur"]
+    kin = f" ({spurs[-1]['kinematics']} kinematics)" if spurs else ""
+    bt = Table(title=escape(f"full error budget, TE at the output [{unit}]{kin}"), title_justify="left")
     for col in ("source", "kind", "order", "amplitude", "origin", "share"):
         bt.add_column(col, justify="left" if col in ("source", "kind", "origin") else "right")
     for ln in r["budget"]:
@@ -87,52 +88,116 @@ def _budget_tables(r: dict, unit: str) -> list:
     return [bt, note, vt]
 
 
+def _legacy(r: dict) -> bool:
+    """A drive of one worm stage followed by one spur stage: its tables keep the paper's names."""
+    return [st["kind"] for st in r["stages"]] == ["worm", "spur"]
+
+
+def _stage_title(r: dict, st: dict) -> str:
+    if _legacy(r):
+        return (f"gear stage (spur, i_c = {st['ratio']:g}), at the output" if st["kind"] == "spur"
+                else f"worm stage (worm ratio {st['ratio']:g}), at the wheel")
+    where = "at the output" if st["ratio_after"] == 1.0 else "at its output shaft"
+    return f"stage {st['stage']}: {st['name']} ({st['kind']}, ratio {st['ratio']:g}), {where}"
+
+
+def _spur_table(r: dict, st: dict, unit: str, title: str) -> list:
+    from rich.markup import escape
+    from rich.table import Table
+
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
+    at_output = st["ratio_after"] != 1.0
+    gt = Table(title=escape(title), title_justify="left")
+    cols = ("quantity", "eccentricity", "deformation", "value") + (("at output",) if at_output else ()) + (
+        "share of total",)
+    for col in cols:
+        gt.add_column(col, justify="left" if col == "quantity" else "right")
+    for q, parts in (("transmission_error", tp), ("backlash", bp)):
+        first = a(parts["eccentricity"]) if "eccentricity" in parts else f"residual {a(parts['residual'])}"
+        row = [q.replace("_", " "), first, a(parts["deformation"]), a(st[q])]
+        gt.add_row(*row, *((a(c[q]),) if at_output else ()), f"{c[q + '_pct']:.1f} %")
+    share = "n/a (no eccentric part)" if st["load_share_pct"] is None else f"{st['load_share_pct']:.2f} %"
+    note = escape(f"TE maximum at pinion angle {st['phi_at_max_deg']:.1f} deg; load adds "
+                  f"{share} to it (delta1 = {st['deflection_um']:.3f} um, "
+                  f"{r['deflection_model']})")
+    if bp.get("thickness", 0.0) > 0.0:
+        note += escape(f"; {st['kinematics']} kinematics: backlash includes the tooth-thickness allowances "
+                       f"{a(bp['thickness'])}")
+    if "residual" in bp:
+        note += escape(f"; {st['anti_backlash']}: clearance set to the residual {a(bp['residual'])}")
+    return [gt, note]
+
+
+def _worm_table(r: dict, st: dict, unit: str, title: str) -> list:
+    from rich.markup import escape
+    from rich.table import Table
+
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    c, tp, wp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
+    wt = Table(title=escape(title), title_justify="left")
+    for col in ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"):
+        wt.add_column(col, justify="left" if col == "quantity" else "right")
+    wt.add_row("transmission error", a(tp["deformation"]), a(tp["envelope_halfwidth"]), a(st["transmission_error"]),
+               a(c["transmission_error"]), f"{c['transmission_error_pct']:.1f} %")
+    if "residual" in wp:
+        wt.add_row("backlash", a(wp["deformation"] + wp["residual"]), a(0.0), a(st["backlash"]), a(c["backlash"]),
+                   f"{c['backlash_pct']:.1f} %")
+        note = escape(f"central TE = deformation (delta2 = {st['deflection_um']:.3f} um); backlash = deformation "
+                      f"{a(wp['deformation'])} + the {st['anti_backlash']} worm's residual {a(wp['residual'])}")
+        return [wt, note]
+    wt.add_row("backlash", a(wp["deformation"] + wp["profile"] + wp["thickness"]), a(wp["envelope_halfwidth"]),
+               a(st["backlash"]), a(c["backlash"]), f"{c['backlash_pct']:.1f} %")
+    note = escape(f"central TE = deformation (delta2 = {st['deflection_um']:.3f} um); central backlash = "
+                  f"deformation {a(wp['deformation'])} + profile {a(wp['profile'])} + thickness "
+                  f"{a(wp['thickness'])}")
+    return [wt, note]
+
+
+def _belt_table(r: dict, st: dict, unit: str, title: str) -> list:
+    from rich.markup import escape
+    from rich.table import Table
+
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
+    bt = Table(title=escape(title), title_justify="left")
+    for col in ("quantity", "stretch", "other", "value", "at output", "share of total"):
+        bt.add_column(col, justify="left" if col == "quantity" else "right")
+    bt.add_row("transmission error", a(tp["stretch"]), a(tp["periodic"]), a(st["transmission_error"]),
+               a(c["transmission_error"]), f"{c['transmission_error_pct']:.1f} %")
+    bt.add_row("backlash", a(bp["stretch"]), a(bp["clearance"]), a(st["backlash"]), a(c["backlash"]),
+               f"{c['backlash_pct']:.1f} %")
+    note = escape(f"other: the periodic sources (TE; root-sum-square per order, summed over orders) and the "
+                  f"tooth clearance (backlash); effective tension {st['effective_tension_N']:g} N, belt stretch "
+                  f"{st['stretch_um']:.3f} um")
+    return [bt, note]
+
+
+_STAGE_TABLES = {"spur": _spur_table, "worm": _worm_table, "belt": _belt_table}
+
+
 def _tables(r: dict, unit: str) -> list:
     from rich.markup import escape
     from rich.table import Table
 
-    g, w, t = r["stages"]["gear"], r["stages"]["worm"], r["total"]
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
-    out = []
-    gt = Table(title=escape(f"{r['drive']}: gear stage (spur, i_c = {r['ratios']['gear']:g}), at the output [{unit}]"),
-               title_justify="left")
-    for col in ("quantity", "eccentricity", "deformation", "value", "share of total"):
-        gt.add_column(col, justify="left" if col == "quantity" else "right")
-    gt.add_row("transmission error", a(g["transmission_error_parts"]["eccentricity"]),
-               a(g["transmission_error_parts"]["deformation"]), a(g["transmission_error"]),
-               f"{g['contribution']['transmission_error_pct']:.1f} %")
-    gt.add_row("backlash", a(g["backlash_parts"]["eccentricity"]), a(g["backlash_parts"]["deformation"]),
-               a(g["backlash"]), f"{g['contribution']['backlash_pct']:.1f} %")
-    share = "n/a (no eccentric part)" if g["load_share_pct"] is None else f"{g['load_share_pct']:.2f} %"
-    gear_note = escape(f"TE maximum at pinion angle {g['phi_at_max_deg']:.1f} deg; load adds "
-                  f"{share} to it (delta1 = {g['deflection_um']:.3f} um, "
-                  f"{r['deflection_model']})")
-    if g["backlash_parts"].get("thickness", 0.0) > 0.0:
-        gear_note += escape(f"; {g['kinematics']} kinematics: backlash includes the tooth-thickness allowances "
-                            f"{a(g['backlash_parts']['thickness'])}")
-    out += [gt, gear_note]
-    wt = Table(title=escape(f"worm stage (worm ratio {r['ratios']['worm']:g}), at the wheel [{unit}]"),
-               title_justify="left")
-    for col in ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"):
-        wt.add_column(col, justify="left" if col == "quantity" else "right")
-    wp = w["backlash_parts"]
-    wt.add_row("transmission error", a(w["transmission_error_parts"]["deformation"]),
-               a(w["transmission_error_parts"]["envelope_halfwidth"]), a(w["transmission_error"]),
-               a(w["contribution"]["transmission_error"]), f"{w['contribution']['transmission_error_pct']:.1f} %")
-    wt.add_row("backlash", a(wp["deformation"] + wp["profile"] + wp["thickness"]), a(wp["envelope_halfwidth"]),
-               a(w["backlash"]), a(w["contribution"]["backlash"]), f"{w['contribution']['backlash_pct']:.1f} %")
-    worm_note = escape(f"central TE = deformation (delta2 = {w['deflection_um']:.3f} um); central backlash = "
-                  f"deformation {a(wp['deformation'])} + profile {a(wp['profile'])} + thickness "
-                  f"{a(wp['thickness'])}")
-    out += [wt, worm_note]
+    out: list = []
+    back = r["stages"][::-1]  # from the output back to the motor
+    for k, st in enumerate(back):
+        title = f"{_stage_title(r, st)} [{unit}]"
+        out += _STAGE_TABLES[st["kind"]](r, st, unit, f"{r['drive']}: {title}" if k == 0 else title)
     tt = Table(title=escape(f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]"), title_justify="left")
     tt.add_column("quantity")
-    tt.add_column("gear stage", justify="right")
-    tt.add_column("worm stage / i_c", justify="right")
+    for st in back:
+        if _legacy(r):
+            label = "gear stage" if st["kind"] == "spur" else "worm stage / i_c"
+        else:
+            label = st["name"] if st["ratio_after"] == 1.0 else f"{st['name']} / {st['ratio_after']:g}"
+        tt.add_column(escape(label), justify="right")
     tt.add_column("total", justify="right")
-    tt.add_row("transmission error", a(g["transmission_error"]), a(w["contribution"]["transmission_error"]),
-               a(t["transmission_error"]))
-    tt.add_row("backlash", a(g["backlash"]), a(w["contribution"]["backlash"]), a(t["backlash"]))
+    t = r["total"]
+    for q in ("transmission_error", "backlash"):
+        tt.add_row(q.replace("_", " "), *(a(st["contribution"][q]) for st in back), a(t[q]))
     out.append(tt)
     return out
 
@@ -190,25 +255,39 @@ def new(
                                            ".toml; - writes the template to stdout.", show_default=False,
                                            metavar="NEW.toml")],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
+    stages: Annotated[str, typer.Option("--stages", help="The stages' kinds from the motor to the output, comma "
+                                        "separated: worm, spur, belt (e.g. worm | belt,worm | spur,worm | "
+                                        "worm,spur).", metavar="KINDS")] = "worm,spur",
 ):
     """Write a complete, commented drive template to start from.
 
-    The template is the paper's MCH50 drive (the values of configs/mch50.toml:
-    Table 1, the paper's loads, and that file's assumptions); derived keys are
-    comments holding their derived value.  It never overwrites an existing file
-    (not even one that appears while it is written).  - (or /dev/stdout) writes
-    it to stdout, as everywhere else.
+    One [[stage]] table per kind in --stages, listed from the motor to the
+    output.  Worm and spur stages hold the paper's MCH50 values (those of
+    configs/mch50.toml: Table 1, the paper's loads, and that file's
+    assumptions), a belt stage an EQ6-class mount's motor reduction; every
+    value says its source, derived keys are comments holding their derived
+    value.  The default, worm,spur, is the MCH50 drive.  It never overwrites an
+    existing file (not even one that appears while it is written).  - (or
+    /dev/stdout) writes it to stdout, as everywhere else.
 
-    Example: wormgear new my-table.toml && wormgear analyze my-table.toml
+    Example: wormgear new my-mount.toml --stages belt,worm && wormgear analyze my-mount.toml
     """
     from wormgear_cli.errors import UsageError, quote
     from wormgear_cli.files import atomic_write, names_a_descriptor
+    from wormgear_cli.spec.stages import MAX_STAGES, STAGE_KINDS
     from wormgear_cli.spec.template import template
 
     if name is not None and not name.isprintable():
         raise UsageError("--name: expected a single-line name without control characters")
+    kinds = tuple(k.strip() for k in stages.split(","))
+    for k in kinds:
+        if k not in STAGE_KINDS:
+            raise UsageError(f"--stages: unknown stage kind {k!r} in {stages!r}; expected kinds from "
+                             f"{', '.join(STAGE_KINDS)}, comma separated, e.g. belt,worm")
+    if len(kinds) > MAX_STAGES:
+        raise UsageError(f"--stages: at most {MAX_STAGES} stages, got {len(kinds)}")
     if str(path) == "-" or names_a_descriptor(path):  # stdout (or a descriptor), as everywhere
-        emit(template(name or "drive"), path)
+        emit(template(name or "drive", kinds), path)
         return
     path = _spec_name(path)
     if path.exists() or path.is_symlink():
@@ -216,7 +295,7 @@ def new(
     from wormgear_cli.cli.common import announce_written
     from wormgear_cli.files import after_commit
 
-    atomic_write(path, template(name or quote(path.stem)), exclusive=True)
+    atomic_write(path, template(name or quote(path.stem), kinds), exclusive=True)
     announce_written(path)
     after_commit(lambda: say(f"edit it, then run: wormgear check {quote(path)}"))
 
@@ -232,3 +311,31 @@ def _spec_name(path: Path) -> Path:
         return path.with_name(path.name + ".toml")
     raise UsageError(f"{quote(path)}: a drive spec is a .toml file; name it {path.with_suffix('.toml').name} (or "
                      f"{path.name}.toml)")
+
+
+@app.command(cls=HelpCommand)
+def upgrade(
+    drive: Annotated[Path, typer.Argument(help="Drive spec of the legacy two-table form (TOML).", show_default=False,
+                                          metavar="OLD.toml")],
+    output: OutputOption = None,
+):
+    """Rewrite a drive file of the legacy two-table form as [[stage]] tables.
+
+    The [gear_pair], [worm_pair], [assembly] and [loads] tables become two
+    [[stage]] tables listed from the motor to the output (the worm pair, then
+    the spur pair); every value is kept as written, comments travel with their
+    keys, and the result is checked to give the same drive.  The output goes to
+    stdout, or to -o FILE (never the input).
+
+    Example: wormgear upgrade configs/mch50.toml -o mch50-stages.toml
+    """
+    from wormgear_cli.errors import SpecError, quote
+    from wormgear_cli.files import read_text_file
+    from wormgear_cli.spec.toml import MAX_SPEC_BYTES
+    from wormgear_cli.spec.upgrade import upgrade_text
+
+    text = read_text_file(drive, "a TOML drive file", SpecError, encoding="utf-8-sig", max_bytes=MAX_SPEC_BYTES)
+    result = upgrade_text(text, str(drive))
+    if result.note:
+        say(f"note: {quote(drive)}: {result.note}")
+    emit(result.text, output, [drive])

@@ -12,24 +12,16 @@ if TYPE_CHECKING:
     from wormgear_cli.diagnosis.phases import ModelFit
 
 
-def _set_path(doc: dict, dotted: str, value) -> None:
-    parts = dotted.split(".")
-    node = doc
-    for part in parts[:-1]:
-        node = node.setdefault(part, {})
-    node[parts[-1]] = value
-
-
 def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y):
     """The spec as a TOML dict with fitted phases and the named effects, and its
     simulation (plus the fitted zero offset) at the measured rows [arcsec]."""
     from wormgear_cli.analysis.simulate import simulate
-    from wormgear_cli.spec.loader import raw_copy, spec_from_dict
+    from wormgear_cli.spec.loader import raw_copy, set_path, spec_from_dict
 
     raw = raw_copy(spec)
     if fit_phases:
         for s, psi in zip(sources, after.psi):
-            _set_path(raw, s.key, round(wrap_deg(float(psi)), 4))
+            set_path(raw, s.key, round(wrap_deg(float(psi)), 4))  # stage.N reaches a [[stage]] table
     for f in found:
         raw.setdefault("effects", {})[f.name] = augmented_params(f)
     aug = spec_from_dict(raw, str(spec.source), spec.drive.name)

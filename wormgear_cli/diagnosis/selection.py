@@ -531,6 +531,7 @@ def _thermal_prediction(spec) -> float | None:
     try:
         from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
-        return float(predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio))
+        predicted = predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio)
+        return None if predicted is None else float(predicted)  # None: a drive without a worm stage
     except (ImportError, AttributeError):
         return None

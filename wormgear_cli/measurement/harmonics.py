@@ -632,7 +632,7 @@ def _harmonic_label(h: int, name: str) -> str:
     return prefix + name
 
 
-def physical_orders(geometry, harmonics: int = 3, worm_starts: int = 1,
+def physical_orders(geometry, harmonics: int = 3, worm_starts: int | None = None,
                     rel_tol: float = 1e-9) -> list[tuple[float, str]]:
     """Orders [cycles per output revolution] that belong to the drive's shafts and meshes.
 
@@ -652,10 +652,12 @@ def physical_orders(geometry, harmonics: int = 3, worm_starts: int = 1,
                                                                              rel_tol), key=lambda t: t[0])]
 
 
-def _physical(geometry, harmonics: int, worm_starts: int, rel_tol: float) -> list[tuple[float, list[str], int]]:
+def _physical(geometry, harmonics: int, worm_starts: int | None, rel_tol: float) -> list[tuple[float, list[str], int]]:
     """(order, labels, lowest harmonic number) of the drive's orders, merged, unsorted."""
     if harmonics < 1:
         raise ValueError("harmonics must be at least 1")
+    if worm_starts is None:
+        worm_starts = int(getattr(geometry, "worm_starts", 1))
     i_c = float(geometry.gear_ratio)
     n_w = float(geometry.worm_order)
     z1 = float(geometry.output_teeth)
@@ -665,6 +667,8 @@ def _physical(geometry, harmonics: int, worm_starts: int, rel_tol: float) -> lis
     else:
         bases.append((n_w, "worm shaft"))
         bases.append((n_w * worm_starts, "worm mesh"))
+    if getattr(geometry, "labels", ()):  # any other train: its shafts and meshes (drive.train.orders)
+        bases = [(float(k), name) for k, name in geometry.labels]
     merged: list[tuple[float, list[str], int]] = []
     for h in range(1, harmonics + 1):
         for k, name in bases:
@@ -679,7 +683,8 @@ def _physical(geometry, harmonics: int, worm_starts: int, rel_tol: float) -> lis
     return merged
 
 
-def physical_priority(geometry, harmonics: int = 3, worm_starts: int = 1, rel_tol: float = 1e-9) -> list[float]:
+def physical_priority(geometry, harmonics: int = 3, worm_starts: int | None = None,
+                      rel_tol: float = 1e-9) -> list[float]:
     """The orders of :func:`physical_orders` ranked for fitting when not all
     can be resolved: every shaft/mesh fundamental first (by order), then the
     2nd harmonics, and so on."""

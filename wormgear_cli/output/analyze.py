@@ -7,39 +7,40 @@ from __future__ import annotations
 
 
 def document(spec, result, unit: str) -> dict:
-    """The JSON document of ``wormgear analyze`` (angles in ``unit``): the paper's stage and
-    total values (:meth:`wormgear_cli.analysis.accuracy.Analysis.report`), the full error budget
+    """The JSON document of ``wormgear analyze`` (angles in ``unit``): each stage's and the total
+    values (:meth:`wormgear_cli.analysis.accuracy.Analysis.report`), the full error budget
     (:func:`wormgear_cli.analysis.budget.budget`) and the values used with their origin."""
     from wormgear_cli.analysis.budget import budget
 
     return {**result.report(unit), **budget(spec, result).report(unit), "values_used": values_used(spec)}
 
 
-#: spec keys whose value and origin analyze lists (the tolerances the budget and the paper use)
-LISTED_KEYS = (
-    "gear_pair.output_gear.cumulative_pitch_deviation_mm", "gear_pair.output_gear.single_pitch_deviation_mm",
-    "gear_pair.output_gear.profile_error_mm", "gear_pair.output_gear.thickness_deviation_mm",
-    "gear_pair.pinion.cumulative_pitch_deviation_mm", "gear_pair.pinion.single_pitch_deviation_mm",
-    "gear_pair.pinion.profile_error_mm", "gear_pair.pinion.thickness_deviation_mm",
-    "worm_pair.lead_error_mm", "worm_pair.wheel.radial_composite_error_mm",
-    "worm_pair.wheel.cumulative_pitch_deviation_mm", "assembly.gear_centre_distance_error_mm",
-    "assembly.gear_eccentricity_mm",
-)
+#: stage keys whose value and origin analyze lists, per kind: (the parts' tolerances, the assembly's)
+LISTED_STAGE_KEYS = {
+    "spur": (tuple(f"{m}.{k}" for m in ("gear", "pinion") for k in (
+        "cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm", "thickness_deviation_mm")),
+        ("centre_distance_error_mm", "eccentricity_mm")),
+    "worm": (("lead_error_mm", "wheel.radial_composite_error_mm", "wheel.cumulative_pitch_deviation_mm"), ()),
+    "belt": (("pitch_error_mm", "tooth_mesh_error_mm", "driver.eccentricity_mm", "driven.eccentricity_mm",
+              "backlash_mm"), ()),
+}
 
 
 def values_used(spec) -> list:
-    """``[{"key", "value_um", "origin"}]`` for :data:`LISTED_KEYS` (origin: spec / grade / default)."""
-    from wormgear_cli.spec.loader import FIELD_BY_PATH, value_origin
+    """``[{"key", "value_um", "origin"}]`` of the tolerances the model reads (origin: spec / grade /
+    default), keyed by their TOML path: the parts' tolerances stage by stage from the output back,
+    then the assembly's (a spur stage's centre distance and eccentricity)."""
+    from wormgear_cli.spec.stages import record_values
 
+    back = spec.stages[::-1]
     out = []
-    for path in LISTED_KEYS:
-        f = FIELD_BY_PATH[path]
-        node = spec
-        for part in f.section.split("."):
-            node = getattr(node, part)
-        value = getattr(node, f.attr)
-        origin = value_origin(spec, path)
-        if path == "assembly.gear_eccentricity_mm" and origin == "default":
-            origin = "spec" if value_origin(spec, "assembly.gear_centre_distance_error_mm") == "spec" else origin
-        out.append({"key": path, "value_um": round(float(value) * 1000.0, 6), "origin": origin})
+    for group in (0, 1):
+        for stage in back:
+            values = record_values(stage)
+            for key in LISTED_STAGE_KEYS[stage.kind][group]:
+                origin = stage.origins.get(key, "default")
+                if key == "eccentricity_mm" and origin == "default":  # defaults to the centre-distance error
+                    origin = "spec" if stage.origins.get("centre_distance_error_mm") == "spec" else origin
+                out.append({"key": stage.paths[key], "value_um": round(float(values[key]) * 1000.0, 6),
+                            "origin": origin})
     return out

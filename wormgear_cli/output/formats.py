@@ -32,8 +32,16 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+#: version of the layout of every JSON document the commands write (CHANGELOG.md lists what changed);
+#: 2: stages as a list from the motor to the output (analyze), budget lines with their stage
+SCHEMA_VERSION = 2
+
+
 def json_text(doc) -> str:
-    """Deterministic JSON (key order as built, shortest round-trip floats, NaN/inf -> null)."""
+    """Deterministic JSON (key order as built, shortest round-trip floats, NaN/inf -> null).  A
+    document (a dict) carries ``schema_version`` (:data:`SCHEMA_VERSION`) as its first key."""
+    if isinstance(doc, dict) and "schema_version" not in doc:
+        doc = {"schema_version": SCHEMA_VERSION, **doc}
     return json.dumps(_clean(doc), indent=2, allow_nan=False) + "\n"
 
 

@@ -170,3 +170,17 @@ DEFORMATION_MODELS.update(
         },
     }
 )
+
+
+def rack_contact_ratio(z, pressure_angle, addendum_coefficient=1.0):
+    """Transverse contact ratio eps_alpha of a standard gear of ``z`` teeth against a rack [-].
+
+    eps = [sqrt(ra^2 - rb^2) - r sin(alpha) + h* / sin(alpha)] / (pi cos(alpha)) per unit module
+    (r = z/2, ra = r + h*, rb = r cos(alpha)): the gear's part of the path of contact plus the
+    rack's, h* / sin(alpha) (ISO 21771 geometry, zero profile shift).  The limit of
+    :func:`spur_contact_ratio` as the mating gear grows without bound.
+    """
+    r = z / 2.0
+    ra, rb = r + addendum_coefficient, r * np.cos(pressure_angle)
+    return (np.sqrt(ra**2 - rb**2) - r * np.sin(pressure_angle) + addendum_coefficient / np.sin(pressure_angle)) / (
+        np.pi * np.cos(pressure_angle))

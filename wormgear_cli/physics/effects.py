@@ -102,9 +102,10 @@ def intermediate_shaft_runout(s: Signals, g: DriveGeometry, eccentricity, phase)
     i.e. e / (r_b2 i_c) = e / r_b1 at the output (r_b2 i_c = r_b1).  The worm wheel
     sits on the same shaft (same order) but converts through its own radius: a
     wheel eccentricity e_w gives e_w / (r_b,wheel i_c) at the output, not e_w / r_b1;
-    enter it here as the equivalent e = e_w r_b1 / (r_b,wheel i_c).  (The spec's
-    ``assembly.wheel_eccentricity_mm`` follows the paper's rule instead, see
-    docs/budget.md.)"""
+    enter it here as the equivalent e = e_w r_b1 / (r_b,wheel i_c).  The spec's wheel
+    runout S2 (``wheel.runout_mm``, legacy ``assembly.wheel_eccentricity_mm``) is a total
+    indicator reading, S2 = 2 e_w: the paper's S2 / (2 cos(alpha_2)) on the wheel's pitch
+    circle is this same e_w / r_b,wheel (docs/models.md, "Runout and eccentricity")."""
     return eccentricity / g.output_base_radius * np.sin(g.gear_ratio * s.theta + phase)
 
 

@@ -18,7 +18,10 @@ class DriveGeometry(NamedTuple):
     ``output_base_radius`` r_b1 [mm], ``wheel_pitch_radius`` [mm],
     ``gear_ratio`` i_c = z1/z2 [-], ``worm_order`` n_w = i_c z3 / z_worm [-]
     (worm revolutions per output revolution), ``output_teeth`` z1,
-    ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm].
+    ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm],
+    ``worm_starts`` z_worm (the worm mesh is at z_worm n_w; 1: worm shaft and mesh coincide),
+    ``labels``: ((order, label), ...) of every shaft and mesh of a drive other than the legacy
+    worm + spur one, from its train (empty: the legacy drive's named orders).
     """
 
     output_pitch_radius: float
@@ -29,3 +32,5 @@ class DriveGeometry(NamedTuple):
     output_teeth: int
     axial_pressure_angle: float
     worm_centre_distance: float
+    worm_starts: int = 1
+    labels: tuple = ()

@@ -60,10 +60,22 @@ def centre_distance_growth(centre_distance, worm_radius, wheel_radius, housing_e
             - (worm_radius * worm_expansion * worm_dt + wheel_radius * wheel_expansion * wheel_dt))
 
 
+def worm_stage(spec):
+    """The drive's worm stage (the last one from the motor), or None; a spec-like record without
+    stages gives its ``worm_pair`` (the same attribute names)."""
+    stages = getattr(spec, "stages", None)
+    if not stages:
+        return getattr(spec, "worm_pair", None)
+    return next((s for s in reversed(stages) if s.kind == "worm"), None)
+
+
 def worm_pair_radii(spec) -> tuple[float, float, float]:
     """(a, r_1, r_2) of the worm pair [mm]: d_m1 = z_worm m_x / tan(lambda),
-    r_1 = d_m1 / 2, r_2 = m_x z3 / 2, a = r_1 + r_2 (no profile shift)."""
-    wp = spec.worm_pair
+    r_1 = d_m1 / 2, r_2 = m_x z3 / 2, a = r_1 + r_2 (no profile shift).  The drive's worm stage
+    (:func:`worm_stage`); ValueError for a drive without one."""
+    wp = worm_stage(spec)
+    if wp is None:
+        raise ValueError("the drive has no worm stage")
     worm_radius = wp.worm.starts * wp.module / math.tan(wp.lead_angle) / 2.0
     wheel_radius = wp.module * wp.wheel.teeth / 2.0
     return worm_radius + wheel_radius, worm_radius, wheel_radius
@@ -122,7 +134,7 @@ def mesh_housing_warmup(t, rise, tau_s, housing_share, housing_lag_s):
     return mesh, housing_share * rise * lagged
 
 
-def predicted_centre_distance_um_per_K(spec, housing_rise_ratio: float = 1.0) -> float:
+def predicted_centre_distance_um_per_K(spec, housing_rise_ratio: float = 1.0) -> float | None:
     """Predicted ``centre_distance_um_per_K`` of ``thermal_backlash`` for a drive [um/K].
 
     The coefficient is per kelvin of the recorded temperature, taken as the
@@ -140,6 +152,9 @@ def predicted_centre_distance_um_per_K(spec, housing_rise_ratio: float = 1.0) ->
     cast-iron housing 10.5 ppm/K).  For the MCH50 this gives about
     -0.32 um/K with q = 1 and -0.70 um/K with q = 0.4: warming closes the
     backlash.  A q that drifts during a warm-up (the housing lagging) makes
-    the relation non-linear: see :func:`mesh_housing_warmup`.
+    the relation non-linear: see :func:`mesh_housing_warmup`.  None for a drive without a worm
+    stage.
     """
+    if worm_stage(spec) is None:
+        return None
     return float(centre_distance_change_mm(spec, 1.0, housing_rise_ratio) * 1000.0)

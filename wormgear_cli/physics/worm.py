@@ -36,13 +36,17 @@ def worm_te_halfwidth(lead_error, worm_eccentricity, worm_clearance, radial_comp
     h = 1/2 * sqrt( f_hL^2 + (S1^2 + C1^2)/cos^2(lambda) + F_i^2
                     + (S2^2 + C2^2)/cos^2(alpha_2) )
 
+    S1 and S2 are radial runouts (total indicator readings): an eccentric member of
+    centre offset e has S = 2 e, so S2 / (2 cos(alpha_2)) on the pitch circle is
+    e / r_b at the wheel, the involute rule (docs/models.md, "Runout and eccentricity").
+
     Parameters
     ----------
     lead_error : f_hL [mm], >= 0
-    worm_eccentricity : S1 [mm], >= 0
+    worm_eccentricity : S1, radial runout of the worm [mm], >= 0
     worm_clearance : C1, worm bearing clearance [mm], >= 0
     radial_composite : F_i, wheel radial composite error [mm], >= 0
-    wheel_eccentricity : S2 [mm], >= 0
+    wheel_eccentricity : S2, radial runout of the wheel [mm], >= 0
     wheel_clearance : C2, wheel bearing clearance [mm], >= 0
     lead_angle : lambda [rad]
     transverse_pressure_angle : alpha_2 [rad]

@@ -20,254 +20,161 @@ import math
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
-from typing import Any, NamedTuple
+from typing import Any
 
 from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.physics.deformation import DEFORMATION_MODELS
-from wormgear_cli.units import ARCSEC, DEG
-
-#: unit suffix -> factor to the internal unit
-UNIT_SCALE = {
-    "mm": 1.0,
-    "um": 1e-3,
-    "deg": DEG,
-    "N": 1.0,
-    "GPa": 1000.0,
-    "ppm/K": 1e-6,
-    "arcsec": ARCSEC,
-    "-": 1.0,
-    "": 1.0,
-}
-
-
-# an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
-# ``analyze`` starts (0.1 ms against 0.6 ms; docs/development.md, "Start-up")
-class Field(NamedTuple):
-    """One key of the drive spec.
-
-    ``path``: dotted TOML path.  ``attr``: attribute name on the section
-    dataclass.  ``kind``: "float", "int", "str", "floats" (array).
-    ``unit``: unit of the key (see :data:`UNIT_SCALE`).  ``default``: in the
-    key's unit; ``None`` means required; ``"derived"`` is computed from
-    other keys (described in ``doc``).  ``lo``/``hi``: allowed range in the
-    key's unit with ``lo_open``/``hi_open`` for strict bounds.  ``table1``:
-    the value the paper's Table 1 (or its text) gives for the MCH50, or "".
-    """
-
-    path: str
-    attr: str
-    kind: str
-    unit: str
-    default: Any
-    doc: str
-    lo: float | None = None
-    hi: float | None = None
-    lo_open: bool = False
-    hi_open: bool = False
-    table1: str = ""
-    choices: tuple = ()
-    length: int | None = None
-
-    @property
-    def section(self) -> str:
-        return self.path.rsplit(".", 1)[0]
-
-    @property
-    def key(self) -> str:
-        return self.path.rsplit(".", 1)[1]
-
-    def expected(self) -> str:
-        """Human description of what the key takes."""
-        if self.kind == "str":
-            if self.choices:
-                return "one of " + ", ".join(f'"{c}"' for c in self.choices)
-            return "a string"
-        if self.kind == "int":
-            what = "an integer"
-        elif self.kind == "floats":
-            what = f"an array of {self.length} numbers" if self.length else "an array of numbers"
-        else:
-            what = "a number"
-        rng = ""
-        if self.lo is not None and self.hi is not None:
-            rng = f" in {'(' if self.lo_open else '['}{_fmt(self.lo)}, {_fmt(self.hi)}{')' if self.hi_open else ']'}"
-        elif self.lo is not None:
-            rng = f" {'>' if self.lo_open else '>='} {_fmt(self.lo)}"
-        unit = f" [{self.unit}]" if self.unit not in ("", "-") else ""
-        return what + rng + unit
-
-
-def _fmt(x: float) -> str:
-    return f"{x:g}"
-
-
-def _f(path, attr, unit, default, doc, lo=None, hi=None, lo_open=False, hi_open=False, table1="", kind="float"):
-    return Field(path, attr, kind, unit, default, doc, lo, hi, lo_open, hi_open, table1)
-
-
-def _teeth(path, attr, doc, table1, lo=1):
-    return Field(path, attr, "int", "-", None, doc, lo, 10000, False, False, table1)
-
-
-def _tol(path, attr, doc, table1="", default=0.0):
-    return _f(path, attr, "mm", default, doc, **TOLERANCE, table1=table1)
-
-
-# Physical ranges shared by several keys (in the keys' units).  Upper bounds keep the
-# models finite and catch unit mistakes (a tolerance of 30 mm was meant as 30 um).
-MODULE = dict(lo=0.05, hi=100.0)  # [mm]
-PRESSURE_ANGLE = dict(lo=1.0, hi=45.0, hi_open=True)  # [deg]
-FACE_WIDTH = dict(lo=0.1, hi=5000.0)  # [mm]
-TOLERANCE = dict(lo=0.0, hi=10.0)  # [mm]
-FORCE = dict(lo=0.0, hi=1e8)  # [N]
-FACTOR = dict(lo=0.01, hi=10.0)  # ISO 6336 correction factors [-]
-
-
-def _phase(path, attr, doc):
-    return _f(path, attr, "deg", 0.0, doc, lo=-360.0, hi=360.0)
-
-
-#: gear-stage kinematics readings (``gear_pair.kinematics``)
-KINEMATICS = ("paper", "involute")
-
-
-def _gear_grade_fields(section, name):
-    """ISO 1328-1 grade and the pitch deviations it sets (explicit keys win over the grade)."""
-    return (
-        Field(f"{section}.accuracy_grade", "accuracy_grade", "int", "-", "",
-              f"ISO 1328-1:2013 flank tolerance class A of {name}; sets the deviations below (and the "
-              "profile error) unless given explicitly", 1, 11),
-        _f(f"{section}.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation", "mm", "derived",
-           f"cumulative pitch deviation F_p of {name} (default: F_pT of accuracy_grade, else 0)", **TOLERANCE),
-        _f(f"{section}.single_pitch_deviation_mm", "single_pitch_deviation", "mm", "derived",
-           f"single pitch deviation f_p of {name} (default: f_pT of accuracy_grade, else 0)", **TOLERANCE),
-        _phase(f"{section}.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
-               f"phase of the cumulative pitch deviation of {name} (once per turn of its shaft)"),
-        _phase(f"{section}.single_pitch_phase_deg", "single_pitch_phase",
-               f"phase of the single pitch (mesh-order) error of {name}"),
-    )
-
+from wormgear_cli.spec import stages as _stages
+from wormgear_cli.spec.fields import (
+    FACE_WIDTH,
+    FACTOR,
+    FORCE,
+    KINEMATICS,
+    MISSING,
+    MODULE,
+    PRESSURE_ANGLE,
+    TOLERANCE,
+    UNIT_SCALE,
+    Field,
+    check_value,
+    field_,
+    fmt,
+    gear_grade_fields,
+    get_path,
+    number_problem,
+    phase_field,
+    quote,
+    teeth_field,
+    tol_field,
+    type_name,
+)
 
 #: The drive-spec schema.  Order = order in the template and the key reference (docs/reference/spec.md).
 FIELDS: tuple[Field, ...] = (
     Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
     Field("drive.description", "description", "str", "", "", "free text"),
     # --- stage 2: spur gear pair -------------------------------------------------
-    _f("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", **MODULE, table1="2.5"),
-    _f("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", **PRESSURE_ANGLE,
+    field_("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", **MODULE, table1="2.5"),
+    field_("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", **PRESSURE_ANGLE,
        table1="20"),
-    _f("gear_pair.face_width_mm", "face_width", "mm", "derived",
+    field_("gear_pair.face_width_mm", "face_width", "mm", "derived",
        "face width b of the spur mesh (default: 10 x module)", **FACE_WIDTH),
     Field("gear_pair.kinematics", "kinematics", "str", "", "paper",
           "gear-stage kinematics: paper (the paper's Delta phi_cc/Delta phi_ch as printed) or involute "
           "(eccentricity e -> TE e/r_b; centre-distance error -> backlash 2 Delta a tan(alpha), no TE; "
           "tooth-thickness allowances in the backlash; see docs/budget.md)",
           choices=KINEMATICS),
-    _teeth("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
-    *_gear_grade_fields("gear_pair.output_gear", "gear 1"),
-    _tol("gear_pair.output_gear.profile_error_mm", "profile_error",
+    teeth_field("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
+    *gear_grade_fields("gear_pair.output_gear", "gear 1"),
+    tol_field("gear_pair.output_gear.profile_error_mm", "profile_error",
          "profile error of gear 1 (not used by the paper's gear-stage equations)", "0.007"),
-    _tol("gear_pair.output_gear.thickness_deviation_mm", "thickness_deviation",
+    tol_field("gear_pair.output_gear.thickness_deviation_mm", "thickness_deviation",
          "tooth thickness deviation of gear 1 (not used by the paper's gear-stage equations)", "0.055"),
-    _teeth("gear_pair.pinion.teeth", "teeth", "teeth z2 of the pinion (gear 2)", "18"),
-    *_gear_grade_fields("gear_pair.pinion", "gear 2"),
-    _tol("gear_pair.pinion.profile_error_mm", "profile_error", "profile error of gear 2 (not used by the paper's "
+    teeth_field("gear_pair.pinion.teeth", "teeth", "teeth z2 of the pinion (gear 2)", "18"),
+    *gear_grade_fields("gear_pair.pinion", "gear 2"),
+    tol_field("gear_pair.pinion.profile_error_mm", "profile_error", "profile error of gear 2 (not used by the paper's "
          "gear-stage equations)", "0.008"),
-    _tol("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
+    tol_field("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
          "tooth thickness deviation of gear 2 (not used by the paper's gear-stage equations)", "0.045"),
     # --- stage 1: worm pair ------------------------------------------------------
-    _f("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", **MODULE,
+    field_("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", **MODULE,
        table1="2.5"),
-    _f("worm_pair.normal_pressure_angle_deg", "normal_pressure_angle", "deg", None, "normal pressure angle alpha_n",
+    field_("worm_pair.normal_pressure_angle_deg", "normal_pressure_angle", "deg", None, "normal pressure angle alpha_n",
        **PRESSURE_ANGLE, table1="20"),
-    _f("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.1, hi=45.0,
+    field_("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.1, hi=45.0,
        hi_open=True, table1="3.178"),
-    _f("worm_pair.transverse_pressure_angle_deg", "transverse_pressure_angle", "deg", "derived",
+    field_("worm_pair.transverse_pressure_angle_deg", "transverse_pressure_angle", "deg", "derived",
        "wheel transverse pressure angle alpha_2 (default: atan(tan alpha_n / cos lambda), DIN 3975)",
        **PRESSURE_ANGLE),
-    _f("worm_pair.face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
+    field_("worm_pair.face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
        **FACE_WIDTH),
-    _tol("worm_pair.lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
-    _phase("worm_pair.lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
+    tol_field("worm_pair.lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
+    phase_field("worm_pair.lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
     Field("worm_pair.worm.starts", "starts", "int", "-", None, "number of worm starts (threads)", 1, 100,
           table1="1"),
-    _tol("worm_pair.worm.profile_error_mm", "profile_error", "worm profile error f_t1", "0.036"),
-    _tol("worm_pair.worm.thickness_deviation_mm", "thickness_deviation", "worm thickness deviation T_s1", "0.045"),
-    _teeth("worm_pair.wheel.teeth", "teeth", "teeth z3 of the worm wheel", "30"),
-    _tol("worm_pair.wheel.profile_error_mm", "profile_error", "wheel profile error f_t2", "0.011"),
-    _tol("worm_pair.wheel.thickness_deviation_mm", "thickness_deviation", "wheel thickness deviation T_s2",
+    tol_field("worm_pair.worm.profile_error_mm", "profile_error", "worm profile error f_t1", "0.036"),
+    tol_field("worm_pair.worm.thickness_deviation_mm", "thickness_deviation", "worm thickness deviation T_s1", "0.045"),
+    teeth_field("worm_pair.wheel.teeth", "teeth", "teeth z3 of the worm wheel", "30"),
+    tol_field("worm_pair.wheel.profile_error_mm", "profile_error", "wheel profile error f_t2", "0.011"),
+    tol_field("worm_pair.wheel.thickness_deviation_mm", "thickness_deviation", "wheel thickness deviation T_s2",
          "0.090"),
-    _tol("worm_pair.wheel.radial_composite_error_mm", "radial_composite_error", "wheel radial composite error F_i",
+    tol_field("worm_pair.wheel.radial_composite_error_mm", "radial_composite_error", "wheel radial composite error F_i",
          "0.036"),
-    _phase("worm_pair.wheel.radial_composite_phase_deg", "radial_composite_phase",
+    phase_field("worm_pair.wheel.radial_composite_phase_deg", "radial_composite_phase",
            "phase of the radial composite error (once per wheel turn)"),
-    _tol("worm_pair.wheel.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation",
+    tol_field("worm_pair.wheel.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation",
          "cumulative pitch deviation F_p of the wheel (budget source, order i_c; part of what F_i "
          "measures, so leave 0 unless measured separately)"),
-    _phase("worm_pair.wheel.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
+    phase_field("worm_pair.wheel.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
            "phase of the wheel's cumulative pitch deviation (once per wheel turn)"),
     # --- assembly ----------------------------------------------------------------
-    _tol("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
+    tol_field("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
          "centre-distance error of the spur pair", "0.030"),
-    _f("assembly.gear_eccentricity_mm", "gear_eccentricity", "mm", "derived",
+    field_("assembly.gear_eccentricity_mm", "gear_eccentricity", "mm", "derived",
        "the paper's Delta e (default: gear_centre_distance_error_mm)", **TOLERANCE),
-    _phase("assembly.gear_eccentricity_phase_deg", "gear_eccentricity_phase",
+    phase_field("assembly.gear_eccentricity_phase_deg", "gear_eccentricity_phase",
            "phase of Delta e (once per pinion turn)"),
-    _tol("assembly.worm_centre_distance_error_mm", "worm_centre_distance_error",
+    tol_field("assembly.worm_centre_distance_error_mm", "worm_centre_distance_error",
          "centre-distance error f_a of the worm pair", "0.035"),
-    _tol("assembly.worm_eccentricity_mm", "worm_eccentricity", "worm shaft eccentricity S1"),
-    _phase("assembly.worm_eccentricity_phase_deg", "worm_eccentricity_phase", "phase of S1 (once per worm turn)"),
-    _tol("assembly.worm_bearing_clearance_mm", "worm_bearing_clearance", "worm bearing clearance C1"),
-    _tol("assembly.wheel_eccentricity_mm", "wheel_eccentricity", "wheel eccentricity S2"),
-    _phase("assembly.wheel_eccentricity_phase_deg", "wheel_eccentricity_phase", "phase of S2 (once per wheel turn)"),
-    _tol("assembly.wheel_bearing_clearance_mm", "wheel_bearing_clearance", "wheel bearing clearance C2"),
+    tol_field("assembly.worm_eccentricity_mm", "worm_eccentricity",
+              "the paper's S1: radial runout of the worm (total indicator reading, 2 x the eccentricity of an "
+              "eccentric worm; docs/models.md)"),
+    phase_field("assembly.worm_eccentricity_phase_deg", "worm_eccentricity_phase",
+                "phase of S1 (once per worm turn)"),
+    tol_field("assembly.worm_bearing_clearance_mm", "worm_bearing_clearance", "worm bearing clearance C1"),
+    tol_field("assembly.wheel_eccentricity_mm", "wheel_eccentricity",
+              "the paper's S2: radial runout of the wheel (total indicator reading, 2 x the eccentricity of an "
+              "eccentric wheel; docs/models.md)"),
+    phase_field("assembly.wheel_eccentricity_phase_deg", "wheel_eccentricity_phase",
+                "phase of S2 (once per wheel turn)"),
+    tol_field("assembly.wheel_bearing_clearance_mm", "wheel_bearing_clearance", "wheel bearing clearance C2"),
     Field("assembly.worm_pair_errors_mm", "worm_pair_errors", "floats", "mm", (0.0,) * 6,
           "the paper's six e_i of the worm pair (shaft-position and alignment errors entering Delta j)",
           0.0, 10.0, length=6),
     # --- loads -------------------------------------------------------------------
-    _f("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", **FORCE,
+    field_("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", **FORCE,
        table1="666 (text)"),
-    _f("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", **FORCE,
+    field_("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", **FORCE,
        table1="85 (text)"),
     # --- stiffness (deformation model) -------------------------------------------
     Field("stiffness.model", "model", "str", "", "iso6336",
           "deflection model: iso6336 (ISO 6336-1 c') or empirical (the paper's form)",
           choices=tuple(DEFORMATION_MODELS)),
-    _f("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", **FACTOR),
-    _f("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", **FACTOR),
-    _f("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", **FACTOR),
-    _f("stiffness.iso_ka", "iso_ka", "-", 1.0,
+    field_("stiffness.iso_cm", "iso_cm", "-", 0.8, "ISO 6336 C_M (theory-to-measurement)", **FACTOR),
+    field_("stiffness.iso_cr", "iso_cr", "-", 1.0, "ISO 6336 C_R (blank; 1 = solid)", **FACTOR),
+    field_("stiffness.iso_cb", "iso_cb", "-", 0.975, "ISO 6336 C_B (basic rack)", **FACTOR),
+    field_("stiffness.iso_ka", "iso_ka", "-", 1.0,
        "ISO 6336 K_A (application factor) in the line load F_t K_A / b that scales c' below 100 N/mm",
        **FACTOR),
-    _f("stiffness.empirical_a1", "empirical_a1", "-", 4.0,
+    field_("stiffness.empirical_a1", "empirical_a1", "-", 4.0,
        "the paper's A1 (its calibration: docs/models.md, deformation models)",
        lo=0.0, hi=1000.0),
-    _f("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
-    _f("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
-    _f("stiffness.contact_ratio", "contact_ratio", "-", "derived",
+    field_("stiffness.empirical_b", "empirical_b", "-", 1.0, "the paper's exponent B", lo=-10.0, hi=10.0),
+    field_("stiffness.empirical_c", "empirical_c", "-", 1.0, "the paper's exponent C", lo=-10.0, hi=10.0),
+    field_("stiffness.contact_ratio", "contact_ratio", "-", "derived",
        "contact ratio eps of the empirical form (default: standard spur eps_alpha)", lo=1.0, hi=3.0),
-    _f("stiffness.empirical_lambda2", "empirical_lambda2", "-", 0.0, "the paper's lambda2 (undefined there)",
+    field_("stiffness.empirical_lambda2", "empirical_lambda2", "-", 0.0, "the paper's lambda2 (undefined there)",
        lo=0.0, hi=100.0),
     # --- materials ---------------------------------------------------------------
-    _f("materials.gear_elastic_modulus_GPa", "gear_elastic_modulus", "GPa", 206.0,
+    field_("materials.gear_elastic_modulus_GPa", "gear_elastic_modulus", "GPa", 206.0,
        "Young's modulus E of the spur gears (steel)", lo=1.0, hi=1000.0),
-    _f("materials.worm_elastic_modulus_GPa", "worm_elastic_modulus", "GPa", 206.0,
+    field_("materials.worm_elastic_modulus_GPa", "worm_elastic_modulus", "GPa", 206.0,
        "Young's modulus of the worm (steel)", lo=1.0, hi=1000.0),
-    _f("materials.wheel_elastic_modulus_GPa", "wheel_elastic_modulus", "GPa", 98.0,
+    field_("materials.wheel_elastic_modulus_GPa", "wheel_elastic_modulus", "GPa", 98.0,
        "Young's modulus of the wheel (CuSn12 bronze ~ 98)", lo=1.0, hi=1000.0),
-    _f("materials.worm_expansion_ppm_per_K", "worm_expansion", "ppm/K", 11.5,
+    field_("materials.worm_expansion_ppm_per_K", "worm_expansion", "ppm/K", 11.5,
        "thermal expansion of the worm (steel 11.5)", lo=-5.0, hi=50.0),
-    _f("materials.wheel_expansion_ppm_per_K", "wheel_expansion", "ppm/K", 18.5,
+    field_("materials.wheel_expansion_ppm_per_K", "wheel_expansion", "ppm/K", 18.5,
        "thermal expansion of the wheel (CuSn12 bronze 18.5)", lo=-5.0, hi=50.0),
-    _f("materials.housing_expansion_ppm_per_K", "housing_expansion", "ppm/K", 10.5,
+    field_("materials.housing_expansion_ppm_per_K", "housing_expansion", "ppm/K", 10.5,
        "thermal expansion of the housing (grey cast iron 10.5)", lo=-5.0, hi=50.0),
-    _f("materials.housing_rise_ratio", "housing_rise_ratio", "-", 1.0,
+    field_("materials.housing_rise_ratio", "housing_rise_ratio", "-", 1.0,
        "the housing's temperature rise per kelvin of the measured (mesh/oil) temperature; used by diagnose's "
        "thermal_backlash prediction (1: the whole drive warms alike; a running worm drive warms at the mesh, "
        "so less than 1)", lo=0.0, hi=1.5, lo_open=True),
     # --- requirements (all optional) ---------------------------------------------
     *(
-        _f(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, hi=1e9,
+        field_(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, hi=1e9,
            lo_open=True)
         for name, what in (
             ("transmission_error", "the total transmission error at the output"),
@@ -281,14 +188,30 @@ FIELDS: tuple[Field, ...] = (
             ("budget_peak", "the full budget's TE at the output, exact peak of the phased curve"),
         )
     ),
-    _f("requirements.min_yield", "min_yield", "-", "", "least fraction of built drives meeting every limit "
+    field_("requirements.min_yield", "min_yield", "-", "", "least fraction of built drives meeting every limit "
        "(estimated by wormgear tolerance; see [statistics])", lo=0.0, hi=1.0, lo_open=True, hi_open=True),
 )
+
 
 FIELD_BY_PATH: dict[str, Field] = {f.path: f for f in FIELDS}
 SECTIONS: tuple[str, ...] = tuple(dict.fromkeys(f.section for f in FIELDS))
 REQUIRED_SECTIONS = ("gear_pair", "gear_pair.output_gear", "gear_pair.pinion", "worm_pair", "worm_pair.worm",
                      "worm_pair.wheel")
+#: the legacy form's tables that hold its two stages (the stage form has [[stage]] tables instead)
+LEGACY_TABLES = ("gear_pair", "worm_pair", "assembly", "loads")
+
+#: The drive-level keys of the stage form (``[[stage]]`` tables): [drive] (with the output torque that
+#: sets the stages' loads), [stiffness], [materials] and the drive's [requirements]; each stage's keys
+#: are :data:`wormgear_cli.spec.stages.STAGE_FIELDS`.
+DRIVE_FIELDS: tuple[Field, ...] = (
+    *(f for f in FIELDS if f.section == "drive"),
+    field_("drive.output_torque_Nm", "output_torque", "N m", "",
+           "torque on the output under the process load: the load of every stage that does not give its own "
+           "(normal_force_N, effective_tension_N), carried back through the ratios after it (losses neglected)",
+           lo=0.0, hi=1e9),
+    *(f for f in FIELDS if f.section in ("stiffness", "materials")),
+    *(f for f in FIELDS if f.section == "requirements" and f.path not in _stages.LEGACY_KEYS),
+)
 
 # --- immutable records, one class per section, generated from the schema -----------------
 
@@ -321,33 +244,67 @@ def _class_name(section: str) -> str:
 
 
 _SECTION_CLASSES: dict[str, type] = {sec: type(_class_name(sec), (Section,), {"__slots__": ()}) for sec in SECTIONS}
-_SECTION_SET = frozenset(SECTIONS)
 
 
-def _section_tables() -> tuple[dict[str, tuple], dict[str, tuple]]:
-    fields: dict[str, list] = {sec: [] for sec in SECTIONS}
-    children: dict[str, list] = {sec: [] for sec in SECTIONS}
-    for f in FIELDS:
-        fields[f.section].append(f)
-    for sec in SECTIONS:
-        if "." in sec and sec.rsplit(".", 1)[0] in children:
-            children[sec.rsplit(".", 1)[0]].append(sec)
-    return {k: tuple(v) for k, v in fields.items()}, {k: tuple(v) for k, v in children.items()}
+class _Schema:
+    """A form's drive-level tables as data: fields, sections (deepest first), which keys each table
+    holds (for the unknown-key check), built once at import."""
+
+    def __init__(self, fields: tuple[Field, ...], free: tuple[str, ...]):
+        self.fields = fields
+        self.paths = [f.path for f in fields]
+        self.sections = tuple(dict.fromkeys(f.section for f in fields))
+        self.section_set = frozenset(self.sections) | frozenset(free)
+        self.free = free
+        of: dict[str, list] = {sec: [] for sec in self.sections}
+        children: dict[str, list] = {sec: [] for sec in self.sections}
+        for f in fields:
+            of[f.section].append(f)
+        for sec in self.sections:
+            if "." in sec and sec.rsplit(".", 1)[0] in children:
+                children[sec.rsplit(".", 1)[0]].append(sec)
+        self.fields_of = {k: tuple(v) for k, v in of.items()}
+        self.subsections_of = {k: tuple(v) for k, v in children.items()}
+        self.deepest_first = tuple(sorted(self.sections, key=lambda s: -s.count(".")))
+        known: dict[str, set[str]] = {"": set(free)}
+        for f in fields:
+            parts = f.path.split(".")
+            for depth in range(len(parts)):
+                known.setdefault(".".join(parts[:depth]), set()).add(parts[depth])
+        #: table path ("" = top level) -> the keys and sub-tables valid directly under it
+        self.known = {k: frozenset(v) for k, v in known.items()}
+
+    def records(self, v: dict) -> dict:
+        """Top-level section -> its record, from complete values ``v`` (path -> internal value)."""
+        built: dict[str, Any] = {}
+        for sec in self.deepest_first:
+            kwargs = {f.attr: v[f.path] for f in self.fields_of[sec]}
+            for child in self.subsections_of[sec]:
+                kwargs[child.rsplit(".", 1)[1]] = built[child]
+            built[sec] = _SECTION_CLASSES[sec](**kwargs)
+        return {s: built[s] for s in self.sections if "." not in s}
 
 
-#: section -> its fields, and its direct sub-sections; sections deepest first (built once)
-_FIELDS_OF, _SUBSECTIONS_OF = _section_tables()
-_SECTIONS_DEEPEST_FIRST = tuple(sorted(SECTIONS, key=lambda s: -s.count(".")))
+#: the two forms: the legacy two-table form, and the drive-level tables of the stage form
+_LEGACY = _Schema(FIELDS, ("effects", "statistics"))
+_STAGE_FORM = _Schema(DRIVE_FIELDS, ("effects", "statistics", "stage"))
+_SECTION_SET = _LEGACY.section_set  # (kept: the legacy form's tables)
 
 
 @dataclass(frozen=True)
 class Spec:
     """A validated drive, every value in internal units.
 
-    Sections are attributes (``spec.gear_pair.output_gear.teeth``).
+    ``stages``: the drive's stages from the motor to the output, one record per stage
+    (:mod:`wormgear_cli.spec.stages`: ``WormStageSpec``, ``SpurStageSpec``, ``BeltStageSpec``).
+    Drive-level sections are attributes (``spec.drive.name``, ``spec.stiffness.model``).
+    For a drive of one worm stage followed by one spur stage (the legacy form's drive, in
+    either form) the legacy sections are there too (``spec.gear_pair.output_gear.teeth``,
+    ``spec.worm_pair``, ``spec.assembly``, ``spec.loads``); for any other train they are None.
     ``effects`` maps an effect name to its internal parameters; ``source``
     is the file it came from; ``raw`` the TOML document as read (a
-    read-only mapping; use :func:`raw_copy` to derive a changed spec).
+    read-only mapping; use :func:`raw_copy` to derive a changed spec); ``form``: ``"stages"``
+    (``[[stage]]`` tables) or ``"legacy"`` (the two-table form).
     """
 
     drive: Any
@@ -361,6 +318,8 @@ class Spec:
     effects: Any = field(default_factory=lambda: MappingProxyType({}))
     source: str = "<spec>"
     raw: Any = field(default_factory=lambda: MappingProxyType({}), repr=False)
+    stages: tuple = ()
+    form: str = "legacy"
 
 
 def raw_copy(spec: Spec) -> dict:
@@ -418,38 +377,21 @@ def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -
 
 
 def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "drive") -> Spec:
-    """Validate a TOML document (as a dict) into a :class:`Spec`."""
+    """Validate a TOML document (as a dict) into a :class:`Spec`: the stage form when it has a
+    ``stage`` key (``[[stage]]`` tables), else the legacy two-table form."""
+    if "stage" in data:
+        return _stage_form(data, source, default_name)
     problems: list[str] = []
-    values: dict[str, Any] = {}
 
     def bad(path: str, message: str) -> None:
         problems.append(f"{source}: {path}: {message}")
 
-    _walk_unknown(data, "", problems, source)
-
+    _walk_unknown(data, "", problems, source, _LEGACY)
     for sec in REQUIRED_SECTIONS:
         parent = sec.rsplit(".", 1)[0] if "." in sec else ""
-        if _get(data, sec) is None and (not parent or isinstance(_get(data, parent), dict)):
+        if get_path(data, sec) is None and (not parent or isinstance(get_path(data, parent), dict)):
             bad(sec, f"missing section [{sec}]")
-
-    for f in FIELDS:
-        parent = _get(data, f.section)
-        if not isinstance(parent, dict) or f.key not in parent:
-            if f.default is None and isinstance(parent, dict):
-                bad(f.path, f"missing required key, expected {f.expected()}")
-            values[f.path] = _MISSING
-            continue
-        raw = parent[f.key]
-        if isinstance(raw, dict):  # reported once, by _walk_unknown ("expected a value, got a table")
-            values[f.path] = _MISSING
-            continue
-        err, val = _check_value(f, raw)
-        if err:
-            bad(f.path, err)
-            values[f.path] = _MISSING
-        else:
-            values[f.path] = val
-
+    values = _read_values(data, _LEGACY, bad)
     effects = _load_effects(data.get("effects"), problems, source)
     _apply_grades(values, bad)
 
@@ -458,14 +400,31 @@ def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "driv
     return _build(values, effects, source, default_name, data)
 
 
+def _read_values(data: dict, schema: _Schema, bad) -> dict[str, Any]:
+    """path -> checked internal value (MISSING where absent or wrong) of every key of ``schema``."""
+    values: dict[str, Any] = {}
+    for f in schema.fields:
+        parent = get_path(data, f.section)
+        if not isinstance(parent, dict) or f.key not in parent:
+            if f.default is None and isinstance(parent, dict):
+                bad(f.path, f"missing required key, expected {f.expected()}")
+            values[f.path] = MISSING
+            continue
+        raw = parent[f.key]
+        if isinstance(raw, dict):  # reported once, by _walk_unknown ("expected a value, got a table")
+            values[f.path] = MISSING
+            continue
+        err, val = check_value(f, raw)
+        if err:
+            bad(f.path, err)
+            values[f.path] = MISSING
+        else:
+            values[f.path] = val
+    return values
+
+
 #: keys a user may reasonably try that no standard here covers -> the message (exit 2)
-_NOT_COVERED = {
-    f"worm_pair.{part}.accuracy_grade": (
-        "worm pairs are not covered by ISO 1328-1/-2 (cylindrical involute gears only) and no public, "
-        "citable worm-gear grade system (DIN 3974) is available here; give the worm pair's tolerances "
-        "explicitly (lead_error_mm, profile_error_mm, radial_composite_error_mm, ...)")
-    for part in ("worm", "wheel")
-}
+_NOT_COVERED = {f"worm_pair.{key}": message for key, message in _stages.NOT_COVERED.items()}
 
 
 def _apply_grades(values: dict, bad) -> None:
@@ -473,16 +432,16 @@ def _apply_grades(values: dict, bad) -> None:
     where the spec does not give them (ISO 1328-1:2013; explicit keys win).  A gear
     outside the standard's scope is a problem naming the grade key and the range."""
     module = values["gear_pair.module_mm"]
-    if module is _MISSING:
+    if module is MISSING:
         return
     face = values["gear_pair.face_width_mm"]
-    face = 10.0 * module if face is _MISSING else face
+    face = 10.0 * module if face is MISSING else face
     for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
         grade = values[f"{sec}.accuracy_grade"]
-        if grade is _MISSING or grade is None:
+        if grade is MISSING or grade is None:
             continue
         teeth = values[f"{sec}.teeth"]
-        if teeth is _MISSING:
+        if teeth is MISSING:
             continue
         from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
 
@@ -493,25 +452,59 @@ def _apply_grades(values: dict, bad) -> None:
             continue
         for key, um in (("cumulative_pitch_deviation_mm", tol.F_pT), ("single_pitch_deviation_mm", tol.f_pT),
                         ("profile_error_mm", tol.F_alphaT)):
-            if values[f"{sec}.{key}"] is _MISSING:
+            if values[f"{sec}.{key}"] is MISSING:
                 values[f"{sec}.{key}"] = um * 1e-3
 
 
 def value_origin(spec: Spec, path: str) -> str:
     """Where the value of ``path`` came from: ``"spec"`` (written in the file),
-    ``"grade"`` (derived from the part's ``accuracy_grade``) or ``"default"``."""
-    node: Any = spec.raw
-    for part in path.split("."):
+    ``"grade"`` (derived from the part's ``accuracy_grade``) or ``"default"``.
+
+    ``path`` is a key of the file's form; a stage path (``stage.2.gear.teeth``) and, for a
+    [worm, spur] train, a legacy key are understood in both forms."""
+    if spec.form == "stages":
+        parts = _stages.new_path(spec.stages, path).split(".", 2)
+        if len(parts) == 3 and parts[0] == "stage" and parts[1].isdigit() and 1 <= int(parts[1]) <= len(spec.stages):
+            return spec.stages[int(parts[1]) - 1].origins.get(parts[2], "default")
+        return "spec" if _raw_has(spec.raw, path) else "default"
+    return _legacy_origin(spec.raw, _stages.legacy_path(spec.stages, path))
+
+
+_ABSENT = object()
+
+
+def raw_value(raw, path: str, default=None):
+    """The value at TOML ``path`` in a document as read (``stage.N`` reaches the N-th ``[[stage]]``
+    table), or ``default``."""
+    node: Any = raw
+    parts = path.split(".")
+    k = 0
+    while k < len(parts):
+        part = parts[k]
+        if part == "stage" and k == 0 and isinstance(node.get("stage") if hasattr(node, "get") else None,
+                                                     (list, tuple)) and k + 1 < len(parts) and parts[k + 1].isdigit():
+            items, index = node["stage"], int(parts[k + 1])
+            if not 1 <= index <= len(items):
+                return default
+            node, k = items[index - 1], k + 2
+            continue
         if not hasattr(node, "get") or part not in node:
-            node = None
-            break
-        node = node[part]
-    if node is not None:
+            return default
+        node, k = node[part], k + 1
+    return node
+
+
+def _raw_has(raw, path: str) -> bool:
+    return raw_value(raw, path, _ABSENT) is not _ABSENT
+
+
+def _legacy_origin(raw, path: str) -> str:
+    if _raw_has(raw, path):
         return "spec"
-    section, key = path.rsplit(".", 1)
+    section, key = path.rsplit(".", 1) if "." in path else ("", path)
     grade_keys = ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm")
     if key in grade_keys and section in ("gear_pair.output_gear", "gear_pair.pinion"):
-        raw_sec: Any = spec.raw
+        raw_sec: Any = raw
         for part in section.split("."):
             raw_sec = raw_sec.get(part) if hasattr(raw_sec, "get") else None
         if hasattr(raw_sec, "get") and raw_sec.get("accuracy_grade") is not None:
@@ -519,132 +512,45 @@ def value_origin(spec: Spec, path: str) -> str:
     return "default"
 
 
-class _Missing:
-    def __repr__(self):
-        return "<missing>"
-
-
-_MISSING = _Missing()
-
-
-def _get(data: dict, dotted: str):
-    node: Any = data
-    for part in dotted.split("."):
-        if not isinstance(node, dict) or part not in node:
-            return None
-        node = node[part]
-    return node
-
-
-def _quote(text: str) -> str:
-    """A string value as shown in a message: double-quoted, escapes visible, one line."""
-    import json
-
-    return json.dumps(text, ensure_ascii=False)
-
-
-def _type_name(v) -> str:
-    return {bool: "a boolean", int: "an integer", float: "a number", str: "a string", list: "an array",
-            dict: "a table"}.get(type(v), type(v).__name__)
-
-
-def _check_value(f: Field, raw) -> tuple[str | None, Any]:
-    """Return (problem, converted value)."""
-    if f.kind == "str":
-        if not isinstance(raw, str):
-            return f"expected {f.expected()}, got {_type_name(raw)}", None
-        if f.path == "drive.name" and not raw.isprintable():
-            return f"expected a single-line name without control characters, got {_quote(raw)}", None
-        if f.choices and raw not in f.choices:
-            lowered = {c.lower(): c for c in f.choices}
-            hint = did_you_mean(raw.lower(), lowered, show=lambda m: f'"{lowered[m]}"')
-            return f"expected {f.expected()}, got {_quote(raw)}{hint}", None
-        return None, raw
-    if f.kind == "floats":
-        if not isinstance(raw, list):
-            return f"expected {f.expected()}, got {_type_name(raw)}", None
-        if f.length is not None and len(raw) != f.length:
-            return f"expected {f.expected()}, got {len(raw)} values", None
-        out = []
-        for i, item in enumerate(raw):
-            err = _number_problem(f, item)
-            if err:
-                return f"element {i}: {err}", None
-            out.append(float(item) * UNIT_SCALE[f.unit])
-        return None, tuple(out)
-    err = _number_problem(f, raw)
-    if err:
-        return err, None
-    if f.kind == "int":
-        return None, int(raw)
-    return None, float(raw) * UNIT_SCALE[f.unit]
-
-
-def _number_problem(f: Field, raw) -> str | None:
-    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-        shown = _quote(raw) if isinstance(raw, str) else _type_name(raw)
-        return f"expected {f.expected()}, got {shown}"
-    if f.kind == "int" and not isinstance(raw, int):
-        if isinstance(raw, float) and math.isfinite(raw) and raw.is_integer():
-            pass
-        else:
-            return f"expected {f.expected()}, got {raw!r} (not a whole number)"
-    if isinstance(raw, float) and not math.isfinite(raw):
-        return f"expected {f.expected()}, got {raw!r}"
-    if isinstance(raw, int) and abs(raw) > 1e300:
-        return f"expected {f.expected()}, got an integer of {len(str(abs(raw)))} digits"
-    v = float(raw)
-    if f.lo is not None and (v < f.lo or (f.lo_open and v == f.lo)):
-        return f"expected {f.expected()}, got {raw!r}"
-    if f.hi is not None and (v > f.hi or (f.hi_open and v == f.hi)):
-        return f"expected {f.expected()}, got {raw!r}"
-    return None
-
-
-def _known_children(prefix: str) -> frozenset[str]:
-    """Keys and sub-tables valid directly under ``prefix`` ("" = top level)."""
-    return _KNOWN_CHILDREN.get(prefix, frozenset())
-
-
-def _children_table() -> dict[str, frozenset[str]]:
-    out: dict[str, set[str]] = {"": {"effects", "statistics"}}  # free-form tables, validated by their own modules
-    for f in FIELDS:
-        parts = f.path.split(".")
-        for depth in range(len(parts)):
-            out.setdefault(".".join(parts[:depth]), set()).add(parts[depth])
-    return {k: frozenset(v) for k, v in out.items()}
-
-
-#: table path ("" = top level) -> the keys and sub-tables valid directly under it (built once)
-_KNOWN_CHILDREN = _children_table()
-
-
-def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str) -> None:
-    if prefix in ("effects", "statistics"):
+def _walk_unknown(data: dict, prefix: str, problems: list[str], source: str, schema: _Schema) -> None:
+    if prefix in ("effects", "statistics", "stage"):
         return
-    known = _known_children(prefix)
+    known = schema.known.get(prefix, frozenset())
     for key, value in data.items():
-        shown_key = key if key.isprintable() and key.strip() == key and key else _quote(key)
+        shown_key = key if key.isprintable() and key.strip() == key and key else quote(key)
         path = f"{prefix}.{shown_key}" if prefix else shown_key
         if key not in known and path in _NOT_COVERED:
             problems.append(f"{source}: {path}: {_NOT_COVERED[path]}")
             continue
         if key not in known:
-            # the nearest key of this table, else the nearest full path (a misplaced key)
-            hint = (did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
-                    or did_you_mean(path, [f.path for f in FIELDS], cutoff=0.75))
-            if not hint and not prefix:  # nothing close: say what the top level holds
-                hint = f" (a drive file holds the tables {', '.join('[' + k + ']' for k in sorted(known))})"
-            what = "table" if isinstance(value, dict) else "key"
-            problems.append(f"{source}: {path}: unknown {what}{hint}")
+            problems.append(f"{source}: {path}: unknown {'table' if isinstance(value, dict) else 'key'}"
+                            f"{_unknown_hint(key, path, prefix, known, schema)}")
             continue
-        is_section = path in _SECTION_SET or path in ("effects", "statistics")
-        if is_section and not isinstance(value, dict):
-            problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(value)}")
+        is_section = path in schema.section_set
+        if is_section and not isinstance(value, dict) and not (path == "stage" and isinstance(value, list)):
+            shown = "[[stage]]" if path == "stage" else f"[{path}]"
+            problems.append(f"{source}: {path}: expected a table {shown}, got {type_name(value)}")
         elif not is_section and isinstance(value, dict):
             problems.append(f"{source}: {path}: expected a value, got a table")
         elif isinstance(value, dict):
-            _walk_unknown(value, path, problems, source)
+            _walk_unknown(value, path, problems, source, schema)
+
+
+def _unknown_hint(key: str, path: str, prefix: str, known, schema: _Schema) -> str:
+    """The nearest key of this table, else the nearest full path (a misplaced key), else what the
+    table holds; in a file of the stage form, where a legacy key belongs."""
+    if schema is _STAGE_FORM and (path in _stages.LEGACY_KEYS or path in LEGACY_TABLES):
+        if path in LEGACY_TABLES:
+            return (" (a table of the legacy two-table form; with [[stage]] tables every stage's keys are in "
+                    "its own [[stage]] table: `wormgear upgrade` rewrites a legacy file)")
+        kind, stage_key = _stages.LEGACY_KEYS[path]
+        return f" (in the stage form: {stage_key} of the {kind} stage's [[stage]] table)"
+    hint = (did_you_mean(key, sorted(known), show=lambda m: (prefix + "." if prefix else "") + m)
+            or did_you_mean(path, schema.paths, cutoff=0.75))
+    if not hint and not prefix:  # nothing close: say what the top level holds
+        shown = ("[[stage]]" if k == "stage" else f"[{k}]" for k in sorted(known))
+        hint = f" (a drive file holds the tables {', '.join(shown)})"
+    return hint
 
 
 def _load_effects(table, problems: list[str], source: str) -> dict:
@@ -663,7 +569,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
             problems.append(f"{source}: {path}: unknown effect{hint}")
             continue
         if not isinstance(params, dict):
-            problems.append(f"{source}: {path}: expected a table [{path}], got {_type_name(params)}")
+            problems.append(f"{source}: {path}: expected a table [{path}], got {type_name(params)}")
             continue
         eff = EFFECTS[name]
         keys = [p.key for p in eff.params]
@@ -677,12 +583,12 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
             if p.key not in params:
                 if p.default is None:
                     problems.append(f"{source}: {path}.{p.key}: missing required key, expected a number "
-                                    f"in [{_fmt(p.lo)}, {_fmt(p.hi)}] [{p.unit}]")
+                                    f"in [{fmt(p.lo)}, {fmt(p.hi)}] [{p.unit}]")
                     ok = False
                 continue
             raw = params[p.key]
             pf = Field(f"{path}.{p.key}", p.name, "float", p.unit, p.default, p.doc, p.lo, p.hi)
-            err = _number_problem(pf, raw)
+            err = number_problem(pf, raw)
             if err:
                 problems.append(f"{source}: {path}.{p.key}: {err}")
                 ok = False
@@ -691,15 +597,11 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
     return out
 
 
-def _build(values: dict, effects: dict, source: str, default_name: str, data: dict) -> Spec:
+def _defaults(schema: _Schema, values: dict) -> dict:
+    """``values`` with the plain defaults of ``schema`` filled in (not the derived ones)."""
     v = dict(values)
-
-    def take(path, fallback):
-        return fallback if v[path] is _MISSING else v[path]
-
-    # defaults, including the derived ones (documented in FIELDS)
-    for f in FIELDS:
-        if v[f.path] is _MISSING and f.default not in ("derived", None):
+    for f in schema.fields:
+        if v[f.path] is MISSING and f.default not in ("derived", None):
             d = f.default
             if d == "":
                 v[f.path] = None
@@ -709,42 +611,173 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
                 v[f.path] = d
             else:
                 v[f.path] = float(d) * UNIT_SCALE[f.unit]
-    v["drive.name"] = take("drive.name", default_name)
+    return v
+
+
+def _legacy_derived(v: dict) -> None:
+    """The derived defaults of the legacy sections (documented in FIELDS), in place."""
+
+    def take(path, fallback):
+        return fallback if v[path] is MISSING else v[path]
+
     v["gear_pair.face_width_mm"] = take("gear_pair.face_width_mm", 10.0 * v["gear_pair.module_mm"])
     v["worm_pair.face_width_mm"] = take("worm_pair.face_width_mm", 10.0 * v["worm_pair.module_mm"])
-    if v["worm_pair.transverse_pressure_angle_deg"] is _MISSING:
+    if v["worm_pair.transverse_pressure_angle_deg"] is MISSING:
         an, lam = v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"]
         v["worm_pair.transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
-    if v["assembly.gear_eccentricity_mm"] is _MISSING:
+    if v["assembly.gear_eccentricity_mm"] is MISSING:
         v["assembly.gear_eccentricity_mm"] = v["assembly.gear_centre_distance_error_mm"]
     for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
         for key in ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm"):
             v[f"{sec}.{key}"] = take(f"{sec}.{key}", 0.0)
-    if v["stiffness.contact_ratio"] is _MISSING:
+    if v["stiffness.contact_ratio"] in (MISSING, None):
         from wormgear_cli.physics.deformation import spur_contact_ratio
 
         v["stiffness.contact_ratio"] = float(spur_contact_ratio(
             v["gear_pair.output_gear.teeth"], v["gear_pair.pinion.teeth"], v["gear_pair.pressure_angle_deg"]))
 
-    built: dict[str, Any] = {}
-    for sec in _SECTIONS_DEEPEST_FIRST:
-        kwargs = {f.attr: v[f.path] for f in _FIELDS_OF[sec]}
-        for child in _SUBSECTIONS_OF[sec]:
-            kwargs[child.rsplit(".", 1)[1]] = built[child]
-        built[sec] = _SECTION_CLASSES[sec](**kwargs)
-    top = {s: built[s] for s in SECTIONS if "." not in s}
-    return Spec(**top, effects=MappingProxyType(effects), source=source, raw=_freeze(data))
+
+def _build(values: dict, effects: dict, source: str, default_name: str, data: dict) -> Spec:
+    """The Spec of a validated legacy-form file: its sections, and its two stages [worm, spur]."""
+    v = _defaults(_LEGACY, values)
+    v["drive.name"] = default_name if v["drive.name"] is MISSING else v["drive.name"]
+    _legacy_derived(v)
+    top = _LEGACY.records(v)
+    raw = _freeze(data)
+    return Spec(**top, effects=MappingProxyType(effects), source=source, raw=raw,
+                stages=_legacy_stages(v, raw), form="legacy")
+
+
+def _legacy_stages(v: dict, raw) -> tuple:
+    """The stage records [worm, spur] of complete legacy values ``v`` (legacy path -> internal value);
+    each stage key's path and origin are those of its legacy key."""
+    out = []
+    for index, kind in enumerate(_stages.LEGACY_TRAIN, start=1):
+        values: dict[str, Any] = {"stiffness_model": v["stiffness.model"], "anti_backlash": "none",
+                                  "residual_lost_motion_arcsec": 0.0}
+        paths, origins = {}, {}
+        for f in _stages.STAGE_FIELDS[kind]:
+            old = _stages.STAGE_TO_LEGACY.get((kind, f.path))
+            if old is not None:
+                values[f.path] = v[old]
+                paths[f.path] = old
+                origins[f.path] = _legacy_origin(raw, old) if raw is not None else "default"
+            else:
+                paths[f.path] = _stages.stage_path(index, f.path)
+                origins[f.path] = "default"
+        out.append(_stages.make_record(kind, index, _stages.DEFAULT_NAMES[kind], values, paths, origins))
+    return tuple(out)
+
+
+def legacy_stages(spec: Spec) -> tuple:
+    """The stages [worm, spur] read from ``spec``'s legacy sections as they are now (for code that
+    still changes a spec through them, such as the ratio/centre-distance sweep's designs)."""
+    v = {f.path: _section_value(spec, f) for f in FIELDS if f.section.split(".")[0] in
+         (*LEGACY_TABLES, "requirements", "stiffness")}
+    return tuple(s._replace(paths=old.paths, origins=old.origins)
+                 for s, old in zip(_legacy_stages(v, None), spec.stages))
+
+
+def _section_value(spec: Spec, f: Field):
+    node: Any = spec
+    for part in f.section.split("."):
+        node = getattr(node, part)
+    return getattr(node, f.attr)
+
+
+# --- the stage form ---------------------------------------------------------------------------------
+
+
+def _stage_form(data: dict, source: str, default_name: str) -> Spec:
+    """Validate a drive file of the stage form: drive-level tables and ``[[stage]]`` tables."""
+    problems: list[str] = []
+
+    def bad(path: str, message: str) -> None:
+        problems.append(f"{source}: {path}: {message}")
+
+    _walk_unknown(data, "", problems, source, _STAGE_FORM)
+    values = _read_values(data, _STAGE_FORM, bad)
+    tables = data["stage"]
+    if not isinstance(tables, list) or not tables:
+        bad("stage", "expected one or more [[stage]] tables listed from the motor to the output, got "
+            + (type_name(tables) if not isinstance(tables, list) else "none"))
+        tables = []
+    elif len(tables) > _stages.MAX_STAGES:
+        bad("stage", f"expected at most {_stages.MAX_STAGES} [[stage]] tables, got {len(tables)}")
+        tables = []
+    checked = [_stages.check_stage(t, k, source, problems) for k, t in enumerate(tables, start=1)]
+    effects = _load_effects(data.get("effects"), problems, source)
+    if problems or None in checked:
+        raise SpecError(problems)
+    v = _defaults(_STAGE_FORM, values)
+    v["drive.name"] = default_name if v["drive.name"] is MISSING else v["drive.name"]
+    v["stiffness.contact_ratio"] = None if v["stiffness.contact_ratio"] is MISSING else v["stiffness.contact_ratio"]
+    stages = _stages.build_stages(checked, source, problems, v["stiffness.model"], _torque(v))
+    if problems:
+        raise SpecError(problems)
+    top = _STAGE_FORM.records(v)
+    legacy = _legacy_views(v, stages) if _stages.is_legacy_train(stages) else None
+    requirements = (legacy or {}).get("requirements") or _SECTION_CLASSES["requirements"](**{
+        **{f.attr: None for f in FIELDS if f.section == "requirements"}, **top["requirements"].__dict__})
+    return Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
+                requirements=requirements, **{t: (legacy or {}).get(t) for t in LEGACY_TABLES},
+                effects=MappingProxyType(effects), source=source, raw=_freeze(data), stages=stages, form="stages")
+
+
+def _torque(v: dict) -> float | None:
+    t = v.get("drive.output_torque_Nm")
+    return None if t in (MISSING, None) else float(t)
+
+
+def _legacy_views(v: dict, stages: tuple) -> dict:
+    """The legacy sections (gear_pair, worm_pair, assembly, loads, requirements) of a [worm, spur]
+    train of the stage form: the old attribute names on the same values."""
+    old = {f.path: v.get(f.path, MISSING) for f in FIELDS}
+    for stage in stages:
+        for key, value in _stages.record_values(stage).items():
+            path = _stages.STAGE_TO_LEGACY.get((stage.kind, key))
+            if path is not None:
+                old[path] = value
+    _legacy_derived(old)
+    return _LEGACY.records(old)
+
+
+def set_path(doc: dict, path: str, value) -> None:
+    """Set TOML ``path`` in the document ``doc`` to ``value``, creating tables on the way; a part
+    ``stage.N`` addresses the N-th ``[[stage]]`` table (1-based).  Raises SpecError when a part on
+    the way is not a table."""
+    parts = path.split(".")
+    node: Any = doc
+    k = 0
+    while k < len(parts) - 1:
+        part = parts[k]
+        if part == "stage" and k == 0 and isinstance(node.get("stage"), list) and k + 1 < len(parts) - 1 \
+                and parts[k + 1].isdigit():
+            items = node["stage"]
+            index = int(parts[k + 1])
+            if not 1 <= index <= len(items):
+                raise SpecError(f"{path}: no stage {index} (the drive has {len(items)})")
+            node = items[index - 1]
+            k += 2
+            continue
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise SpecError(f"{path}: cannot set, {part} is not a table")
+        k += 1
+    node[parts[-1]] = value
 
 
 def with_values(spec: Spec, changes: dict[str, Any]) -> Spec:
-    """A new spec with TOML ``path -> value`` changes applied (key units), re-validated."""
+    """A new spec with TOML ``path -> value`` changes applied (key units), re-validated.
+
+    Paths of either form reach a [worm, spur] train of either form (``gear_pair.module_mm`` or
+    ``stage.2.module_mm``); any other train takes stage paths."""
     data = raw_copy(spec)
     for path, value in changes.items():
-        parts = path.split(".")
-        node = data
-        for part in parts[:-1]:
-            node = node.setdefault(part, {})
-            if not isinstance(node, dict):
-                raise SpecError(f"{spec.source}: {path}: cannot set, {part} is not a table")
-        node[parts[-1]] = value
+        where = (_stages.new_path(spec.stages, path) if spec.form == "stages"
+                 else _stages.legacy_path(spec.stages, path))
+        try:
+            set_path(data, where, value)
+        except SpecError as exc:
+            raise SpecError(f"{spec.source}: {exc.problems[0]}") from None
     return spec_from_dict(data, spec.source, spec.drive.name)

@@ -349,9 +349,11 @@ def run(s: Setup, on_block: Callable | None = None, progress: Callable[[int], No
 
 def _aligned(spec, quantity: str) -> dict[str, np.ndarray]:
     from wormgear_cli.analysis.simulate import aligned_phases, periodic_sources
+    from wormgear_cli.spec.stages import legacy_path
 
     a = aligned_phases(spec, quantity)  # sources without a size are left out there: 90 deg, as the sinusoids
-    return {src.phase_path: np.array([a.get(src.name, 0.5 * math.pi)])
+    # keyed by the sampled phases' (legacy) paths, also for a worm + spur drive of the stage form
+    return {legacy_path(spec.stages, src.phase_path): np.array([a.get(src.name, 0.5 * math.pi)])
             for src in periodic_sources(spec, all_budget_sources=True)}
 
 

@@ -50,7 +50,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.physics import spur as gear_model
-from wormgear_cli.physics import worm as worm_model
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
 BUDGET_METRICS = ("budget_linear", "budget_rss")
@@ -125,6 +124,7 @@ class Context:
     theta: np.ndarray  # test targets [rad]
     fixed_up: np.ndarray  # deflection lag + effects, forward [rad]
     fixed_down: np.ndarray
+    registry: object = None  # the drive's registry (wormgear_cli.drive.registry), built once per run
 
 
 def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, dwell_s: float = 10.0) -> Context:
@@ -132,21 +132,41 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
     run, forward pass then reverse pass, ``dwell_s`` [s] per point as ``synth``)."""
     from wormgear_cli.analysis.accuracy import deflections
     from wormgear_cli.analysis.simulate import components
+    from wormgear_cli.drive.registry import build
     from wormgear_cli.physics.effects import Signals
 
-    d = deflections(spec)
+    d = deflections(spec)  # a [worm, spur] drive (the thin adapter: docs/tolerance.md)
+    reg = build(spec)
     theta = np.asarray(targets_rad, dtype=float)
     n = theta.size
     fixed = {}
     for sign, times in ((1.0, np.arange(n) * dwell_s), (-1.0, (2 * n - 1 - np.arange(n)) * dwell_s)):
-        parts = components(spec, Signals.make(theta, sign, 0.0, 20.0, times))
+        parts = components(spec, Signals.make(theta, sign, 0.0, 20.0, times), registry=reg)
         fixed[sign] = sum((v for k, v in parts.items() if k == "deformation" or k.startswith("effect:")),
                           np.zeros(n))
     paper = spec.gear_pair.kinematics == "paper"
     t = gear_eccentricity_tolerance if paper else 0.0  # the involute stage needs no interpolant
     return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, t, d.gear), GearTeMax(spec, t, 0.0),
                    GearTeMax(spec, t, d.gear, "deformation"), theta, np.broadcast_to(fixed[1.0], (n,)).copy(),
-                   np.broadcast_to(fixed[-1.0], (n,)).copy())
+                   np.broadcast_to(fixed[-1.0], (n,)).copy(), reg)
+
+
+def stage_value(ctx: Context, v: dict, stage):
+    """``value(stage key)`` -> the sampled values of a stage's key (arrays), from the sample columns
+    ``v`` (keyed by legacy path: the varied quantities of a [worm, spur] drive), else the stage's own
+    value: how the registry's vectorised size functions and stage models read a sampled drive."""
+    from wormgear_cli.spec.stages import STAGE_TO_LEGACY, record_values
+
+    own = record_values(stage)
+
+    def value(key):
+        if key == "alignment_errors_mm":
+            return tuple(np.asarray(v.get(f"assembly.worm_pair_errors_mm[{i}]", own[key][i]), dtype=float)
+                         for i in range(6))
+        path = STAGE_TO_LEGACY.get((stage.kind, key))
+        return np.asarray(v[path] if path in v else own[key], dtype=float)
+
+    return value
 
 
 def _gear_stage(ctx: Context, v: dict):
@@ -172,66 +192,34 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     stage by the spec's kinematics (paper or involute).
     """
     spec = ctx.spec
-    gp, wp = spec.gear_pair, spec.worm_pair
+    gp = spec.gear_pair
     z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
     i_c = z1 / z2
     v = values
     te_gear, bl_gear = _gear_stage(ctx, v)
-    lam, a2, m2, z3 = wp.lead_angle, wp.transverse_pressure_angle, wp.module, wp.wheel.teeth
-    f_hl, fi = v["worm_pair.lead_error_mm"], v["worm_pair.wheel.radial_composite_error_mm"]
-    h_te = worm_model.worm_te_halfwidth(f_hl, v["assembly.worm_eccentricity_mm"],
-                                        v["assembly.worm_bearing_clearance_mm"], fi,
-                                        v["assembly.wheel_eccentricity_mm"], v["assembly.wheel_bearing_clearance_mm"],
-                                        lam, a2)
-    wte = worm_model.worm_te(ctx.deflection_worm, h_te, m2, z3)
-    ft1, ft2 = v["worm_pair.worm.profile_error_mm"], v["worm_pair.wheel.profile_error_mm"]
-    ts1, ts2 = v["worm_pair.worm.thickness_deviation_mm"], v["worm_pair.wheel.thickness_deviation_mm"]
-    j_def, j_prof, j_thk = worm_model.worm_backlash_central(ctx.deflection_worm, ft1, ft2, ts1, ts2, lam)
-    e_sq = sum(v[f"assembly.worm_pair_errors_mm[{i}]"] ** 2 for i in range(6))
-    h_j = worm_model.worm_backlash_halfwidth(ft1, ft2, ts1, ts2, e_sq, f_hl,
-                                             v["assembly.worm_centre_distance_error_mm"], fi, lam, a2)
-    wbl = worm_model.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
+    from wormgear_cli.drive.worm import paper
+
+    worm = ctx.registry.train.stages[0]
+    ws = paper(worm, ctx.deflection_worm, stage_value(ctx, v, worm))  # the worm stage's one definition
+    wte, wbl = ws.transmission_error, ws.backlash
     return {"total_transmission_error": te_gear + wte / i_c, "total_backlash": bl_gear + wbl / i_c}
 
 
 def _sinusoids(ctx: Context, v: dict) -> list:
-    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), in
-    the order of ``simulation.periodic_sources`` (the gear eccentricity only under the involute
-    kinematics, where it is the sinusoid e/r_b1 at order i_c)."""
-    from wormgear_cli.analysis.accuracy import geometry
+    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), the
+    registry's sources in their order (all of them: the budget's too) with their sizes evaluated on
+    the samples (:attr:`wormgear_cli.drive.records.Source.size`); the paper kinematics' gear curve,
+    not a sinusoid, is left out (the gear eccentricity is one only under the involute kinematics)."""
+    from wormgear_cli.spec.stages import legacy_path
 
-    spec = ctx.spec
-    g = geometry(spec)
-    gp, wp = spec.gear_pair, spec.worm_pair
-    r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-    i_c, n_w, z1 = g.gear_ratio, g.worm_order, float(gp.output_gear.teeth)
-    to_out = 1.0 / (g.wheel_pitch_radius * i_c)
-    worm_ecc = np.hypot(v["assembly.worm_eccentricity_mm"], v["assembly.worm_bearing_clearance_mm"]) / math.cos(
-        wp.lead_angle)
-    wheel_ecc = np.hypot(v["assembly.wheel_eccentricity_mm"], v["assembly.wheel_bearing_clearance_mm"]) / math.cos(
-        wp.transverse_pressure_angle)
+    reg = ctx.registry
+    stages = reg.train.stages
     out = []
-    if gp.kinematics == "involute":
-        out.append((v["assembly.gear_eccentricity_mm"] / g.output_base_radius,
-                    "assembly.gear_eccentricity_phase_deg", i_c))
-    out += [
-        (v["worm_pair.lead_error_mm"] * (0.5 * to_out), "worm_pair.lead_error_phase_deg", n_w),
-        (worm_ecc * (0.5 * to_out), "assembly.worm_eccentricity_phase_deg", n_w),
-        (v["worm_pair.wheel.radial_composite_error_mm"] * (0.5 * to_out), "worm_pair.wheel.radial_composite_phase_deg",
-         i_c),
-        (wheel_ecc * (0.5 * to_out), "assembly.wheel_eccentricity_phase_deg", i_c),
-        # pitch deviations: F_p / (2 r) at their shaft, reduced by the ratios; f_p at the mesh order z1
-        (v["gear_pair.output_gear.cumulative_pitch_deviation_mm"] / (2.0 * r2),
-         "gear_pair.output_gear.cumulative_pitch_phase_deg", 1.0),
-        (v["gear_pair.pinion.cumulative_pitch_deviation_mm"] / (2.0 * r1) / i_c,
-         "gear_pair.pinion.cumulative_pitch_phase_deg", i_c),
-        (v["worm_pair.wheel.cumulative_pitch_deviation_mm"] / (2.0 * g.wheel_pitch_radius) / i_c,
-         "worm_pair.wheel.cumulative_pitch_phase_deg", i_c),
-        (v["gear_pair.output_gear.single_pitch_deviation_mm"] / (2.0 * r2),
-         "gear_pair.output_gear.single_pitch_phase_deg", z1),
-        (v["gear_pair.pinion.single_pitch_deviation_mm"] / (2.0 * r1) / i_c,
-         "gear_pair.pinion.single_pitch_phase_deg", z1),
-    ]
+    for src in reg.periodic(all_budget_sources=True):
+        if getattr(src.curve, "sine", None) is None:
+            continue
+        stage = stages[src.stage_index - 1]
+        out.append((src.size(stage_value(ctx, v, stage)), legacy_path(stages, src.phase_path), src.order))
     return out
 
 
@@ -246,9 +234,8 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     kinematics depends on Delta e; worm: delta2 on the wheel pitch circle / i_c).
     """
     spec = ctx.spec
-    gp, wp = spec.gear_pair, spec.worm_pair
-    i_c = gp.output_gear.teeth / gp.pinion.teeth
-    worm_static = float(gear_model.pitch_arc_to_angle(ctx.deflection_worm, wp.module, wp.wheel.teeth)) / i_c
+    gp = spec.gear_pair
+    worm_static = next(x.amplitude for x in ctx.registry.statics if x.stage_kind == "worm")  # not sampled
     periodic = [np.asarray(a, dtype=float) for a, _, _ in _sinusoids(ctx, values)]
     if gp.kinematics == "paper":
         de = values["assembly.gear_eccentricity_mm"]
@@ -284,7 +271,7 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
 
     spec = ctx.spec
     g = geometry(spec)
-    gp, wp = spec.gear_pair, spec.worm_pair
+    gp = spec.gear_pair
     r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
     alpha, i_c = gp.pressure_angle, g.gear_ratio
     to_out = 1.0 / (g.wheel_pitch_radius * i_c)
@@ -311,15 +298,13 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     common = coef @ basis
     if paper:
         common += gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha)
-    # lost motion (never negative): the gear part and simulation._worm_lost_motion
-    ft1, ft2 = v["worm_pair.worm.profile_error_mm"], v["worm_pair.wheel.profile_error_mm"]
-    ts1, ts2 = v["worm_pair.worm.thickness_deviation_mm"], v["worm_pair.wheel.thickness_deviation_mm"]
-    _, prof, thk = worm_model.worm_backlash_central(0.0, ft1, ft2, ts1, ts2, wp.lead_angle)
-    e_sq = sum(v[f"assembly.worm_pair_errors_mm[{i}]"] ** 2 for i in range(6))
-    h_j = worm_model.worm_backlash_halfwidth(ft1, ft2, ts1, ts2, e_sq, v["worm_pair.lead_error_mm"],
-                                             v["assembly.worm_centre_distance_error_mm"],
-                                             v["worm_pair.wheel.radial_composite_error_mm"], wp.lead_angle,
-                                             wp.transverse_pressure_angle)
+    # lost motion (never negative): the gear part and the worm stage's (drive.worm: the paper's Delta j
+    # without load, central + h_j sin at the wheel's order)
+    from wormgear_cli.drive.worm import paper as worm_paper
+
+    worm = ctx.registry.train.stages[0]
+    ws = worm_paper(worm, 0.0, stage_value(ctx, v, worm))
+    prof, thk, h_j = ws.backlash_profile, ws.backlash_thickness, ws.backlash_halfwidth
     psi_f = np.asarray(ph["worm_pair.wheel.radial_composite_phase_deg"], dtype=float)
     n = de.shape[0]
 

@@ -231,6 +231,7 @@ def statistics_table(spec) -> dict[str, dict]:
     positive number, ``cpk`` > ``cp``, ``cp``/``cpk`` with the uniform law.
     """
     from wormgear_cli.spec.loader import FIELD_BY_PATH
+    from wormgear_cli.spec.stages import legacy_path
 
     table = spec.raw.get("statistics")
     if table is None:
@@ -241,8 +242,9 @@ def statistics_table(spec) -> dict[str, dict]:
     problems: list[str] = []
     out: dict[str, dict] = {}
     valid = [q.path for q in QUANTITIES]
-    for path, entry in table.items():
-        where = f"{src}: statistics.\"{path}\""
+    for written, entry in table.items():
+        where = f"{src}: statistics.\"{written}\""
+        path = legacy_path(spec.stages, written)  # a stage path (stage.1.wheel.runout_mm) of a worm + spur drive
         if path not in QUANTITY_BY_PATH:
             if path in PHASES:
                 problems.append(f"{where}: phases are always drawn uniformly in [0, 360) deg; remove this entry")

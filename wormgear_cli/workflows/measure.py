@@ -159,9 +159,9 @@ def _orders_asked(drive, orders, harmonics):
 
         spec = load_spec(drive)
         drive_name = spec.drive.name
-        geo, starts = geometry(spec), spec.worm_pair.worm.starts
-        physical = physical_orders(geo, harmonics, worm_starts=starts)
-        priority = physical_priority(geo, harmonics, worm_starts=starts)
+        geo = geometry(spec)  # the worm's starts are part of the geometry
+        physical = physical_orders(geo, harmonics)
+        priority = physical_priority(geo, harmonics)
     if orders is not None:
         order_list = [float(k) for k in orders]
         priority = None  # the user's order breaks ties

@@ -1,0 +1,191 @@
+"""The spur stage of a train: the paper's Delta phi_cc and Delta phi_ch (or the involute reading),
+its sources at the output.
+
+Pinion (radius R1, z2 teeth) on the stage's input shaft, gear (R2, z1) on its output shaft.  At
+the gear shaft (:mod:`wormgear_cli.physics.spur`), by ``kinematics``:
+
+* ``paper``: Delta phi_cc(phi) = (R1+R2)/(2R2) F(l, phi) + delta1 sin(alpha + lambda1)/R2 at its
+  maximum over the pinion angle phi; Delta phi_ch = 2 Delta C1 / (m1 z1) with
+  Delta C1 = 2 Delta e tan(alpha) |sin phi| + 2 delta1.
+* ``involute``: an eccentricity e gives TE e / r_b2 at the pinion's order, a centre-distance error
+  Delta a a backlash 2 Delta a tan(alpha) and no TE, the thickness allowances add to the backlash.
+
+With ``anti_backlash = "split_pinion"`` (a split or spring-preloaded pinion) the clearance terms of
+the backlash are replaced by the stated residual lost motion; the deflection stays.
+
+Sources at the output (A = the product of the ratios after the stage, O_p = A z1 / z2 the pinion
+shaft's order): the eccentricity Delta e at O_p (paper: the kinematic Delta phi_cc curve at the
+pinion angle O_p theta + psi, / A; involute: e / r_b2 / A); the full budget's pitch deviations,
+each a once-per-turn TE of peak-to-peak F_p / r at its shaft carried to the output (gear
+F_p / (2 R2) / A at A, pinion F_p / (2 R1) / O_p at O_p) and the single pitch deviations f_p at
+the mesh order z1 A.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from wormgear_cli.drive import stiffness
+from wormgear_cli.drive.records import Clearance, Source, StageResult, Static, sine, sine_source
+from wormgear_cli.physics import spur as model
+
+#: the paper's names of the spur stage's TE and backlash
+SYMBOLS = ("Delta phi_cc", "Delta phi_ch")
+
+
+def radii(stage) -> tuple[float, float]:
+    """(R1 pinion, R2 gear) pitch radii [mm]."""
+    return stage.module * stage.pinion.teeth / 2.0, stage.module * stage.gear.teeth / 2.0
+
+
+def base_radius(stage) -> float:
+    """r_b2 = m z1 cos(alpha) / 2, the gear's base radius [mm]."""
+    return stage.module * stage.gear.teeth * math.cos(stage.pressure_angle) / 2.0
+
+
+def evaluate(spec, stage, t, deflection: float) -> StageResult:
+    """The stage's TE and backlash at the gear shaft, with their parts."""
+    r_pinion, r_gear = radii(stage)
+    de, alpha, m, z1 = stage.model_eccentricity, stage.pressure_angle, stage.module, stage.gear.teeth
+    bl_thk = 0.0
+    if stage.kinematics == "paper":
+        _, phi_star = model.gear_te_max_fast(r_pinion, r_gear, de, alpha, deflection)
+        te_kin_only, _ = model.gear_te_max_fast(r_pinion, r_gear, de, alpha, 0.0)
+        te_kin = model.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
+        te_def = model.gear_deformation_te(phi_star, r_pinion, r_gear, de, alpha, deflection)
+        bl = model.gear_backlash_max(m, z1, de, alpha, deflection)
+        bl_def = model.pitch_arc_to_angle(2.0 * deflection, m, z1)
+    else:
+        inv = model.involute_stage(r_gear, alpha, de, stage.centre_distance_error, deflection,
+                                   stage.gear.thickness_deviation + stage.pinion.thickness_deviation)
+        phi_star = 0.5 * np.pi  # e sin(phi) peaks at a quarter turn of the pinion
+        te_kin_only = te_kin = inv.te_eccentricity
+        te_def, bl = inv.te_deformation, inv.backlash
+        bl_def, bl_thk = inv.backlash_deformation, inv.backlash_thickness
+    te_max = te_kin + te_def
+    if stage.anti_backlash == "none":
+        bl_parts = {"eccentricity": float(bl - bl_def - bl_thk), "deformation": float(bl_def),
+                    "thickness": float(bl_thk)}
+        backlash = float(bl)
+    else:
+        bl_parts = {"deformation": float(bl_def), "residual": float(stage.residual_lost_motion)}
+        backlash = sum(bl_parts.values())
+    info = {
+        "kinematics": stage.kinematics,
+        "line_load_N_per_mm": stiffness.line_load(spec, stage),
+        "phi_at_max_deg": float(np.degrees(phi_star)),
+        # the paper's "load adds ~0.11 %": increase of the maximum caused by the deflection
+        # (undefined, None, when there is no eccentric part to increase: Delta e = 0)
+        "load_share_pct": (float(100.0 * (te_max - te_kin_only) / te_kin_only) if te_kin_only > 0 and deflection > 0
+                           else (0.0 if deflection == 0 else None)),
+        "deflection_um": float(deflection * 1e3),
+        "normal_force_N": float(stage.normal_force),
+        "anti_backlash": stage.anti_backlash,
+    }
+    return StageResult(stage.index, stage.name, "spur", stage.ratio, t.after(stage), float(te_max), backlash,
+                       {"eccentricity": float(te_kin), "deformation": float(te_def)}, bl_parts, info, SYMBOLS)
+
+
+def _first_harmonic(curve, samples: int = 256) -> float:
+    """Size of the once-per-turn Fourier component of a 2 pi-periodic ``curve(phi)``.
+
+    Exact for the gear curve (which is smooth, so 256 samples resolve its
+    harmonics far beyond the first).  For small Delta e it approaches
+    Delta e sqrt(1 + 4 tan^2 alpha) / (2 R2), with mean Delta e tan(alpha) / R2.
+    """
+    phi = np.arange(samples) * (2.0 * np.pi / samples)
+    c = 2.0 / samples * np.sum(curve(phi) * np.exp(-1j * phi))
+    return float(abs(c))
+
+
+def _eccentricity_source(stage, t, origin) -> Source:
+    """The eccentricity Delta e of the pinion shaft (module docstring), with its lost motion."""
+    r1, r2 = radii(stage)
+    de, alpha = stage.model_eccentricity, stage.pressure_angle
+    o_p, after = t.before(stage), t.after(stage)
+    keys = ("eccentricity_mm", "centre_distance_error_mm")
+    lost_clear = stage.anti_backlash == "none"
+    if stage.kinematics == "paper":
+        def curve(theta, phase):
+            return model.gear_kinematic_te(o_p * theta + phase, r1, r2, de, alpha) / after
+
+        def lost(theta, phase):
+            return de * math.tan(alpha) * (1.0 + np.sin(o_p * theta + phase)) / r2 / after
+
+        def size(v):  # the curve's peak as a function of Delta e
+            return model.gear_te_max_fast(r1, r2, v("eccentricity_mm"), alpha, 0.0)[0] / after
+
+        amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
+        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after
+    else:
+        # involute: e / r_b at the pinion's order, i.e. e / r_b2 at the gear (models.gear.involute_stage);
+        # the static part of the lost motion (centre distance, thickness allowances) is constant
+        r_b = base_radius(stage)
+        amp = peak = de / r_b / after
+        curve = sine(amp, o_p)
+        static = (2.0 * stage.centre_distance_error * math.tan(alpha)
+                  + stage.gear.thickness_deviation + stage.pinion.thickness_deviation)
+        keys = ("eccentricity_mm",)
+
+        def lost(theta, phase):
+            return (static + de * math.tan(alpha) * (1.0 + np.sin(o_p * theta + phase))) / r2 / after
+
+        counts = 1.0 if de == stage.eccentricity else 0.0  # involute: only an eccentricity the spec states
+
+        def size(v):
+            return counts * v("eccentricity_mm") / r_b / after
+    return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
+                  curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
+                  stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0)
+
+
+def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:
+    """(periodic sources, static terms, constant clearances) of the stage at the output (module
+    docstring); ``result``: the stage's :func:`evaluate`.  ``origin(stage, keys)``: the origin of a
+    size read from ``keys``."""
+    r1, r2 = radii(stage)
+    o_p, after = t.before(stage), t.after(stage)
+    mesh = float(stage.gear.teeth) * after
+    gear_name = "output_gear" if stage.index == len(t.stages) else "gear"
+    ident = {"stage_index": stage.index, "stage_kind": "spur"}
+
+    def pitch(member, name, key, order, kind, radius, per, tier):
+        k = f"{member}.{key}_deviation_mm"
+        phase_key = f"{member}.{key}_phase_deg"
+
+        def size(v):
+            return v(k) / (2.0 * radius) / per
+        part = getattr(stage, member)
+        amp = size(lambda _: getattr(part, f"{key}_deviation"))
+        return sine_source(f"{name}_{key}", stage.paths[phase_key], order, amp, getattr(part, f"{key}_phase"),
+                           stage.name, kind, (stage.paths[k],), part=member, origin=origin(stage, (k,)),
+                           size_keys=(k,), size=size, tier=tier, **ident)
+
+    out = [
+        _eccentricity_source(stage, t, origin),
+        pitch("gear", gear_name, "cumulative_pitch", after, "shaft", r2, after, 1),
+        pitch("pinion", "pinion", "cumulative_pitch", o_p, "shaft", r1, o_p, 1),
+        # single pitch deviation f_p: a tooth-to-tooth TE of peak-to-peak f_p on that gear's pitch circle, at
+        # the mesh order z1 A (both gears: z2 O_p = z1 A)
+        pitch("gear", gear_name, "single_pitch", mesh, "mesh", r2, after, 2),
+        pitch("pinion", "pinion", "single_pitch", mesh, "mesh", r1, o_p, 2),
+    ]
+    static = [Static("gear_deflection", result.te_parts["deformation"] / after, stage.name, stage.index, "spur",
+                     origin(stage, ("normal_force_N",)), (stage.paths["normal_force_N"],))]
+    clear = [] if stage.anti_backlash == "none" else [
+        Clearance("gear_residual_lost_motion", float(stage.residual_lost_motion) / after, stage.name, stage.index,
+                  "spur")]
+    return out, static, clear
+
+
+def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:
+    """(process lag, wind-up per N m of output torque) at the output: paper, delta1 on the pitch arc
+    (its Delta phi_ch); involute, along the line of action, 1 / r_b2; the gear's torque T / A gives the
+    normal force T / (A r_b2) (ISO 6336-1's c' held at the spec's load)."""
+    after = t.after(stage)
+    r_b = base_radius(stage)
+    angle_per_mm = (1.0 / radii(stage)[1] if stage.kinematics == "paper" else 1.0 / r_b) / after
+    unit = stiffness.deflection(spec, stage, 1.0, linear_at_spec_load=True)
+    return float(deflection * angle_per_mm), float(unit * (1000.0 / after / r_b) * angle_per_mm)

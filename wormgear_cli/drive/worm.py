@@ -1,0 +1,171 @@
+"""The worm stage of a train: the paper's Delta phi_wc and Delta phi_wh, its sources at the output.
+
+Index 1 is the worm (on the stage's input shaft), index 2 the wheel (on its output shaft).  At the
+wheel shaft (:mod:`wormgear_cli.physics.worm`):
+
+    Delta phi_wc = 2 (delta2 + h) / (m2 z3),  h = 1/2 sqrt(f_hL^2 + (S1^2 + C1^2)/cos^2(lambda) + F_i^2
+                                                       + (S2^2 + C2^2)/cos^2(alpha_2))
+    Delta phi_wh = 2 (Delta j_central + h_j) / (m2 z3)
+
+S1 and S2 are radial runouts (total indicator readings); for an eccentric member S = 2 e, so the
+paper's term S2 / (2 cos(alpha_2)) on the wheel's pitch circle is e / r_b,wheel at the wheel: the
+involute rule of the spur stage and of the effect catalogue (docs/models.md, "Runout and
+eccentricity").  With ``anti_backlash = "duplex"`` (a duplex worm set axially) the clearance terms
+of Delta j are replaced by the stated residual lost motion; the deflection stays.
+
+Sources at the output (A = the product of the ratios after the stage, r_w the wheel's pitch radius,
+O_w = A z3 / z_worm the worm shaft's order): the lead error f_hL / 2 and the worm runout
+sqrt(S1^2 + C1^2) / (2 cos(lambda)) at O_w; the radial composite error F_i / 2 and the wheel runout
+sqrt(S2^2 + C2^2) / (2 cos(alpha_2)) at A; each / (r_w A): the paper's +/- half-width term by term.
+The wheel's cumulative pitch deviation F_p / (2 r_w) / A at A (the full budget).
+"""
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from wormgear_cli.drive import stiffness
+from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
+from wormgear_cli.physics import worm as model
+from wormgear_cli.physics.spur import pitch_arc_to_angle
+from wormgear_cli.spec.stages import record_values
+
+#: the paper's names of the worm stage's TE and backlash
+SYMBOLS = ("Delta phi_wc", "Delta phi_wh")
+
+
+class WormParts(NamedTuple):
+    """The paper's worm stage at the wheel shaft [rad], and its parts on the wheel's pitch circle [mm]
+    (arrays when an input is one): ``transmission_error`` Delta phi_wc, ``backlash`` Delta phi_wh;
+    ``te_halfwidth`` h, ``backlash_halfwidth`` h_j; ``backlash_deformation``, ``backlash_profile``,
+    ``backlash_thickness`` (the central backlash's parts)."""
+
+    transmission_error: object
+    backlash: object
+    te_halfwidth: object
+    backlash_halfwidth: object
+    backlash_deformation: object
+    backlash_profile: object
+    backlash_thickness: object
+
+
+def values(stage):
+    """``value(key)`` -> the stage's own value of a stage key (internal units)."""
+    table = record_values(stage)
+    return table.__getitem__
+
+
+def paper(stage, deflection, value=None) -> WormParts:
+    """The paper's worm stage at tooth deflection ``deflection`` [mm] (delta2; scalar or array).
+    ``value(key)``: the tolerances by stage key (default the stage's own; arrays of sampled drives
+    allowed, ``alignment_errors_mm`` a sequence of six)."""
+    v = value or values(stage)
+    lam, a2 = stage.lead_angle, stage.transverse_pressure_angle
+    m2, z3 = stage.module, stage.wheel.teeth
+    f_hl, fi = v("lead_error_mm"), v("wheel.radial_composite_error_mm")
+    h_te = model.worm_te_halfwidth(f_hl, v("worm.runout_mm"), v("worm.bearing_clearance_mm"), fi, v("wheel.runout_mm"),
+                                   v("wheel.bearing_clearance_mm"), lam, a2)
+    wte = model.worm_te(deflection, h_te, m2, z3)
+    ft1, ft2 = v("worm.profile_error_mm"), v("wheel.profile_error_mm")
+    ts1, ts2 = v("worm.thickness_deviation_mm"), v("wheel.thickness_deviation_mm")
+    j_def, j_prof, j_thk = model.worm_backlash_central(deflection, ft1, ft2, ts1, ts2, lam)
+    e_sq = sum(e * e for e in v("alignment_errors_mm"))
+    h_j = model.worm_backlash_halfwidth(ft1, ft2, ts1, ts2, e_sq, f_hl, v("centre_distance_error_mm"), fi, lam, a2)
+    wbl = model.worm_backlash(j_def + j_prof + j_thk, h_j, m2, z3)
+    return WormParts(wte, wbl, h_te, h_j, j_def, j_prof, j_thk)
+
+
+def evaluate(spec, stage, t, deflection: float) -> StageResult:
+    """The stage's TE and backlash at the wheel shaft, with their parts (``spec``: the drive-level
+    settings; ``t``: the train)."""
+    p = paper(stage, deflection)
+
+    def arc(x):
+        return float(pitch_arc_to_angle(x, stage.module, stage.wheel.teeth))
+
+    te_parts = {"deformation": arc(deflection), "envelope": arc(p.te_halfwidth)}
+    if stage.anti_backlash == "none":
+        backlash = float(p.backlash)
+        bl_parts = {"deformation": arc(p.backlash_deformation), "profile": arc(p.backlash_profile),
+                    "thickness": arc(p.backlash_thickness), "envelope": arc(p.backlash_halfwidth)}
+    else:
+        bl_parts = {"deformation": arc(p.backlash_deformation), "residual": float(stage.residual_lost_motion)}
+        backlash = sum(bl_parts.values())
+    info = {"deflection_um": float(deflection * 1e3), "line_load_N_per_mm": stiffness.line_load(spec, stage),
+            "normal_force_N": float(stage.normal_force), "anti_backlash": stage.anti_backlash,
+            "starts": stage.worm.starts}
+    return StageResult(stage.index, stage.name, "worm", stage.ratio, t.after(stage), float(p.transmission_error),
+                       backlash, te_parts, bl_parts, info, SYMBOLS)
+
+
+def _runout(runout, clearance, angle):
+    """sqrt(S^2 + C^2) / cos(angle) [mm] (math.hypot for numbers, numpy's for arrays)."""
+    if np.ndim(runout) == 0 and np.ndim(clearance) == 0:
+        return math.hypot(runout, clearance) / math.cos(angle)
+    return np.hypot(runout, clearance) / math.cos(angle)
+
+
+def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:
+    """(periodic sources, static terms, constant clearances) of the stage at the output (module
+    docstring); ``result``: the stage's :func:`evaluate`.  ``origin(stage, keys)``: the origin of a
+    size read from ``keys``."""
+    after = t.after(stage)
+    r_w = stage.output_radius
+    to_out = 1.0 / (r_w * after)
+    n_w = t.before(stage)
+    lam, a2 = stage.lead_angle, stage.transverse_pressure_angle
+    ident = {"stage_index": stage.index, "stage_kind": "worm"}
+    own = values(stage)
+
+    def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None):
+        amp = float(size(own))
+        return sine_source(name, stage.paths[key_phase], order, amp, phase, stage.name, "shaft",
+                           tuple(stage.paths[k] for k in keys), lost, part=part, origin=origin(stage, keys),
+                           size_keys=keys, size=size, tier=tier, **ident)
+
+    lost = _lost_motion(stage, after, to_out, own) if stage.anti_backlash == "none" else None
+    out = [
+        src("worm_lead_error", "lead_error_phase_deg", n_w, lambda v: v("lead_error_mm") * (0.5 * to_out),
+            ("lead_error_mm",), "worm", stage.lead_error_phase),
+        src("worm_eccentricity", "worm.runout_phase_deg", n_w,
+            lambda v: _runout(v("worm.runout_mm"), v("worm.bearing_clearance_mm"), lam) * (0.5 * to_out),
+            ("worm.runout_mm", "worm.bearing_clearance_mm"), "worm", stage.worm.runout_phase),
+        src("wheel_radial_composite", "wheel.radial_composite_phase_deg", after,
+            lambda v: v("wheel.radial_composite_error_mm") * (0.5 * to_out), ("wheel.radial_composite_error_mm",),
+            "wheel", stage.wheel.radial_composite_phase, lost=lost),
+        src("wheel_eccentricity", "wheel.runout_phase_deg", after,
+            lambda v: _runout(v("wheel.runout_mm"), v("wheel.bearing_clearance_mm"), a2) * (0.5 * to_out),
+            ("wheel.runout_mm", "wheel.bearing_clearance_mm"), "wheel", stage.wheel.runout_phase),
+        src("wheel_cumulative_pitch", "wheel.cumulative_pitch_phase_deg", after,
+            lambda v: v("wheel.cumulative_pitch_deviation_mm") / (2.0 * r_w) / after,
+            ("wheel.cumulative_pitch_deviation_mm",), "wheel", stage.wheel.cumulative_pitch_phase, tier=1),
+    ]
+    static = [Static("worm_deflection", result.te_parts["deformation"] / after,
+                     stage.name, stage.index, "worm", origin(stage, ("normal_force_N",)),
+                     (stage.paths["normal_force_N"],))]
+    clear = [] if stage.anti_backlash == "none" else [
+        Clearance("worm_residual_lost_motion", float(stage.residual_lost_motion) / after, stage.name, stage.index,
+                  "worm")]
+    return out, static, clear
+
+
+def _lost_motion(stage, after: float, to_out: float, own):
+    """max(Delta j_central(no load) + h_j sin(A theta + psi), 0) / r_w / A  [rad] at the output, the
+    paper's Delta j +/- its half-width varying with the wheel's runout.  Clipped at zero: a clearance
+    cannot be negative (only matters when the half-width exceeds the central backlash)."""
+    p = paper(stage, 0.0, own)
+    central = float(p.backlash_profile + p.backlash_thickness)
+    h_j = float(p.backlash_halfwidth)
+    return lambda theta, phase: np.maximum(central + h_j * np.sin(after * theta + phase), 0.0) * to_out
+
+
+def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:
+    """(process lag, wind-up per N m of output torque) at the output [rad, rad/(N m)]: the deflection
+    along the flanks, delta2 / (cos(lambda) r_w), per direction; the wheel's torque T / A gives the
+    normal force T / (A r_w cos(alpha_n) cos(lambda)) (ISO 6336-1's c' held at the spec's load)."""
+    after, r_w = t.after(stage), stage.output_radius
+    angle_per_mm = 1.0 / (math.cos(stage.lead_angle) * r_w * after)
+    unit = stiffness.deflection(spec, stage, 1.0, linear_at_spec_load=True)
+    force_per_nm = 1000.0 / after / (r_w * math.cos(stage.normal_pressure_angle) * math.cos(stage.lead_angle))
+    return float(deflection * angle_per_mm), float(unit * force_per_nm * angle_per_mm)
