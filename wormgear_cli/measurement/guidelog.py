@@ -354,22 +354,21 @@ def _numbers(values, lines: np.ndarray, name: str, column: str) -> np.ndarray:
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-#: the columns read, beyond :data:`NEEDED_COLUMNS`, when the rows have them
-_READ_COLUMNS = NEEDED_COLUMNS + ("ErrorCode",)
 #: RADirection letter -> sign of the pulse (West positive, as PHD2 moves a positive RA offset)
 _SIGN = {"W": 1.0, "E": -1.0, "": 0.0}
 
 
-def _cells(sec: _Section, name: str) -> tuple[dict, np.ndarray, int]:
-    """The section's cells of the columns read (a tuple of text cells per column name, over the
-    rows), the rows' line numbers and the line of an incomplete last row left out (0: none)."""
+def _cells(sec: _Section, name: str) -> tuple[dict, tuple | None, np.ndarray, int]:
+    """The section's cells of :data:`NEEDED_COLUMNS` (a tuple of text cells per column name, over
+    the rows), the rest of each row after them (None when no row has more), the rows' line numbers
+    and the line of an incomplete last row left out (0: none)."""
     cols = sec.columns
     missing = [c for c in NEEDED_COLUMNS if c not in cols]
     if missing:
         raise DataError(f"{name}:{sec.column_line}: the column line lacks {', '.join(missing)}; expected PHD2's "
                         "Frame,Time,mount,dx,dy,RARawDistance,DECRawDistance,RAGuideDistance,...")
     need = max(cols[c] for c in NEEDED_COLUMNS) + 1
-    cells = [r.split(",") for r in sec.rows]
+    cells = [r.split(",", need) for r in sec.rows]  # the cells read, then the rest of the row in one piece
     lines = sec.row_lines
     cut = 0
     if cells and len(cells[-1]) < need:  # the last row of a log cut off while PHD2 wrote it
@@ -381,20 +380,31 @@ def _cells(sec: _Section, name: str) -> tuple[dict, np.ndarray, int]:
         k = int(short[0])
         raise DataError(f"{name}:{lines[k]}: expected at least {need} cells as in the column line "
                         f"(line {sec.column_line}), got {lengths[k]}")
-    columns = list(zip(*cells))  # as many columns as the shortest row has
-    read = {c: columns[cols[c]] if columns else () for c in _READ_COLUMNS if c in cols and cols[c] < max(
-        len(columns), need)}
-    return read, np.asarray(lines, dtype=np.int64), cut
+    columns = list(zip(*cells))  # as many as the shortest row has
+    read = {c: columns[cols[c]] if columns else () for c in NEEDED_COLUMNS}
+    return read, columns[need] if len(columns) > need else None, np.asarray(lines, dtype=np.int64), cut
+
+
+def _flagged(sec: _Section, rest: tuple | None, idx: np.ndarray) -> int:
+    """Rows ``idx`` whose ErrorCode (a star warning) is not 0, from the rest of each row."""
+    j = sec.columns.get("ErrorCode")
+    need = max(sec.columns[c] for c in NEEDED_COLUMNS) + 1
+    if j is None or rest is None or j < need:
+        return 0
+    if j == max(sec.columns.values()):  # the last column, as PHD2 writes it: the end of a guide-step row
+        codes = [rest[k].rpartition(",")[2] for k in idx.tolist()]
+    else:
+        codes = [(rest[k].split(",")[j - need:j - need + 1] or [""])[0] for k in idx.tolist()]
+    return sum(1 for c in codes if c.strip() not in ("", "0"))
 
 
 def _frames(sec: _Section, name: str) -> _Frames:
     """Parse the rows of a section (see :class:`_Frames`)."""
-    cells, lines, cut = _cells(sec, name)
+    cells, rest, lines, cut = _cells(sec, name)
     kind = cells["mount"]
-    drop = np.fromiter((k == '"DROP"' for k in kind), dtype=bool, count=len(kind))
-    mount = np.fromiter((k == '"Mount"' for k in kind), dtype=bool, count=len(kind))
-    bad = np.flatnonzero(~drop & ~mount)
-    for k in bad.tolist():  # spelled another way (no quotes, spaces)?
+    n = len(kind)
+    drop, mount = np.zeros(n, dtype=bool), np.ones(n, dtype=bool)
+    for k in [k for k, word in enumerate(kind) if word != '"Mount"']:  # DROP rows, or spelled another way
         word = kind[k].strip().strip('"')
         if word == "AO":
             raise DataError(f"{name}:{lines[k]}: adaptive-optics steps (\"AO\" rows): the corrections of an AO "
@@ -404,30 +414,31 @@ def _frames(sec: _Section, name: str) -> _Frames:
         drop[k], mount[k] = word == "DROP", word == "Mount"
     time = _numbers(cells["Time"], lines, name, "Time")
     frame = _numbers(cells["Frame"], lines, name, "Frame")
-    dead = np.zeros(drop.shape, dtype=bool)
+    dead = np.zeros(n, dtype=bool)
     dead[1:] = mount[1:] & drop[:-1] & (frame[1:] == frame[:-1])
     measured = mount & ~dead
     idx = np.flatnonzero(measured)
-    raw = np.full(drop.shape, np.nan)
-    col = cells["RARawDistance"]
-    raw[idx] = _numbers([col[k] for k in idx.tolist()], lines[idx], name, "RARawDistance")
+    raw = np.full(n, np.nan)
+    raw[idx] = _numbers(_pick(cells["RARawDistance"], idx), lines[idx], name, "RARawDistance")
     rows = np.flatnonzero(mount)
-    col = cells["RADuration"]
-    dur = _numbers([col[k] or "0" for k in rows.tolist()], lines[rows], name, "RADuration")
-    col = cells["RADirection"]
-    sign = np.fromiter((_SIGN.get(col[k].strip(), math.nan) for k in rows.tolist()), dtype=float, count=rows.size)
+    col = _pick(cells["RADuration"], rows)
+    dur = _numbers(col if all(col) else [c or "0" for c in col], lines[rows], name, "RADuration")
+    col = _pick(cells["RADirection"], rows)
+    sign = np.fromiter((_SIGN.get(c, math.nan) for c in col), dtype=float, count=rows.size)
     odd = np.flatnonzero(np.isnan(sign) | ((sign == 0) & (dur != 0)))
-    if odd.size:
-        k = int(odd[0])
-        raise DataError(f"{name}:{lines[rows[k]]}: column RADirection: expected W or E with a pulse of "
-                        f"{dur[k]:g} ms, got {col[rows[k]].strip()!r}")
-    pulse = np.zeros(drop.shape)
+    for k in odd.tolist():
+        sign[k] = _SIGN.get(col[k].strip(), math.nan)  # a letter with spaces round it
+        if math.isnan(sign[k]) or (sign[k] == 0 and dur[k] != 0):
+            raise DataError(f"{name}:{lines[rows[k]]}: column RADirection: expected W or E with a pulse of "
+                            f"{dur[k]:g} ms, got {col[k].strip()!r}")
+    pulse = np.zeros(n)
     pulse[rows] = sign * dur
-    flagged = 0
-    if "ErrorCode" in cells:
-        col = cells["ErrorCode"]
-        flagged = sum(1 for k in idx.tolist() if col[k].strip() not in ("", "0"))
-    return _Frames(time, measured, drop, dead, raw, pulse, lines, flagged, cut)
+    return _Frames(time, measured, drop, dead, raw, pulse, lines, _flagged(sec, rest, idx), cut)
+
+
+def _pick(col: tuple, idx: np.ndarray):
+    """The cells of ``col`` at the rows ``idx``."""
+    return col if idx.size == len(col) else [col[k] for k in idx.tolist()]
 
 
 def _split_restarts(sec: _Section, frames: _Frames) -> list[_Section]:
@@ -612,8 +623,8 @@ def _place(sessions: list[_Session]) -> tuple[list[float], list[float], list[str
         prev = sessions[k - 1]
         ref = next((j for j in range(k - 1, -1, -1) if sessions[j].sec.start is not None), None)
         prev_end = times[-1] + float(prev.frames.time[-1]) if prev.frames.time.size else times[-1]
-        if s.sec.start is not None and ref is not None and sessions[0].sec.start is not None:
-            t0 = (s.sec.start - sessions[0].sec.start).total_seconds()
+        if s.sec.start is not None and ref is not None:
+            t0 = times[ref] + (s.sec.start - sessions[ref].sec.start).total_seconds()
             if t0 >= prev_end - 1.0:
                 clock = angles[ref] + rate * (t0 - times[ref])
                 times.append(t0)
