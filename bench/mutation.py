@@ -95,6 +95,11 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                      "gear_deformation_te", "gear_te", "gear_te_max", "gear_backlash", "gear_backlash_max",
                      "pitch_arc_to_angle", "_bracket_constants", "kinematic_bracket_derivatives",
                      "load_factor_derivatives", "kinematic_peak", "gear_te_max_fast", "involute_stage")),
+    # the guide-log reader (PHD2 logs) and the periodic error of a worm, checked by their tests
+    "guidelog": (("wormgear_cli/measurement/guidelog.py",),
+                 ("tests/measurement/test_guidelog.py",), None),
+    "periodic-error": (("wormgear_cli/measurement/periodic_error.py",),
+                       ("tests/measurement/test_periodic_error.py",), None),
 }
 
 

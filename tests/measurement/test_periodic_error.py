@@ -153,3 +153,106 @@ def test_real_logs_through_the_reader(name, session, order, harmonics, extra, ri
     np.testing.assert_allclose(pe.amplitude, right, atol=tol)
     assert pe.peak_to_peak > 2 * pe.amplitude[0] * 0.9
     assert pe.rms_without_worm < pe.rms_detrended
+
+
+def test_noise_free_curve_peak_to_peak_exact_and_phases():
+    """Without noise the fit is exact: the amplitudes, phases and the range of the curve are the truth's
+    (the maximum at worm phase 0.5 rad, inside the first radian of the period)."""
+    theta, _, t, run, _ = tracking(0, noise=0.0)
+    ph = math.pi / 2 - 0.5
+    y = 3.0 * np.sin(WORM * theta + ph) + 0.01 * t
+    pe = periodic_error(theta, y, WORM, time=t, run=run, harmonics=1, drift_degree=1)
+    assert pe.order == 180.0 and pe.harmonics == 1 and pe.period_s is None
+    assert pe.amplitude[0] == pytest.approx(3.0, abs=1e-9)
+    assert pe.phase[0] == pytest.approx(ph, abs=1e-9)
+    assert pe.identifiable.tolist() == [True]
+    assert pe.peak_to_peak == pytest.approx(6.0, abs=1e-4)
+    assert pe.rms_residual == pytest.approx(0.0, abs=1e-9)
+    for h, a, p in TRUE:  # three harmonics: phases as y ~ A sin(k theta + phase)
+        y = y + a * np.sin(h * WORM * theta + p) if h > 1 else y
+    pe3 = periodic_error(theta, y, WORM, time=t, run=run, harmonics=3, drift_degree=1)
+    np.testing.assert_allclose(pe3.phase[1:], [p for _, _, p in TRUE[1:]], atol=1e-9)
+
+
+def test_drift_follows_time_not_angle():
+    """A drift linear in time on an axis that does not turn evenly: fitted exactly with ``time``,
+    not with the angle, and a lower degree leaves a quadratic drift in the residual."""
+    t = np.linspace(0.0, 3000.0, 1500)
+    theta = 2 * math.pi * (t + 400.0 * np.sin(t / 500.0)) / SIDEREAL_DAY_S
+    y = 2.0 * np.sin(WORM * theta) + 0.002 * t + 1e-6 * t ** 2
+    exact = periodic_error(theta, y, WORM, time=t, harmonics=1, drift_degree=2)
+    assert exact.rms_residual == pytest.approx(0.0, abs=1e-8)
+    assert periodic_error(theta, y, WORM, harmonics=1, drift_degree=2).rms_residual > 1e-3
+    assert periodic_error(theta, y, WORM, time=t, harmonics=1, drift_degree=1).rms_residual > 1e-2
+
+
+def test_rms_raw_about_each_run_mean_and_cycles_without_runs():
+    theta = np.array([0.0, 0.001, 0.002, 0.003])
+    y = np.array([1.0, 3.0, 10.0, 14.0])
+    pe = periodic_error(theta, y, 10.0, run=[1, 1, 2, 2], harmonics=1, drift_degree=0)
+    assert pe.rms_raw == pytest.approx(math.sqrt(2.5))
+    one = periodic_error(theta, y, 10.0, harmonics=1, drift_degree=0)
+    assert one.rms_raw == pytest.approx(float(np.std(y)))
+    assert one.cycles == pytest.approx(0.003 * 10.0 / (2 * math.pi))
+    assert periodic_error(theta, y, 10.0, harmonics=1, axis_period_s=86400.0).period_s == pytest.approx(8640.0)
+
+
+def test_fold_of_part_of_a_cycle_and_with_an_extra_order():
+    # under a quarter of a worm cycle: bins 2..6 are empty (NaN) and every array has one entry per
+    # bin; the first sample, a hair below 0, folds onto phase 1.0 exactly and counts in the last bin
+    theta = np.linspace(-1e-20, 0.24 * 2 * math.pi / WORM, 400)
+    y = np.sin(WORM * theta) + 0.5 * np.sin(705.0 * theta)
+    pe = periodic_error(theta, y, WORM, harmonics=1, extra_orders=(705.0,), drift_degree=0, bins=8)
+    assert pe.fold_count.shape == pe.fold_mean.shape == pe.fold_phase.shape == (8,)
+    assert pe.fold_count.sum() == 400 and pe.fold_count[2:7].sum() == 0 and pe.fold_count[7] == 1
+    assert np.isnan(pe.fold_mean[2:7]).all()
+    # the extra order is taken out of the folded samples: bin means of sin(180 theta) alone
+    centres = np.array([np.mean(np.sin(WORM * theta[(np.mod(WORM * theta / (2 * math.pi), 1) * 8).astype(int) == b]))
+                        for b in (0, 1)])
+    np.testing.assert_allclose(pe.fold_mean[:2], centres, atol=1e-6)
+
+
+def test_extra_orders_within_a_billionth_of_a_harmonic_left_out():
+    theta, y, t, run, _ = tracking(1)
+    pe = periodic_error(theta, y, WORM, time=t, run=run, harmonics=2, extra_orders=(360.0000001, 360.01))
+    assert pe.orders.tolist() == [180.0, 360.0, 360.01]
+
+
+def test_argument_bounds():
+    theta, y = [0.0, 0.01], [0.0, 1.0]
+    for kwargs in ({"harmonics": 1}, {"drift_degree": 0}, {"bins": 1}):
+        periodic_error(theta, y, 0.5, **kwargs)  # the smallest values accepted
+    for order, kwargs in ((0.0, {}), (math.inf, {}), (1.0, {"harmonics": 0}), (1.0, {"drift_degree": -1}),
+                          (1.0, {"bins": 0})):
+        with pytest.raises(ValueError, match="order must be positive, harmonics >= 1, drift_degree >= 0"):
+            periodic_error(theta, y, order, **kwargs)
+    with pytest.raises(ValueError, match="at least two samples"):
+        periodic_error([0.0], [1.0], 1.0)
+    with pytest.raises(ValueError, match="y has 1 entries, expected 2"):
+        periodic_error(theta, [1.0], 1.0)
+    with pytest.raises(ValueError, match="time has 1 entries, expected 2"):
+        periodic_error(theta, y, 1.0, time=[0.0])
+    assert worm_order(0.5) == pytest.approx(SIDEREAL_DAY_S / 0.5)
+    assert order_period_s(0.5) == pytest.approx(SIDEREAL_DAY_S / 0.5)
+    for call in (lambda: worm_order(1.0, 0.0), lambda: worm_order(0.0)):
+        with pytest.raises(ValueError, match="periods must be positive"):
+            call()
+    for call in (lambda: order_period_s(0.0), lambda: order_period_s(1.0, 0.0)):
+        with pytest.raises(ValueError, match="order and axis period must be positive"):
+            call()
+    assert worm_order(2.0, 0.5) == 0.25 and order_period_s(2.0, 0.5) == 0.25
+    with pytest.raises(ValueError, match="time must be one-dimensional"):
+        drift_columns([[0.0, 1.0]])
+    with pytest.raises(ValueError, match=r"run has shape \(3,\), expected \(2,\)"):
+        drift_columns([0.0, 1.0], [1, 2, 3])
+
+
+def test_drift_columns_runs_of_one_instant_and_offsets():
+    # a run of one sample first, a run whose samples share one instant, then a run of two samples at t 10..11
+    cols = drift_columns([5.0, 7.0, 7.0, 10.0, 11.0], [3, 1, 1, 2, 2], degree=3)
+    assert cols.shape == (5, 3)  # run 1: offset; run 2: offset, T1 (2 samples: degree 1); run 3: nothing
+    np.testing.assert_allclose(cols[:, 0], [0, 1, 1, 0, 0])
+    np.testing.assert_allclose(cols[:, 1], [0, 0, 0, 1, 1])
+    np.testing.assert_allclose(cols[:, 2], [0, 0, 0, -1, 1])
+    one = drift_columns([2.0, 3.0, 4.0], degree=2)
+    np.testing.assert_allclose(one, [[-1, 1], [0, -1], [1, 1]])

@@ -29,12 +29,21 @@ declination Dec moves cos Dec arcsec on the sky per arcsec of the axis).  The er
 where the axis is ahead of the sky: a positive RA offset is one PHD2 corrects with a West pulse,
 which makes the axis run ahead, so the axis was behind (error = -u x scale / cos Dec).  The
 offset's sign is PHD2's definition and does not depend on the pulse letters, so a log whose W/E
-letters are reversed gets the same error curve.  Time becomes
-the RA-axis angle at the sidereal rate, 360 deg per :data:`~wormgear_cli.units.SIDEREAL_DAY_S`:
-each session starts at its logged hour angle (plus 180 deg on the east side of the pier) where
-the mount moved between sessions, else where the clock puts it.  Every session is a run of the
-measurement (run number = session number, 1 for the first ``Guiding Begins``), so several
-sessions are the same mount at several hour angles.
+letters are reversed gets the same error curve.
+
+Time becomes the RA-axis angle at the sidereal rate, 360 deg per
+:data:`~wormgear_cli.units.SIDEREAL_DAY_S`.  Every session is a run of the measurement (run
+number = session number, 1 for the first ``Guiding Begins``; where ``Time`` goes back inside a
+section, a new session starts), so several sessions are the same mount at several hour angles:
+each starts where the clock puts it (the previous session's start plus the time elapsed), or at
+its logged hour angle (plus 180 deg on the east side of the pier) where that differs (a slew, a
+re-centring, a meridian flip).  ``time`` is seconds since the first session read began.
+
+Rows: a ``DROP`` row has no star; the ``Mount`` row PHD2 writes right after it with the same frame
+number is the dead-reckoning pulse the guide algorithm sent meanwhile (no star position: its pulse
+counts, its offset does not); ``Mount`` rows with a non-zero ``ErrorCode`` (a star warning) were
+guided on and are kept; an incomplete last row (a log cut off while written) is left out.  The
+pulse sign is decided once, pooled over the sessions read.
 
 Pure parsing of a given text (the file is read by the reader layer); every problem raises
 :class:`~wormgear_cli.errors.DataError` naming the line and the option that supplies what is
