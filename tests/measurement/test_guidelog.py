@@ -346,3 +346,52 @@ def test_pulse_sign_rules():
     assert pulse_sign(0.0, 0.0) == (1, 0.0, False)
     # base steps that cancel the pulses exactly (right sign): R+ = 0
     assert sign_roughness([0.0, -1.0, -1.5], [0.0, 1.0, 1.5]) == (0.0, 3.0, 2)
+
+
+def test_calibration_section_and_log_lines_around_the_guiding_ignored():
+    calibration = ("PHD2 version 2.6.14 [Windows], Log version 2.5. Log enabled at 2026-01-05 21:50:00\n\n"
+                   "Calibration Begins at 2026-01-05 21:55:00\nEquipment Profile = p\nDirection,Step,dx,dy,x,y,Dist\n"
+                   "West,1,1.234,-0.567,969.357,606.889,1.358\n"
+                   "West calibration complete. Angle = 0.0 deg, Rate = 4.000 px/sec, Parity = Even\n"
+                   "Calibration complete, mount = M.\n\n")
+    tail = "Guiding Ends at 2026-01-05 22:01:00\n\nLog Summary: calcnt:1 gcnt:1 gdur:60 gacnt:0\nLog closed at x\n"
+    text = calibration + HEAD + row(1, 1.0, 0.25) + row(2, 2.0, 0.5) + tail
+    for variant in (text, "\ufeff" + text.replace("\n", "\r\n"), text.replace("\n", "\r")):
+        m = read_guidelog(variant, "cal")
+        np.testing.assert_allclose(m.error_arcsec, [-0.5, -1.0])  # 2"/px at Dec 0, the axis behind
+        assert m.notes[0] == "PHD2 guide log: 1 session read as run 1 (line 10)"
+
+
+def test_a_session_without_pixel_scale_names_the_sessions_that_can_be_read():
+    text = synth.constructed("several-sessions")[0]
+    first, rest = text.split("Pixel scale = 1.20 arc-sec/px", 1)
+    text = first + "Pixel scale = unspecified" + rest
+    with pytest.raises(DataError) as err:
+        read_guidelog(text, "log.txt")
+    assert err.value.problems[0].startswith("log.txt:3: session 1: the pixel scale is unspecified")
+    assert err.value.problems[1] == "log.txt: sessions 2, 3 can be read as they are: --session 2"
+    assert len(read_guidelog(text, "log.txt", GuideLogOptions(sessions=(2, 3)))) == 400
+
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_DROPS_TEXT = synth.constructed("drop-frames")[0]
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cut=st.integers(0, len(_DROPS_TEXT)), where=st.integers(0, len(_DROPS_TEXT) - 1),
+       junk=st.sampled_from(["", ",", "\n", "x", "-", "\"", "9", "1e999", "INFO: DITHER by 1e999, 0, new lock pos = nan, 1\n",
+                             "INFO: SET LOCK POSITION, new lock pos = 1e999, 1\n", "Dec = 1e999 deg\n",
+                             "INFO: LOCK SHIFT, enabled = 1 X,Y rate (1,1) pixels/hr (1e999,0.00) px/hr\n",
+                             "1,2,3\n", "Guiding Begins at 2026-13-45 99:99:99\n", "Frame,Time,mount\n", "\r"]))
+def test_damaged_logs_raise_only_data_errors(cut, where, junk):
+    """Cut short, or with a character or a line spliced in anywhere: a Measurement or a DataError naming
+    the problem, never another exception."""
+    text = _DROPS_TEXT[:where] + junk + _DROPS_TEXT[where:cut] if where < cut else _DROPS_TEXT[:cut]
+    try:
+        m = read_guidelog(text, "damaged")
+    except DataError as exc:
+        assert str(exc).startswith("damaged")
+    else:
+        assert np.all(np.isfinite(m.error)) and np.all(np.isfinite(m.angle)) and np.all(np.diff(m.time) >= -1e-9)

@@ -200,9 +200,19 @@ def _find(header: list, pattern: str) -> tuple[int, re.Match] | None:
     return None
 
 
+#: numbers in headers and INFO lines beyond this (or not finite) are taken as damage and not used
+_SANE = 1e9
+
+
+def _num(text: str) -> float | None:
+    """``text`` as a number, or None when it is not finite or beyond :data:`_SANE`."""
+    value = float(text)
+    return value if math.isfinite(value) and abs(value) < _SANE else None
+
+
 def _value(header: list, pattern: str) -> float | None:
     found = _find(header, pattern)
-    return None if found is None else float(found[1].group(1))
+    return None if found is None else _num(found[1].group(1))
 
 
 # --- per-session parameters ---------------------------------------------------------------------------------
@@ -233,7 +243,7 @@ def _scale(sec: _Section, opts: GuideLogOptions, where: str) -> tuple[float | No
     logged = None
     if found is not None:
         try:
-            logged = float(found[1].group(1))
+            logged = _num(found[1].group(1))
         except ValueError:
             logged = None
     if opts.pixel_scale is not None:
@@ -250,21 +260,27 @@ def _scale(sec: _Section, opts: GuideLogOptions, where: str) -> tuple[float | No
     elif size:
         hint = (f"; with the log's pixel size {size:g} um and binning {binning or 1:g}: "
                 f"{206.265 * size * (binning or 1):.4g} / focal length [mm]")
-    state = "unspecified" if found is not None else "not in the log"
+    state = ("not in the log" if found is None else "unspecified" if found[1].group(1) == "unspecified"
+             else f"unreadable ({found[1].group(1)!r})")
     return None, "", (f"{where}: the pixel scale is {state}; give it with --pixel-scale ARCSEC_PER_PX "
                       f"(206.265 x pixel size [um] x binning / focal length [mm]){hint}")
 
 
 def _dec(sec: _Section, opts: GuideLogOptions, where: str) -> tuple[float | None, str, str | None]:
     """(declination [deg] or None, how, problem)."""
-    logged = _value(sec.header, rf"\bDec = ({_NUMBER}) deg")
+    found = _find(sec.header, rf"\bDec = ({_NUMBER}) deg")
+    logged = None if found is None else _num(found[1].group(1))
     if opts.dec_deg is not None:
         dec, how = opts.dec_deg, f"Dec {opts.dec_deg:g} deg from --dec-deg"
     elif logged is not None:
         dec, how = logged, f"Dec {logged:g} deg"
     else:
-        return None, "", (f"{where}: the declination is not in the log; give it with --dec-deg DEG (the "
-                          "declination of the guide star)")
+        state = "not in the log" if found is None else f"unreadable ({found[1].group(1)!r})"
+        return None, "", (f"{where}: the declination is {state}; give it with --dec-deg DEG (the declination of "
+                          "the guide star)")
+    if abs(dec) > 90.0:
+        return None, "", (f"{where}: the logged declination {dec:g} is not in [-90, 90] degrees; give the right "
+                          "one with --dec-deg DEG")
     if abs(dec) > MAX_ABS_DEC_DEG:
         fix = "" if opts.dec_deg is not None else "; if the logged value is wrong, give the right one with --dec-deg"
         return None, "", (f"{where}: declination {dec:g} deg is within {90 - MAX_ABS_DEC_DEG:g} deg of the pole: "
@@ -310,12 +326,14 @@ def _params(sec: _Section, number: int, opts: GuideLogOptions, name: str) -> tup
         return None, problems
     x_angle = _value(sec.header, rf"xAngle = ({_NUMBER})")
     lock = _find(sec.header, rf"Lock position = ({_NUMBER}), ({_NUMBER})")
+    lock_xy = None if lock is None else (_num(lock[1].group(1)), _num(lock[1].group(2)))
     hour = _value(sec.header, rf"Hour angle = ({_NUMBER}) hr")
     pier = _find(sec.header, r"Pier side = (East|West)")
     return _Params(scale, scale_how, dec, dec_how, rate, rate_how,
                    None if x_angle is None else x_angle * DEG,
-                   None if lock is None else (float(lock[1].group(1)), float(lock[1].group(2))),
-                   hour, None if pier is None else pier[1].group(1)), []
+                   None if lock_xy is None or None in lock_xy else lock_xy,
+                   hour if hour is not None and abs(hour) <= 24.0 else None,
+                   None if pier is None else pier[1].group(1)), []
 
 
 # --- the frames of a session --------------------------------------------------------------------------------
@@ -507,6 +525,10 @@ def _events(sec: _Section, p: _Params, time: np.ndarray) -> _Events:
         m = _DITHER.match(text)
         dithers += m is not None
         lock = _NEW_LOCK.search(text)
+        numbers = [_num(g) for g in (m.groups() if m else ()) + (lock.groups() if lock else ())]
+        if None in numbers:  # a damaged line
+            unplaced.append(line)
+            continue
         if lock is not None:
             if projected:
                 target = ra(float(lock.group(1)), float(lock.group(2)))
@@ -518,6 +540,9 @@ def _events(sec: _Section, p: _Params, time: np.ndarray) -> _Events:
                 unplaced.append(line)
             continue
         m = _SHIFT.match(text)
+        if m is not None and m.group(2) is not None and None in (_num(m.group(2)), _num(m.group(3))):
+            unplaced.append(line)
+            continue
         if m is not None:
             on = m.group(1) == "1" and m.group(2) is not None
             shifting |= on
@@ -748,6 +773,10 @@ def read_guidelog(text: str, name: str = "<guide log>", options: GuideLogOptions
             continue
         sessions.append(_session(number, sec, frames, p))
     if problems:
+        if sessions:  # some sessions have what they need
+            ok = ", ".join(str(s.number) for s in sessions[:5]) + (", ..." if len(sessions) > 5 else "")
+            problems.append(f"{name}: session{'s' if len(sessions) > 1 else ''} {ok} can be read as "
+                            f"{'they are' if len(sessions) > 1 else 'it is'}: --session {sessions[0].number}")
         raise DataError(problems)
     if sum(s.time.size for s in sessions) < 2:
         raise DataError(f"{name}: fewer than two guide frames with a star in the session"
@@ -766,12 +795,9 @@ def read_guidelog(text: str, name: str = "<guide log>", options: GuideLogOptions
         angle.append(a0 + 2.0 * math.pi * s.time / SIDEREAL_DAY_S)
         time.append(t0 + s.time)
         run.append(np.full(s.time.size, s.number, dtype=np.int64))
-    warnings = _sign_warnings(sessions, sign, rel, decided, plus + minus > 0)
+    warnings = _warnings(sessions, sign, rel, decided, plus + minus > 0)
     notes = (_notes(found, sessions, empty, sign, rel, decided, plus + minus > 0) + place_notes + notes
              + [w for s in sessions for w in _event_notes(s)])
-    warnings += [f"session {s.number}: lock-position changes at line{'s' if len(s.events.unplaced) > 1 else ''} "
-                 f"{', '.join(map(str, s.events.unplaced[:3]))} could not be put on the RA axis (no xAngle or lock "
-                 "position in the session's header): not added back" for s in sessions if s.events.unplaced]
     n = sum(s.time.size for s in sessions)
     return Measurement(
         source=name, angle=np.concatenate(angle), error=np.concatenate(error), direction=np.ones(n),
@@ -784,6 +810,10 @@ def read_guidelog(text: str, name: str = "<guide log>", options: GuideLogOptions
 
 
 # --- what was done, in words --------------------------------------------------------------------------------
+
+
+def _rougher(rel: float) -> str:
+    return "much rougher" if not math.isfinite(rel) else f"{100 * rel:.0f} % rougher"
 
 
 def _plural(k: int, word: str, many: str | None = None) -> str:
@@ -834,10 +864,10 @@ def _notes(found, sessions: list[_Session], empty: list[int], sign: int, rel: fl
         out.append("no RA pulses in the sessions read (guide output off?): the star's offsets are the mount's error")
     elif sign > 0:
         out.append("RA pulses added back with the sign PHD2 writes (a West pulse moves the star towards -RA)"
-                   + (f": the opposite sign gives a {100 * rel:.0f} % rougher series" if decided else ""))
+                   + (f": the opposite sign gives a {_rougher(rel)} series" if decided else ""))
     else:
         out.append(f"RA pulses added back with the sign opposite to the W/E letters: PHD2's own sign gives a "
-                   f"{100 * rel:.0f} % rougher series")
+                   f"{_rougher(rel)} series")
     dithers = sum(s.events.dithers for s in sessions)
     moves = sum(s.events.lock_moves for s in sessions)
     shifts = np.concatenate([s.events.shift for s in sessions])
@@ -863,11 +893,19 @@ def _event_notes(s: _Session) -> list[str]:
     return []
 
 
-def _sign_warnings(sessions: list[_Session], sign: int, rel: float, decided: bool, pulsed: bool) -> list[str]:
-    """Warnings on the pulse sign: reversed letters, no clear answer, a session that disagrees."""
-    if not pulsed:
-        return []
+def _warnings(sessions: list[_Session], sign: int, rel: float, decided: bool, pulsed: bool) -> list[str]:
+    """Warnings: lock changes not added back; the pulse sign (reversed letters, no clear answer, a
+    session that disagrees)."""
     out = []
+    for s in sessions:
+        lines = s.events.unplaced
+        if lines:
+            out.append(f"session {s.number}: lock-position change{'s' if len(lines) > 1 else ''} at line"
+                       f"{'s' if len(lines) > 1 else ''} {', '.join(map(str, lines[:3]))}"
+                       f"{' and more' if len(lines) > 3 else ''} could not be put on the RA axis (a damaged line, "
+                       "or no xAngle or lock position in the session's header): not added back")
+    if not pulsed:
+        return out
     if sign < 0:
         out.append("the RA pulses move the star the way opposite to their W/E letters (the series is smoother with "
                    "the sign reversed, used here); check the mount's RA direction setting")
