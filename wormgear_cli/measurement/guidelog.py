@@ -158,36 +158,60 @@ def _start_time(line: str) -> datetime | None:
         return None
 
 
-def _scan(lines: list[str]) -> list[_Section]:
+#: a line that does not start with a digit (everything but frame rows), after its newline: the regex
+#: engine jumps from newline to newline
+_NOT_A_ROW = re.compile(r"\n(?![0-9])([^\n]*)")
+
+
+def _scan(text: str) -> list[_Section]:
     """The guiding sections of the log, in file order (calibration sections and text outside a
-    section left out)."""
+    section left out).  The frame rows between two other lines are taken as one block."""
     sections: list[_Section] = []
     cur: _Section | None = None
-    for i, line in enumerate(lines, start=1):
-        if not line:
-            continue
-        if cur is not None and cur.columns is not None and line[0].isdigit():
-            cur.rows.append(line)
-            cur.row_lines.append(i)
-            continue
-        s = line.strip()
-        if s.startswith(_BEGINS):
-            cur = _Section(i, _start_time(s))
-            sections.append(cur)
-        elif s.startswith(("Calibration Begins at", "Guiding Ends at")):
-            cur = None
-        elif s.startswith(COLUMN_LINE):
-            if cur is None or cur.columns is not None:  # frames without a "Guiding Begins" line
-                cur = _Section(i, None)
-                sections.append(cur)
-            cur.columns = {c.strip(): k for k, c in enumerate(s.split(","))}
-            cur.column_line = i
-        elif cur is not None and s.startswith("INFO:"):
-            if cur.columns is not None:
-                cur.events.append((len(cur.rows), i, s))
-        elif cur is not None and cur.columns is None and s:
-            cur.header.append((i, s))
+    text = "\n" + text  # every line after a newline
+    line_no, pos = 1, 1  # the line that starts at text[pos]
+    for m in _NOT_A_ROW.finditer(text):
+        if m.start() > pos:
+            line_no = _rows(text[pos:m.start()], line_no, cur)
+        cur = _line(m.group(1), line_no, cur, sections)
+        line_no, pos = line_no + 1, m.end() + 1
+    if pos < len(text):
+        _rows(text[pos:], line_no, cur)
     return [sec for sec in sections if sec.columns is not None]
+
+
+def _rows(block: str, line_no: int, cur: _Section | None) -> int:
+    """File the lines of ``block`` (each starting with a digit) from line ``line_no`` on: frame rows
+    of a section after its column line, header lines before it; the next line number."""
+    lines = block.split("\n")
+    if cur is not None and cur.columns is not None:
+        cur.rows += lines
+        cur.row_lines += range(line_no, line_no + len(lines))
+    elif cur is not None:
+        cur.header += [(line_no + k, line.strip()) for k, line in enumerate(lines)]
+    return line_no + len(lines)
+
+
+def _line(line: str, i: int, cur: _Section | None, sections: list[_Section]) -> _Section | None:
+    """File line ``i`` (not a frame row); the section current after it."""
+    s = line.strip()
+    if s.startswith(_BEGINS):
+        cur = _Section(i, _start_time(s))
+        sections.append(cur)
+    elif s.startswith(("Calibration Begins at", "Guiding Ends at")):
+        cur = None
+    elif s.startswith(COLUMN_LINE):
+        if cur is None or cur.columns is not None:  # frames without a "Guiding Begins" line
+            cur = _Section(i, None)
+            sections.append(cur)
+        cur.columns = {c.strip(): k for k, c in enumerate(s.split(","))}
+        cur.column_line = i
+    elif cur is not None and s.startswith("INFO:"):
+        if cur.columns is not None:
+            cur.events.append((len(cur.rows), i, s))
+    elif cur is not None and cur.columns is None and s:
+        cur.header.append((i, s))
+    return cur
 
 
 def _find(header: list, pattern: str) -> tuple[int, re.Match] | None:
@@ -440,9 +464,10 @@ def _frames(sec: _Section, name: str) -> _Frames:
             raise DataError(f"{name}:{lines[k]}: column mount: expected \"Mount\" or \"DROP\", got {word!r}")
         drop[k], mount[k] = word == "DROP", word == "Mount"
     time = _numbers(cells["Time"], lines, name, "Time")
-    frame = _numbers(cells["Frame"], lines, name, "Frame")
+    frame = cells["Frame"]
     dead = np.zeros(n, dtype=bool)
-    dead[1:] = mount[1:] & drop[:-1] & (frame[1:] == frame[:-1])
+    for k in np.flatnonzero(drop[:-1] & mount[1:]).tolist():  # the row after a DROP row, same frame number
+        dead[k + 1] = frame[k + 1].strip() == frame[k].strip()
     measured = mount & ~dead
     idx = np.flatnonzero(measured)
     raw = np.full(n, np.nan)
@@ -461,6 +486,60 @@ def _frames(sec: _Section, name: str) -> _Frames:
     pulse = np.zeros(n)
     pulse[rows] = sign * dur
     return _Frames(time, measured, drop, dead, raw, pulse, lines, _flagged(sec, rest, idx), cut)
+
+
+def _fast_frames(sec: _Section) -> _Frames | None:
+    """:func:`_frames` of a well-formed section, the numbers converted by numpy's C reader (no
+    Python object per cell); None when anything is out of the ordinary (the exact path then
+    finds it and names the line)."""
+    cols, rows = sec.columns, sec.rows
+    if not rows or any(c not in cols for c in NEEDED_COLUMNS):
+        return None
+    need = max(cols[c] for c in NEEDED_COLUMNS) + 1
+    if rows[-1].count(",") < need - 1:  # a cut last row
+        return None
+    drops = [k for k, r in enumerate(rows) if '"Mount"' not in r]
+    head = [rows[k].split(",", need) for k in drops]
+    if any(len(c) < need or c[cols["mount"]] != '"DROP"' for c in head):
+        return None
+    n = len(rows)
+    mount = np.ones(n, dtype=bool)
+    mount[drops] = False
+    idx = np.flatnonzero(mount)
+    chosen = rows if not drops else [rows[k] for k in idx.tolist()]
+    use = [cols["Time"], cols["RARawDistance"], cols["RADuration"]] + (
+        [cols["ErrorCode"]] if "ErrorCode" in cols else [])
+    try:
+        num = np.loadtxt(chosen, delimiter=",", usecols=use, comments=None, quotechar='"', ndmin=2)
+        letters = np.loadtxt(chosen, delimiter=",", usecols=cols["RADirection"], dtype="U8", comments=None,
+                             quotechar='"', ndmin=1)
+        drop_time = np.array([float(c[cols["Time"]]) for c in head])
+    except ValueError:
+        return None
+    sign = (letters == "W").astype(float) - (letters == "E")
+    if (not np.all(np.isfinite(num)) or not np.all(np.isfinite(drop_time)) or num.shape[0] != idx.size
+            or np.any((sign == 0) & ((letters != "") | (num[:, 2] != 0)))):
+        return None
+    time = np.empty(n)
+    time[idx] = num[:, 0]
+    time[drops] = drop_time
+    drop = ~mount
+    dead = np.zeros(n, dtype=bool)
+    for k, c in zip(drops, head):  # the row after a DROP row with its frame number: dead reckoning
+        if k + 1 < n and mount[k + 1]:
+            dead[k + 1] = rows[k + 1].split(",", 1)[0].strip() == c[cols["Frame"]].strip()
+    measured = mount & ~dead
+    raw = np.full(n, np.nan)
+    raw[idx] = num[:, 1]
+    raw[~measured] = np.nan
+    pulse = np.zeros(n)
+    pulse[idx] = sign * num[:, 2]
+    flagged = 0
+    if num.shape[1] > 3:
+        code = np.zeros(n)
+        code[idx] = num[:, 3]
+        flagged = int(np.count_nonzero(code[measured]))
+    return _Frames(time, measured, drop, dead, raw, pulse, np.asarray(sec.row_lines, dtype=np.int64), flagged, 0)
 
 
 def _pick(col: tuple, idx: np.ndarray):
@@ -693,24 +772,24 @@ def _found_sessions(text: str, name: str) -> tuple[list[tuple[_Section, _Frames]
         text = text[1:]
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
-    sections = _scan(text.split("\n"))
+    sections = _scan(text)
     if not sections:
         raise DataError(f"{name}: no guiding frames: expected a PHD2 guide log with 'Guiding Begins at ...' "
                         f"sections and the column line {COLUMN_LINE}dx,dy,RARawDistance,...")
     found, notes = [], []
     for sec in sections:
-        frames = _frames(sec, name)
+        frames = _fast_frames(sec) or _frames(sec, name)
         if frames.cut:
             notes.append(f"line {frames.cut}: an incomplete last row of a section left out")
         parts = _split_restarts(sec, frames)
         if len(parts) == 1:
             found.append((sec, frames))
             continue
-        found.append((parts[0], _frames(parts[0], name)))
-        for part in parts[1:]:
-            notes.append(f"line {part.line}: Time starts again without a 'Guiding Begins' line: read as a new "
-                         f"session (number {len(found) + 1})")
-            found.append((part, _frames(part, name)))
+        for k, part in enumerate(parts):
+            if k:
+                notes.append(f"line {part.line}: Time starts again without a 'Guiding Begins' line: read as a new "
+                             f"session (number {len(found) + 1})")
+            found.append((part, _fast_frames(part) or _frames(part, name)))
     return found, notes
 
 
