@@ -395,3 +395,26 @@ def test_damaged_logs_raise_only_data_errors(cut, where, junk):
         assert str(exc).startswith("damaged")
     else:
         assert np.all(np.isfinite(m.error)) and np.all(np.isfinite(m.angle)) and np.all(np.diff(m.time) >= -1e-9)
+
+
+def test_consistency_fast_and_exact_row_paths():
+    """The C-reader path and the exact path give the same frames on every test log; a log the fast
+    path declines (Mount unquoted, letters padded, empty ErrorCode) reads the same by the exact path."""
+    from wormgear_cli.measurement import guidelog as g
+
+    paths = [CGE, G11, EQ6, *sorted((TELESCOPE / "constructed").glob("*.txt"))]
+    for path in paths:
+        for sec in g._scan(path.read_text().replace("\r\n", "\n")):
+            fast, exact = g._fast_frames(sec), g._frames(sec, "x")
+            assert fast is not None
+            for name in ("time", "measured", "drop", "dead", "pulse_ms", "lines"):
+                np.testing.assert_array_equal(getattr(fast, name), getattr(exact, name))
+            np.testing.assert_array_equal(fast.raw, exact.raw)
+            assert (fast.flagged, fast.cut) == (exact.flagged, exact.cut)
+    text = synth.constructed("drop-frames")[0]
+    odd = re.sub(r',"Mount",(.*),([EW]),', r',Mount,\1, \2 ,', text).replace(",12000,45.00,0\n", ",12000,45.00,\n")
+    assert odd != text
+    assert all(g._fast_frames(sec) is None for sec in g._scan(odd))
+    a, b = read_guidelog(text, "x"), read_guidelog(odd, "x")
+    np.testing.assert_array_equal(a.error, b.error)
+    np.testing.assert_array_equal(a.angle, b.angle)
