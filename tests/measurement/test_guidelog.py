@@ -57,7 +57,7 @@ def independent(path, session: int = 1):
     else:
         rate = (_number(r"xRate = ([\d.]+)", head) * math.cos(math.radians(dec))
                 / math.cos(math.radians(_number(r"Cal Dec = ([-\d.]+)", head))))
-    times, us = [], []
+    times, us, sent = [], [], []
     lock_ra = pulses = 0.0
     last_drop = None
     for row in csv.reader(body.split("\n")[1:]):
@@ -76,8 +76,10 @@ def independent(path, session: int = 1):
         if row[0] != last_drop:  # a dead-reckoning row (same frame as the DROP before it) is no measurement
             times.append(float(row[1]))
             us.append(float(row[5]) + lock_ra + pulses)
+            sent.append(pulses)
         if row[9] and int(row[9]):
             pulses += (1.0 if row[10] == "W" else -1.0) * int(row[9]) / 1000.0 * rate
+    independent.sent = np.array(sent)  # the cumulated pulses before each frame [px], for the sign check
     return np.array(times), np.array(us), scale, dec
 
 
@@ -185,6 +187,7 @@ def test_several_sessions_third_after_a_meridian_flip():
     m = read_guidelog(text, "several")
     assert "session 3 starts at its logged hour angle +0.35 h (east of the pier)" in "\n".join(m.notes)
     assert not any("session 2 starts" in n for n in m.notes)  # the second follows on the clock
+    assert GuideLogOptions(sessions=2) == GuideLogOptions(sessions=[2]) == GuideLogOptions(sessions=(2,))
     one = read_guidelog(text, "several", GuideLogOptions(sessions=(2,)))
     assert set(one.run.tolist()) == {2}
     assert "session 2 of 3 read" in one.notes[0]
@@ -418,3 +421,194 @@ def test_consistency_fast_and_exact_row_paths():
     a, b = read_guidelog(text, "x"), read_guidelog(odd, "x")
     np.testing.assert_array_equal(a.error, b.error)
     np.testing.assert_array_equal(a.angle, b.angle)
+
+
+@pytest.mark.parametrize("path, session, expected", [
+    (CGE, 1, [
+        "PHD2 guide log: 1 session read as run 1 (line 1)",
+        "3520 guide frames with a star used; 533 frames with a star warning code (ErrorCode not 0) kept, PHD2 "
+        "guided on them",
+        'pixels to RA-axis arcsec: pixel scale 0.55"/px / cos Dec (Dec 22 deg); RA pulses added back at 11.54 px/s '
+        "(xRate 12.346 px/s x cos Dec / cos Cal Dec 7.3 deg)",
+        "RA pulses added back with the sign PHD2 writes (a West pulse moves the star towards -RA): the opposite "
+        "sign gives a {} % rougher series",
+        "3 dithers: the lock's shift along RA (-4.00 to +2.00 px) added back",
+        "time to RA-axis angle at the sidereal rate (360 deg per 86164.09 s), starting at the logged hour angle "
+        "+0.88 h (east of the pier: +180 deg)"]),
+    (EQ6, 3, [
+        "PHD2 guide log: session 3 of 19 read (line 85), each a run numbered as its session",
+        "607 guide frames with a star used; 4 frames without a star (DROP) left out, the 4 dead-reckoning pulses "
+        "PHD2 sent after them added back",
+        'pixels to RA-axis arcsec: pixel scale 1.05"/px / cos Dec (Dec 31.6 deg); RA pulses added back at 5.678 '
+        'px/s (Norm rates RA 7"/s x cos Dec / 1.05"/px)',
+        "RA pulses added back with the sign PHD2 writes (a West pulse moves the star towards -RA): the opposite "
+        "sign gives a {} % rougher series",
+        "1 dither: the lock's shift along RA (-2.00 to +0.00 px) added back",
+        "time to RA-axis angle at the sidereal rate (360 deg per 86164.09 s), starting at the logged hour angle "
+        "-2.78 h"]),
+])
+def test_notes_word_for_word(path, session, expected):
+    """The notes of two real logs, checked by hand: 11.54 = 12.346 cos 22 / cos 7.3, 5.678 = 7.0 cos 31.6 / 1.05;
+    the roughness of the other sign from the independent reconstruction."""
+    t, u, _, _ = independent(path, session)
+    sent = independent.sent
+    step = np.diff(sent) != 0
+    d = np.diff(u - sent)  # the offsets with the lock shifts, without the pulses
+    plus, minus = np.abs(d + np.diff(sent))[step].sum(), np.abs(d - np.diff(sent))[step].sum()
+    expected = [n.format(round(100 * (minus - plus) / plus)) for n in expected]
+    m = read(path, sessions=(session,))
+    assert list(m.notes) == expected
+    assert m.warnings == ()
+
+
+def guided(u, events=None, header=HEAD, rate=4.0, letters=("W", "E")):
+    """A hand-made session: the star's true offset ``u`` [px] per frame (1 s apart), a guider sending
+    the whole measured offset back each frame (rounded to ms at ``rate`` px/s), ``events`` {frame index:
+    (INFO line, lock shift [px] it makes, pulse [px] it sends)} before that frame.  Returns the text."""
+    out, sent, lock = [header], 0.0, 0.0
+    for i, ui in enumerate(u):
+        t = float(i + 1)
+        line, dlock, dpulse = (events or {}).get(i, (None, 0.0, 0.0))
+        if line:
+            out.append(line + "\n")
+            lock += dlock(t) if callable(dlock) else dlock
+            sent += dpulse
+        raw = ui - sent - lock
+        ms = int(round(abs(raw) / rate * 1000))
+        letter = (letters[0] if raw > 0 else letters[1]) if ms else ""
+        out.append(row(i + 1, t, raw, ms, letter))
+        sent += math.copysign(ms / 1000 * rate, raw) if ms else 0.0
+    return "".join(out)
+
+
+U = [0.0, 0.5, 1.0, 1.2, 1.0, 0.8, 0.5, 0.2, -0.3, -0.6, -0.4, 0.0, 0.3, 0.7]
+
+
+def test_hand_log_manual_pulses_both_ways_and_lock_moves():
+    events = {3: ("INFO: Manual guide (Mount) East 250 ms", 0.0, -1.0),
+              6: ("INFO: Manual guide (Mount) West 500 ms", 0.0, 2.0),
+              9: ("INFO: SET LOCK POSITION, new lock pos = 100.700, 100.000", 0.7, 0.0)}
+    m = read_guidelog(guided(U, events), "hand")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
+    assert "2 manual RA pulses added back" in m.notes
+    assert "1 lock-position change: the lock's shift along RA (+0.00 to +0.70 px) added back" in m.notes
+    assert m.warnings == ()
+
+
+def test_hand_log_lock_shift_from_the_start_and_without_calibration_angle():
+    shift = "INFO: LOCK SHIFT, enabled = 1 RA,Dec rate (1.00,0.00) arc-sec/hr (720.00,0.00) px/hr"
+    # the lock moves 0.2 px/s from the first frame's clock (t = 0) on: by 0.2 px at frame 1 (t = 1 s)
+    events = {0: (shift, 0.2, 0.0), **dict.fromkeys(range(1, 14), ("INFO: SETTLING STATE CHANGE, x", 0.2, 0.0))}
+    m = read_guidelog(guided(U, events), "hand")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
+    # no xAngle: a dither's own RA value is added back; a lock change or a lock shift cannot be placed
+    head = HEAD.replace("xAngle = 0.0, ", "")
+    dither = "INFO: DITHER by 0.600, 0.300, new lock pos = 100.600, 100.300"
+    m = read_guidelog(guided(U, {5: (dither, 0.6, 0.0)}, head), "hand")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
+    m = read_guidelog(guided(U, {5: ("INFO: SET LOCK POSITION, new lock pos = 101.000, 100.000", 1.0, 0.0),
+                                 7: (shift, 0.0, 0.0)}, head), "hand")
+    assert m.warnings == ("session 1: lock-position changes at lines 13, 16 could not be put on the RA axis (a "
+                          "damaged line, or no xAngle or lock position in the session's header): not added back",)
+
+
+def test_hand_log_reversed_letters_and_undecided_sign():
+    m = read_guidelog(guided(U, letters=("E", "W")), "hand")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
+    assert "RA pulses added back with the sign opposite to the W/E letters: PHD2's own sign gives a 26 % rougher " \
+           "series" in m.notes  # sum of |steps| after a pulse: 3.8 px (the true |du|), 4.8 px with the letters
+    still = read_guidelog(guided([1.0] * 5, letters=("E", "W")), "hand")  # the mount still: no roughness at all
+    assert "RA pulses added back with the sign opposite to the W/E letters: PHD2's own sign gives a much rougher " \
+           "series" in still.notes
+    flat = read_guidelog(HEAD + row(1, 1.0, 0.1) + row(2, 2.0, 0.1), "hand")
+    assert "no RA pulses in the sessions read (guide output off?): the star's offsets are the mount's error" \
+        in flat.notes
+
+
+def test_pulse_sign_edges():
+    assert pulse_sign(0.0, 5.0) == (1, math.inf, True)
+    assert pulse_sign(5.0, 0.0) == (-1, math.inf, True)
+    assert pulse_sign(0.1, 0.3) == (1, pytest.approx(2.0), True)
+    assert pulse_sign(10.0, 10.5)[2] is False and pulse_sign(10.0, 10.51)[2] is True  # the 5 % margin
+    assert pulse_sign(10.0, 10.51, margin=0.1)[2] is False
+
+
+def test_time_restart_placed_after_the_first_session():
+    text, truth = synth.constructed("time-restart")
+    m = read_guidelog(text, "restart")
+    first, second = m.run == 1, m.run == 2
+    step = np.median(np.diff(m.time[first]))
+    assert m.time[second][0] == pytest.approx(m.time[first][-1] + step + m.time[second][0] - m.time[second][0],
+                                              abs=step * 1.1)
+    # one clock through both: the angle runs with the time at the sidereal rate
+    np.testing.assert_allclose(m.angle - 2 * math.pi * m.time / SIDEREAL, m.angle[0] - 2 * math.pi * m.time[0] / SIDEREAL,
+                               atol=1e-9)
+    assert "session 2 (line 218) has no start time after the previous session's end: placed right after it, its " \
+           "phase on the RA axis unknown" in m.notes
+    assert "line 218: Time starts again without a 'Guiding Begins' line: read as a new session (number 2)" in m.notes
+
+
+def test_rate_and_declination_edges():
+    text = synth.make_log([synth.Session(synth.START, frames=100)], synth.Rig(log_rate="xrate"))[0]
+    m = read_guidelog(text.replace("Cal Dec = 5.0", "Cal Dec = Unknown"), "x")
+    assert any("(xRate 6.243 px/s as logged (calibration declination unknown))" in n for n in m.notes)
+    slow = synth.make_log([synth.Session(synth.START, frames=100)], synth.Rig(log_rate="xrate", guide_speed=0.6))
+    check_truth(read_guidelog(*slow[:1], "x"), slow[1], synth.Rig())  # an xRate below 1 px/s
+    ok = synth.make_log([synth.Session(synth.START, frames=50)], synth.Rig(dec=80.0))[0]
+    assert len(read_guidelog(ok, "x")) == 50  # 80 deg is the limit, still read
+    with pytest.raises(DataError) as err:
+        read_guidelog(ok, "x", GuideLogOptions(dec_deg=85.0))
+    assert err.value.problems == ["x:3: session 1: declination 85 deg is within 10 deg of the pole: the star moves "
+                                  "only cos Dec = 0.087 arcsec per arcsec of the RA axis, too little to measure its "
+                                  "error; guide on a star nearer the equator"]
+    with pytest.raises(DataError, match=r"equator; if the logged value is wrong, give the right one with --dec-deg$"):
+        read_guidelog(ok.replace("Dec = 80.0 deg", "Dec = 81.0 deg"), "x")
+    uncalibrated = synth.make_log([synth.Session(synth.START, frames=50)], synth.Rig(log_rate="none"))[0]
+    with pytest.raises(DataError) as err:
+        read_guidelog(uncalibrated.replace("RA Guide Speed = 7.5 a-s/s, ", ""), "x")
+    assert err.value.problems[0].endswith("(arc-seconds per second of pulse at the equator, e.g. 7.52 for 0.5x "
+                                          "sidereal)")
+
+
+def test_pixel_scale_hints():
+    text = synth.constructed("unspecified-pixel-scale")[0]
+    with pytest.raises(DataError) as err:
+        read_guidelog(text.replace("Binning = 1, Focal length = unspecified", "Binning = 2, Focal length = 2800 mm"),
+                      "x")
+    assert err.value.problems[0].endswith("(the log's pixel size and focal length give 0.56)")
+    with pytest.raises(DataError) as err:
+        read_guidelog(text.replace("Binning = 1,", "Binning = 2,"), "x")
+    assert err.value.problems[0].endswith("with the log's pixel size 3.8 um and binning 2: 1568 / focal length [mm]")
+    with pytest.raises(DataError) as err:
+        read_guidelog(text.replace("Pixel scale = unspecified, ", ""), "x")
+    assert "the pixel scale is not in the log; give it with --pixel-scale" in err.value.problems[0]
+    logged = synth.constructed("no-version-header")[0]
+    m = read_guidelog(logged, "x", GuideLogOptions(pixel_scale=0.5))
+    assert m.notes[2].startswith('pixels to RA-axis arcsec: pixel scale 0.5"/px from --pixel-scale; the log says 1.2 ')
+
+
+def test_options_edges_and_detection():
+    GuideLogOptions(pixel_scale=0.5, guide_rate=0.5, dec_deg=-90.0, sessions=(1,))
+    for kwargs in ({"sessions": (True,)}, {"pixel_scale": 0.0}, {"guide_rate": 0.0}, {"dec_deg": 90.5}):
+        with pytest.raises(UsageError):
+            GuideLogOptions(**kwargs)
+    with pytest.raises(UsageError, match="^--pixel-scale 0.0: expected a positive number of arc-seconds per pixel$"):
+        GuideLogOptions(pixel_scale=0.0)
+    with pytest.raises(UsageError, match="^--guide-rate -1: expected a positive number of arc-seconds per second$"):
+        GuideLogOptions(guide_rate=-1)
+    for head in ("Calibration Begins at 2026-01-01 20:00:00\nx", "\ufeffPHD2 version 2.6.14, Log version 2.5.",
+                 "x\r Frame,Time,mount,dx,dy", "\r\nGuiding Begins at 2026"):
+        assert looks_like_guidelog(head), head
+    for head in ("phd2 version", "Frame,Time", "angle_deg,error_arcsec\n0,1", "Guiding Ends at x"):
+        assert not looks_like_guidelog(head), head
+
+
+def test_sessions_listed_in_the_message_of_a_session_beyond_them():
+    text = synth.constructed("several-sessions")[0]
+    nine = text + "".join(text.split("\n", 2)[2] for _ in range(3))  # 3 + 9 sessions, no version lines between
+    with pytest.raises(UsageError) as err:
+        read_guidelog(nine, "x", GuideLogOptions(sessions=(13,)))
+    assert str(err.value).startswith("--session 13: the log has 12 sessions (starting at lines 3, ")
+    assert str(err.value).endswith(", ...)")
+    with pytest.raises(UsageError, match=r"^--session 2: the log has 1 session \(starting at line 1\)$"):
+        read_guidelog(synth.constructed("no-version-header")[0], "x", GuideLogOptions(sessions=2))

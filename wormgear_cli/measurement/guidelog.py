@@ -87,7 +87,7 @@ class GuideLogOptions:
 
     Parameters
     ----------
-    sessions : tuple of int
+    sessions : tuple of int (or one int)
         Sessions to read, numbered from 1 in file order (``--session N``); empty: all.
     pixel_scale : float or None
         Guide-camera pixel scale [arcsec/px] (``--pixel-scale``); wins over the log's.
@@ -109,6 +109,10 @@ class GuideLogOptions:
     guide_rate: float | None = None
 
     def __post_init__(self):
+        if isinstance(self.sessions, (int, np.integer)) and not isinstance(self.sessions, bool):
+            object.__setattr__(self, "sessions", (int(self.sessions),))  # one session given as a number
+        else:
+            object.__setattr__(self, "sessions", tuple(self.sessions))
         problems = []
         for k in self.sessions:
             if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
