@@ -612,3 +612,59 @@ def test_sessions_listed_in_the_message_of_a_session_beyond_them():
     assert str(err.value).endswith(", ...)")
     with pytest.raises(UsageError, match=r"^--session 2: the log has 1 session \(starting at line 1\)$"):
         read_guidelog(synth.constructed("no-version-header")[0], "x", GuideLogOptions(sessions=2))
+
+
+def test_measurement_record_of_a_guide_log():
+    m = read(CGE)
+    assert m.source == str(CGE)
+    assert m.present == frozenset({"run", "time_s"}) and m.derived == frozenset()
+    assert m.header[:6] == ("Frame", "Time", "mount", "dx", "dy", "RARawDistance") and len(m.header) == 18
+    assert m.comments == () and m.rows == ()
+    assert dict(m.columns) == {"angle_deg": "Time", "error_arcsec": "RARawDistance", "run": "Guiding Begins",
+                               "time_s": "Time"}
+    assert m.run.dtype == np.int64
+    np.testing.assert_array_equal(m.direction, 1.0)
+    np.testing.assert_array_equal(m.load, 0.0)
+    np.testing.assert_array_equal(m.temperature, 20.0)
+    assert m.units == (("angle", "deg"), ("error", "arcsec"))
+
+
+def test_sessions_without_a_star_left_out_and_too_few_frames():
+    lost = 'INFO: x\n1,1.000,"DROP",,,,,,,,,,,,,0,0.00,5,"No star found"\n'
+    text = HEAD + lost.replace("INFO: x\n", "") + "Guiding Ends at x\n\n" + HEAD + row(1, 1.0, 0.1) + row(2, 2.0, 0.2)
+    m = read_guidelog(text, "two")
+    assert "session 1 without a frame with a star: left out" in m.notes
+    assert set(m.run.tolist()) == {2}
+    with pytest.raises(DataError, match=r"^one: fewer than two guide frames with a star in the session read; at "
+                                        r"least two are needed$"):
+        read_guidelog(HEAD + row(1, 1.0, 0.1), "one")
+    with pytest.raises(DataError, match=r"in the sessions read"):
+        read_guidelog(text.replace(row(2, 2.0, 0.2), ""), "two")
+
+
+def test_rows_without_error_code_column_and_a_drop_at_the_end():
+    head = HEAD.replace(",StarMass,SNR,ErrorCode", ",StarMass,SNR")
+    rows = "".join(row(i, float(i), 0.1 * i).rsplit(",", 1)[0] + "\n" for i in (1, 2, 3))
+    drop = '4,4.000,"DROP",,,,,,,,,,,,,0,0.00,5,"No star found"\n'
+    m = read_guidelog(head + rows + drop, "old")
+    np.testing.assert_allclose(m.error_arcsec, [-0.2, -0.4, -0.6])
+    assert "3 guide frames with a star used; 1 frame without a star (DROP) left out" in m.notes
+    # the exact path (Mount unquoted) counts the star warnings, wherever the ErrorCode column is
+    flagged = (HEAD + row(1, 1.0, 0.1) + row(2, 2.0, 0.2)[:-2] + "3\n" + row(3, 3.0, 0.3)).replace('"Mount"', "Mount")
+    assert any("1 frame with a star warning code" in n for n in read_guidelog(flagged, "f").notes)
+    moved = flagged.replace("SNR,ErrorCode", "ErrorCode,SNR").replace(",20.00,3\n", ",3,20.00\n").replace(
+        ",20.00,0\n", ",0,20.00\n")
+    assert any("1 frame with a star warning code" in n for n in read_guidelog(moved, "f").notes)
+
+
+def test_restart_parts_keep_their_info_lines_and_a_damaged_line_does_not_stop_the_rest():
+    dither = "INFO: DITHER by 0.500, 0.000, new lock pos = 100.500, 100.000"
+    first = guided(U)
+    second = guided(U[:6], {3: (dither, 0.5, 0.0)}, header="")  # Time starts again, a dither in the second part
+    m = read_guidelog(first + second, "parts")
+    assert m.run.tolist() == [1] * 14 + [2] * 6
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U + U[:6]), atol=2e-3)
+    damaged = "INFO: SET LOCK POSITION, new lock pos = 1e999, 100.000"
+    m = read_guidelog(guided(U, {2: (damaged, 0.0, 0.0), 5: (dither, 0.5, 0.0)}), "damaged")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
+    assert len(m.warnings) == 1 and "line 10" in m.warnings[0]
