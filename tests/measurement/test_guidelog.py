@@ -664,6 +664,10 @@ def test_restart_parts_keep_their_info_lines_and_a_damaged_line_does_not_stop_th
     m = read_guidelog(first + second, "parts")
     assert m.run.tolist() == [1] * 14 + [2] * 6
     np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U + U[:6]), atol=2e-3)
+    # a dither between the two parts (before the second part's first row) belongs to the second
+    between = guided(U[:6], {0: (dither, 0.5, 0.0)}, header="")
+    m = read_guidelog(first + between, "parts")
+    np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U + U[:6]), atol=2e-3)
     damaged = "INFO: SET LOCK POSITION, new lock pos = 1e999, 100.000"
     m = read_guidelog(guided(U, {2: (damaged, 0.0, 0.0), 5: (dither, 0.5, 0.0)}), "damaged")
     np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)

@@ -510,6 +510,8 @@ def _fast_frames(sec: _Section) -> _Frames | None:
     mount = np.ones(n, dtype=bool)
     mount[drops] = False
     idx = np.flatnonzero(mount)
+    if not idx.size:  # no guide step at all: the exact path (numpy's reader warns on no rows)
+        return None
     chosen = rows if not drops else [rows[k] for k in idx.tolist()]
     use = [cols["Time"], cols["RARawDistance"], cols["RADuration"]] + (
         [cols["ErrorCode"]] if "ErrorCode" in cols else [])
