@@ -120,6 +120,11 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     # the guard on the model's results (issue 23, item 11)
     "sanity": (("wormgear_cli/analysis/sanity.py",),
                ("tests/analysis/test_sanity.py",), None),
+    # the guide-log reader (PHD2 logs) and the periodic error of a worm, checked by their tests
+    "guidelog": (("wormgear_cli/measurement/guidelog.py",),
+                 ("tests/measurement/test_guidelog.py",), None),
+    "periodic-error": (("wormgear_cli/measurement/periodic_error.py",),
+                       ("tests/measurement/test_periodic_error.py",), None),
 }
 
 
