@@ -24,6 +24,7 @@ COMMAND_MODULES = {
     "tolerance": "tolerance",
     "grade": "grade",
     "merge": "merge",
+    "compensate": "compensate",
 }
 
 

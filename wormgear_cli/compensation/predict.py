@@ -1,0 +1,195 @@
+"""What a correction table will leave, said before it is loaded: ISO 230-2 figures of a repeat test.
+
+Cross-validation over runs: each run in turn is left out, a table is made from the other runs
+exactly as the final table is made, and applied to the left-out run as the controller applies it
+(:func:`~wormgear_cli.compensation.table.apply_table`).  The corrected rows are therefore judged
+on data the table was not made from.  Their mean square, less the scatter of the measurement
+itself (:func:`~wormgear_cli.compensation.noise.noise_components`), is what the table leaves
+systematically at the targets: its own noise and what the model misses.
+
+A single corrected test is one draw of noisy figures (E is a range over the targets, so its
+spread between repeat tests is some 10 to 20 %).  The prediction is therefore the distribution of
+the figures over simulated repeat tests of the same plan (targets, directions, runs): per cell a
+systematic remainder drawn with the cross-validated mean square (scaled by (R - 1) / R, the final
+table being made from all R runs), per run an offset and per row a scatter with the measured
+variances.  The median is the predicted figure, the 5 and 95 % points its range.
+
+With a single run nothing can be left out: the figures of the table applied to its own data are
+given instead, said to be in-sample (optimistic).  Pure numpy.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+#: simulated repeat tests behind a predicted figure (fewer on long files: REPLICATE_ROWS / rows)
+REPLICATES = 200
+#: rows x replicates simulated at most
+REPLICATE_ROWS = 4_000_000
+#: fewest replicates
+MIN_REPLICATES = 40
+#: seed of the simulated repeat tests (same input, same output)
+SEED = 20_230_201
+#: the figures predicted
+FIGURES = ("E", "B", "A", "M")
+#: orders named as the largest left in the residual
+RESIDUAL_ORDERS = 3
+#: highest whole order scanned in the residual (beyond the model's own orders)
+RESIDUAL_MAX_ORDER = 60
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A predicted figure [rad]: ``median`` over simulated repeat tests, ``low`` and ``high``
+    their 5 and 95 % points (all equal for an in-sample figure)."""
+
+    median: float
+    low: float
+    high: float
+
+
+@dataclass(frozen=True)
+class TablePrediction:
+    """Result of :func:`predict_table`.
+
+    ``method``: "cross-validated" or "in-sample"; ``folds``: runs left out
+    one at a time (0 in-sample); ``before``: the ISO 230-2 figures as
+    measured (:class:`~wormgear_cli.measurement.iso230.Iso230Figures`);
+    ``after``: figure name -> :class:`Figure`; ``noise``:
+    :class:`~wormgear_cli.compensation.noise.Noise` of the measurement;
+    ``remainder_rms`` [rad]: RMS of what the table leaves systematically at
+    the targets; ``residual_orders``: (order, common amplitude, differential
+    amplitude [rad]) of the largest orders in the corrected rows;
+    ``replicates``: simulated repeat tests.
+    """
+
+    method: str
+    folds: int
+    before: object
+    after: dict
+    noise: object
+    remainder_rms: float
+    residual_orders: tuple
+    replicates: int
+
+
+def _cells(theta, d):
+    from wormgear_cli.measurement.iso230 import group_targets
+
+    grouping = group_targets(theta)
+    return grouping, 2 * grouping[0] + (d < 0)
+
+
+def corrected_rows(make_table: Callable, theta, y, d, run) -> tuple[np.ndarray, int]:
+    """The rows corrected by tables made without them: (corrected errors [rad], folds).
+
+    ``make_table(mask)`` returns the table made from the rows where
+    ``mask`` is True.  With a single run the table of all rows is applied
+    to them (folds 0)."""
+    from wormgear_cli.compensation.table import apply_table
+
+    runs = np.unique(run)
+    out = np.empty_like(y)
+    if runs.size < 2:
+        return y + apply_table(make_table(np.ones(y.shape[0], dtype=bool)), theta, d), 0
+    for r in runs:
+        held = run == r
+        out[held] = y[held] + apply_table(make_table(~held), theta[held], d[held])
+    return out, int(runs.size)
+
+
+def _figures(theta, x, d, grouping) -> dict:
+    from wormgear_cli.measurement.iso230 import iso230_figures
+
+    f = iso230_figures(theta, x, d, grouping=grouping)
+    return {k: getattr(f, k) for k in FIGURES}
+
+
+def _simulate(theta, d, grouping, cell, run, remainder_var: float, noise) -> dict:
+    """Figures over simulated repeat tests -> name -> :class:`Figure`."""
+    rng = np.random.default_rng(SEED)
+    n = theta.shape[0]
+    _, ci = np.unique(cell, return_inverse=True)
+    _, ri = np.unique(run, return_inverse=True)
+    ci, ri = ci.ravel(), ri.ravel()
+    count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(n, 1)))
+    within = noise.within if math.isfinite(noise.within) else 0.0
+    draws = {k: [] for k in FIGURES}
+    for _ in range(count):
+        x = (rng.normal(0.0, math.sqrt(remainder_var), ci.max() + 1)[ci]
+             + rng.normal(0.0, math.sqrt(noise.between_runs), ri.max() + 1)[ri]
+             + rng.normal(0.0, math.sqrt(within), n))
+        for k, v in _figures(theta, x, d, grouping).items():
+            draws[k].append(v)
+    out = {}
+    for k, values in draws.items():
+        v = np.asarray(values)
+        if not np.all(np.isfinite(v)):
+            out[k] = Figure(math.nan, math.nan, math.nan)
+            continue
+        lo, med, hi = np.quantile(v, [0.05, 0.5, 0.95])
+        out[k] = Figure(float(med), float(lo), float(hi))
+    return out
+
+
+def residual_orders(theta, resid, d, extra=(), most: int = RESIDUAL_ORDERS) -> tuple:
+    """The ``most`` orders of largest common-mode amplitude in ``resid`` (whole orders 1 ..
+    min(targets / 2, :data:`RESIDUAL_MAX_ORDER`) and the ``extra`` orders), each fitted alone:
+    ((order, common, differential) [rad], ...)."""
+    from wormgear_cli.compensation.scan import order_amplitudes
+
+    distinct = np.unique(np.round(np.mod(theta, 2.0 * math.pi), 9)).size
+    top = max(1, min(distinct // 2, RESIDUAL_MAX_ORDER))
+    candidates = sorted(set(range(1, top + 1)) | {float(k) for k in extra if k > 0})
+    scan = order_amplitudes(theta, resid, d, candidates)
+    best = np.argsort(-scan.common)[:most]
+    return tuple((float(scan.orders[i]), float(scan.common[i]),
+                  float(scan.differential[i]) if math.isfinite(scan.differential[i]) else math.nan) for i in best)
+
+
+def predict_table(make_table: Callable, theta, y, direction, run, orders=()) -> TablePrediction:
+    """The ISO 230-2 figures a repeat test will show once the table is loaded (module doc).
+
+    Parameters
+    ----------
+    make_table : callable
+        ``make_table(mask)`` -> :class:`~wormgear_cli.compensation.table.CorrectionTable`
+        made from the rows where ``mask`` is True, as the final table is made.
+    theta, y : array_like [rad], shape (n,)
+        Angles and errors (actual - target).
+    direction, run : array_like, shape (n,)
+    orders : sequence of float
+        Orders also scanned in the residual (the model's, and those the table cannot carry).
+    """
+    from wormgear_cli.compensation.noise import noise_components
+
+    theta = np.asarray(theta, dtype=float)
+    y = np.asarray(y, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    run = np.zeros(y.shape[0], dtype=int) if run is None else np.asarray(run)
+    grouping, cell = _cells(theta, d)
+    before = _iso(theta, y, d, grouping)
+    corrected, folds = corrected_rows(make_table, theta, y, d, run)
+    noise = noise_components(cell, run, y)
+    _, ri = np.unique(run, return_inverse=True)
+    ri = ri.ravel()
+    centred = corrected - (np.bincount(ri, weights=corrected) / np.bincount(ri))[ri]
+    tops = residual_orders(theta, centred, d, orders)
+    if folds and math.isfinite(noise.within):
+        remainder = max(0.0, float(np.mean(centred**2)) - noise.within) * (folds - 1) / folds
+        after = _simulate(theta, d, grouping, cell, run, remainder, noise)
+        count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(y.shape[0], 1)))
+        return TablePrediction("cross-validated", folds, before, after, noise, math.sqrt(remainder), tops, count)
+    figs = _figures(theta, corrected, d, grouping)
+    after = {k: Figure(v, v, v) for k, v in figs.items()}
+    return TablePrediction("in-sample", 0, before, after, noise, float(np.sqrt(np.mean(centred**2))), tops, 0)
+
+
+def _iso(theta, y, d, grouping):
+    from wormgear_cli.measurement.iso230 import iso230_figures
+
+    return iso230_figures(theta, y, d, grouping=grouping)
