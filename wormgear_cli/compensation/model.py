@@ -11,11 +11,13 @@ with a polynomial trend over a partial span)::
 so it can be evaluated anywhere, between the measured targets too.  Where the orders leave a
 residual at the targets that stands above the noise (:class:`TargetTest`: a chi-square test of
 the residual cell means against the scatter between runs), the residual means per target and
-direction are added, interpolated linearly between the targets (round the turn on a full turn):
-the table then follows the measured means at the targets and the model's shape between them.
+direction are added, interpolated between the targets by a cubic spline (periodic round a full
+turn): the table then follows the measured means at the targets and the model's shape, smoothly
+bent, between them.  A spline rather than straight lines: a kink at every target would be
+sampled again by the table's own straight lines and leave an error at the targets themselves.
 
 Over a partial span the model is held at the ends of the covered arc outside it (a trend must
-not be extrapolated).  Pure numpy; scipy only for the test's tail probability.
+not be extrapolated).  Pure numpy; scipy for the test's tail probability and the spline.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ from wormgear_cli.measurement.harmonics import BLOCK_ROWS, harmonic_columns
 TARGET_ALPHA = 0.01
 #: a target is named in the test's report when its residual mean exceeds this many standard errors
 WORST_SE = 3.0
+#: fewest targets a spline is drawn through (fewer: straight lines between them)
+SPLINE_TARGETS = 4
 
 
 @dataclass(frozen=True)
@@ -120,17 +124,39 @@ class CorrectionModel:
         return out
 
     def _residual(self, theta: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """The per-target residual means between the targets: a cubic spline through them
+        (periodic round a full turn), linear with fewer than :data:`SPLINE_TARGETS` targets."""
         ok = np.isfinite(values)
         if not np.any(ok):
             return np.zeros(theta.shape)
-        x, f = self.targets[ok], values[ok]
-        cov = self.plan.coverage
-        if cov.full_turn:
-            return np.interp(np.mod(theta, 2.0 * math.pi), np.mod(x, 2.0 * math.pi), f, period=2.0 * math.pi)
         two_pi = 2.0 * math.pi
-        ux = np.mod(x - cov.start, two_pi)
-        order = np.argsort(ux)
-        return np.interp(np.mod(theta - cov.start, two_pi), ux[order], f[order])
+        cov = self.plan.coverage
+        start = 0.0 if cov.full_turn else cov.start
+        x = np.mod(self.targets[ok] - start, two_pi)
+        order = np.argsort(x)
+        x, f = x[order], values[ok][order]
+        u = np.mod(theta - start, two_pi)
+        if cov.full_turn:
+            if x.size < SPLINE_TARGETS:
+                return np.interp(u, x, f, period=two_pi)
+            from scipy.interpolate import CubicSpline  # the spline through the targets
+
+            return CubicSpline(np.append(x, x[0] + two_pi), np.append(f, f[0]), bc_type="periodic")(u)
+        if x.size < SPLINE_TARGETS:
+            return np.interp(u, x, f)
+        from scipy.interpolate import CubicSpline  # the spline through the targets
+
+        return CubicSpline(x, f, bc_type="natural")(np.clip(u, x[0], x[-1]))
+
+def parameters(plan: ModelPlan, theta, direction) -> int:
+    """Values a table of ``plan`` is fitted with on these rows: the model's columns, or with
+    per-target means the cells (target and direction) they are taken over."""
+    if plan.per_target:
+        from wormgear_cli.measurement.iso230 import group_targets
+
+        index = group_targets(np.asarray(theta, dtype=float))[0]
+        return int(np.unique(2 * index + (np.asarray(direction) < 0)).size)
+    return (1 + 2 * len(plan.orders) + plan.trend_degree) * (2 if plan.both else 1)
 
 
 def _design_block(theta: np.ndarray, d: np.ndarray, plan: ModelPlan, a: int, b: int) -> np.ndarray:
@@ -243,9 +269,16 @@ def check_targets(model: CorrectionModel, theta, y, direction, run, alpha: float
     plan = model.plan
     params = (1 + 2 * len(plan.orders) + plan.trend_degree) * (2 if plan.both else 1)
     dof = counts.shape[0] - params
-    if not noise.replicated or not math.isfinite(noise.within) or noise.within <= 0 or dof <= 0:
-        why = ("each target was measured once per direction: the residual at the targets cannot be told "
-               "from noise" if not noise.replicated else "too few targets for the model's columns")
+    scale = float(np.sqrt(np.mean(y * y))) if y.size else 0.0
+    if not noise.replicated:
+        why = "each target was measured once per direction: the residual at the targets cannot be told from noise"
+    elif dof <= 0:
+        why = "too few targets for the model's columns: the residual at the targets cannot be judged"
+    elif not (math.isfinite(noise.within) and noise.within > (1e-9 * scale) ** 2):
+        why = "the runs repeat each other exactly: there is no scatter to judge the residual at the targets against"
+    else:
+        why = ""
+    if why:
         return TargetTest(False, rms, math.nan, math.nan, max(dof, 0), False, (), why)
     from scipy.special import chdtrc  # tail probability of the test
 

@@ -109,9 +109,9 @@ def fit_harmonics(th, y, run, orders: Sequence[float], degree: int = DRIFT_DEGRE
     return HarmonicFit(ords, h[0::2], h[1::2], y - x @ coef)
 
 
-def peak_to_peak(fit: HarmonicFit, worm_order: float, orders: Sequence[float]) -> float:
-    """Peak-to-peak [rad] over one worm cycle of the fitted sinusoids at ``orders``."""
-    theta = np.linspace(0.0, 2.0 * math.pi / worm_order, PP_POINTS, endpoint=False)
+def peak_to_peak(fit: HarmonicFit, worm_order: float, orders: Sequence[float], start: float = 0.0) -> float:
+    """Peak-to-peak [rad] over one worm cycle (from axis angle ``start``) of the fitted sinusoids at ``orders``."""
+    theta = start + np.linspace(0.0, 2.0 * math.pi / worm_order, PP_POINTS, endpoint=False)
     curve = fit.evaluate(theta, orders)
     return float(np.ptp(curve)) if curve.size else 0.0
 
@@ -123,9 +123,13 @@ class PecCurve:
     ``worm_order`` [cycles per axis turn]; ``period_s``: its period at the
     sidereal rate [s]; ``rows``: the period in whole seconds (one row per
     second); ``harmonics``: the orders carried (whole multiples of the worm
-    order); ``extra``: orders fitted alongside but not carried; ``pe`` (rows,)
-    [rad]: the error at worm phase t / rows, t = 0 .. rows - 1, mean removed;
-    ``fit``: the :class:`HarmonicFit`; ``cycles``: worm cycles the data cover.
+    order); ``extra``: orders fitted alongside but not carried; ``reference``
+    [rad]: the axis angle of worm phase 0, the first angle at or after the
+    record's start where worm_order x angle is a whole number of turns;
+    ``pe`` (rows,) [rad]: the error at worm phase t / rows (axis angle
+    reference + 2 pi t / (rows worm_order)), t = 0 .. rows - 1, mean
+    removed; ``fit``: the :class:`HarmonicFit`; ``cycles``: worm cycles the
+    data cover.
     """
 
     worm_order: float
@@ -133,13 +137,14 @@ class PecCurve:
     rows: int
     harmonics: tuple[float, ...]
     extra: tuple[float, ...]
+    reference: float
     pe: np.ndarray
     fit: HarmonicFit
     cycles: float
 
     @property
     def peak_to_peak(self) -> float:
-        return peak_to_peak(self.fit, self.worm_order, self.harmonics)
+        return peak_to_peak(self.fit, self.worm_order, self.harmonics, self.reference)
 
 
 def harmonics_of(worm_order: float, orders: Sequence[float], rel_tol: float = 1e-6) -> tuple[list, list]:
@@ -180,9 +185,12 @@ def pec_curve(theta, y, run, worm_order: float, orders: Sequence[float]) -> PecC
     fit = fit_harmonics(th, y, run, carried + other)
     period = period_of(worm_order)
     rows = max(1, int(math.floor(period + 0.5)))
-    phase = np.arange(rows) / rows
-    pe = fit.evaluate(2.0 * math.pi * phase / worm_order, carried)
-    return PecCurve(worm_order, period, rows, tuple(carried), tuple(other), pe - float(np.mean(pe)), fit,
+    # worm phase 0 next to the data: with a worm order that is not whole (a period found or given in
+    # seconds), the fitted sinusoids hold only near the record, not at axis angle 0
+    turn = 2.0 * math.pi / worm_order
+    reference = math.ceil(float(th[0]) / turn - 1e-9) * turn
+    pe = fit.evaluate(reference + turn * np.arange(rows) / rows, carried)
+    return PecCurve(worm_order, period, rows, tuple(carried), tuple(other), reference, pe - float(np.mean(pe)), fit,
                     cycles_covered(th, run, worm_order))
 
 
@@ -258,7 +266,7 @@ def predict_pec(theta, y, run, curve: PecCurve, most: int = 3) -> PecPrediction:
     top = max(len(curve.harmonics), 1) * 2
     candidates = sorted({curve.worm_order * h for h in range(1, top + 1)} | set(curve.extra))
     resid_fit = fit_harmonics(th, left, fold, list(curve.harmonics), degree=0)
-    after = peak_to_peak(resid_fit, curve.worm_order, curve.harmonics)
+    after = peak_to_peak(resid_fit, curve.worm_order, curve.harmonics, curve.reference)
     scan = order_amplitudes(th, left, np.ones_like(th), candidates)
     best = np.argsort(-scan.common)[:most]
     tops = tuple((float(scan.orders[i]), float(scan.common[i])) for i in best)

@@ -151,7 +151,8 @@ def residual_orders(theta, resid, d, extra=(), most: int = RESIDUAL_ORDERS) -> t
                   float(scan.differential[i]) if math.isfinite(scan.differential[i]) else math.nan) for i in best)
 
 
-def predict_table(make_table: Callable, theta, y, direction, run, orders=()) -> TablePrediction:
+def predict_table(make_table: Callable, theta, y, direction, run, orders=(), parameters: int | None = None
+                  ) -> TablePrediction:
     """The ISO 230-2 figures a repeat test will show once the table is loaded (module doc).
 
     Parameters
@@ -164,6 +165,12 @@ def predict_table(make_table: Callable, theta, y, direction, run, orders=()) -> 
     direction, run : array_like, shape (n,)
     orders : sequence of float
         Orders also scanned in the residual (the model's, and those the table cannot carry).
+    parameters : int or None
+        Values the table is fitted with (the model's columns, or the cells
+        with per-target means): its own noise at the rows is then known, a
+        within-run variance times parameters / rows (the mean leverage), and
+        only what the model misses is taken from the cross-validation.  None:
+        both from the cross-validation, scaled by (R - 1) / R.
     """
     from wormgear_cli.compensation.noise import noise_components
 
@@ -180,13 +187,27 @@ def predict_table(make_table: Callable, theta, y, direction, run, orders=()) -> 
     centred = corrected - (np.bincount(ri, weights=corrected) / np.bincount(ri))[ri]
     tops = residual_orders(theta, centred, d, orders)
     if folds and math.isfinite(noise.within):
-        remainder = max(0.0, float(np.mean(centred**2)) - noise.within) * (folds - 1) / folds
+        remainder = _remainder(float(np.mean(centred**2)), noise.within, folds, parameters, y.shape[0])
         after = _simulate(theta, d, grouping, cell, run, remainder, noise)
         count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(y.shape[0], 1)))
         return TablePrediction("cross-validated", folds, before, after, noise, math.sqrt(remainder), tops, count)
     figs = _figures(theta, corrected, d, grouping)
     after = {k: Figure(v, v, v) for k, v in figs.items()}
     return TablePrediction("in-sample", 0, before, after, noise, float(np.sqrt(np.mean(centred**2))), tops, 0)
+
+
+def _remainder(mean_square: float, within: float, folds: int, parameters: int | None, rows: int) -> float:
+    """The variance the final table leaves systematically at a row [rad^2].
+
+    The cross-validated rows hold the scatter (``within``), what the model
+    misses (m^2) and the noise of a table made from (R - 1) of the R runs
+    (within x h x R / (R - 1), h = parameters / rows the mean leverage); the
+    final table, made from all runs, leaves m^2 + within x h."""
+    if parameters is None:
+        return max(0.0, mean_square - within) * (folds - 1) / folds
+    h = parameters / rows
+    missed = max(0.0, mean_square - within * (1.0 + h * folds / (folds - 1)))
+    return missed + within * h
 
 
 def _iso(theta, y, d, grouping):

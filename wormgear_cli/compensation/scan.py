@@ -27,6 +27,8 @@ BLOCK_CELLS = 4_000_000
 MAX_ORDERS = 8
 #: significance of one selection step (Bonferroni over the candidates tried)
 ALPHA = 0.01
+#: refinements of the strongest order, each on a grid ten times finer
+REFINEMENTS = 3
 
 
 @dataclass(frozen=True)
@@ -193,12 +195,13 @@ def strongest_orders(theta, y, direction, candidates: Sequence[float], noise_var
 
 def strongest_order(theta, y, direction, lowest: float, highest: float, base=None, weights=None,
                     step: float | None = None) -> tuple[float, float]:
-    """The single order in [``lowest``, ``highest``] (not necessarily whole) with the largest
-    common-mode amplitude, and that amplitude.
+    """The single order in [``lowest``, ``highest``] (not necessarily whole) that explains the
+    largest sum of squares (the peak of a least-squares periodogram), and its common-mode
+    amplitude.  (The fitted amplitude itself peaks away from the true order on a short arc.)
 
     A grid of step ``step`` (default: a quarter of the resolution 2 pi / span
-    of the angles) is scanned, then the best grid point is refined on a grid
-    ten times finer around it.  Meant for a mount's worm period from a
+    of the angles) is scanned, then the best point is refined :data:`REFINEMENTS`
+    times on a grid ten times finer around it.  Meant for a mount's worm period from a
     tracking record (a partial turn): pass the drift as ``base`` columns.
     """
     theta = np.asarray(theta, dtype=float)
@@ -209,8 +212,11 @@ def strongest_order(theta, y, direction, lowest: float, highest: float, base=Non
     if grid.size == 0:
         grid = np.array([lowest])
     scan = order_amplitudes(theta, y, direction, grid, base, weights)
-    best = float(grid[int(np.argmax(scan.common))])
-    fine = np.clip(np.arange(best - step, best + step * 1.0001, step / 10.0), lowest, highest)
-    scan = order_amplitudes(theta, y, direction, fine, base, weights)
-    i = int(np.argmax(scan.common))
-    return float(fine[i]), float(scan.common[i])
+    best = float(grid[int(np.argmax(scan.reduction))])
+    for _ in range(REFINEMENTS):  # each pass a grid ten times finer around the best point so far
+        fine = np.clip(np.linspace(best - step, best + step, 21), lowest, highest)
+        scan = order_amplitudes(theta, y, direction, fine, base, weights)
+        i = int(np.argmax(scan.reduction))
+        best = float(fine[i])
+        step /= 10.0
+    return best, float(scan.common[i])

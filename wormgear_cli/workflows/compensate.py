@@ -268,7 +268,7 @@ def _strongest_table_orders(theta, y, d, run):
 
 
 def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
-    from wormgear_cli.compensation.model import fit_plan, plan_model
+    from wormgear_cli.compensation.model import fit_plan, parameters, plan_model
     from wormgear_cli.compensation.predict import predict_table
     from wormgear_cli.compensation.table import TableGrid, build_table, interpolation_loss, uncarried
 
@@ -288,7 +288,7 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     def make(mask):
         return build_table(fit_plan(plan, theta[mask], y[mask], d[mask], run[mask]).without(dropped), grid)
 
-    prediction = predict_table(make, theta, y, d, run, tuple(plan.orders) + dropped)
+    prediction = predict_table(make, theta, y, d, run, tuple(plan.orders) + dropped, parameters(plan, theta, d))
     details = TableDetails(plan, carried, analysis, test, grid, table, dropped, interpolation_loss(carried, table),
                            prediction, selection)
     warnings, notes = _table_findings(details, theta, options)
@@ -334,7 +334,7 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
                           f"{to_unit(v, u):+.3g}" for a, s, v in test.worst[:3])
         notes.append(f"the fitted orders leave {to_unit(test.rms, u):.3g} {u} RMS at the targets against "
                      f"{to_unit(test.expected_rms, u):.3g} {u} from the noise (p = {test.p_value:.2g}): the "
-                     "per-target means of the residual are added, interpolated linearly between the targets"
+                     "per-target means of the residual are added, a cubic spline between the targets"
                      + (f" (largest {worst} {u})" if worst else ""))
     elif test.testable:
         notes.append(f"the fitted orders explain the data at the targets: residual {to_unit(test.rms, u):.3g} {u} "

@@ -27,7 +27,8 @@ def write(curve, options) -> str:
     lines = [f"# {caption}", f"!WormPeriod={curve.rows}"]
     if steps:
         lines.append(f"!StepsPerWorm={int(steps)}")
-    lines.append("# time - motor - PE [arcsec of RA axis], drift removed; row 0 = worm phase 0 of the record")
+    lines.append(f"# time - motor - PE [arcsec of RA axis], drift removed; row 0 = worm phase 0 (RA axis at "
+                 f"{math.degrees(curve.reference) % 360.0:.4f} deg in the record)")
     pe = (curve.pe / arcsec).tolist()
     for t in range(curve.rows):
         motor = (t * int(steps)) // curve.rows if steps else t
