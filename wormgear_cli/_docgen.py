@@ -291,7 +291,8 @@ def refresh_session(text: str, root: Path) -> str:
 
 #: Hand-written pages whose command outputs :func:`refresh_session` fills in.
 SESSION_PAGES = ("tutorial.md", "commands/analyze.md", "commands/check.md", "commands/sweep.md",
-                 "commands/simulate.md", "commands/synth.md", "commands/measure.md", "commands/diagnose.md")
+                 "commands/simulate.md", "commands/synth.md", "commands/measure.md", "commands/diagnose.md",
+                 "commands/compensate.md", "compensation.md")
 
 
 # --- driver ---------------------------------------------------------------------------------------------------------

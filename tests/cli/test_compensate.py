@@ -7,10 +7,10 @@ import json
 import pytest
 
 from tests.support import compensation_data as data
-from tests.support.paths import ROOT
+from tests.support.paths import CONFIGS
 from wormgear_cli.cli import app
 
-MOUNT = ROOT / "tests" / "data" / "compensation" / "mount-180.toml"
+MOUNT = CONFIGS / "telescope-mount.toml"
 
 
 @pytest.fixture(scope="module")

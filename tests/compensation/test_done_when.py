@@ -15,11 +15,11 @@ import pytest
 
 from tests.support import compensation_data as data
 from tests.support.controllers import LinuxCncJoint, eqascom_read
-from tests.support.paths import ROOT
+from tests.support.paths import CONFIGS
 from wormgear_cli.api import compensate
 
 #: the mount: a 180-tooth RA wheel (worm period 478.7 s)
-MOUNT = ROOT / "tests" / "data" / "compensation" / "mount-180.toml"
+MOUNT = CONFIGS / "telescope-mount.toml"
 
 
 @pytest.fixture(scope="module")

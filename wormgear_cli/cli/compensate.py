@@ -31,8 +31,8 @@ def compensate(
         "--format", "-f", metavar=FORMATS, help=_FORMAT_HELP, show_default=False)] = None,
     output: OutputOption = None,
     drive: Annotated[Path | None, typer.Option(
-        "--drive", "-d", help="Drive spec (TOML): its shafts and meshes are the orders fitted; for a mount, its "
-        "worm gives the worm period.", show_default=False)] = None,
+        "--drive", "-d", help="Drive spec (TOML): of its shafts and meshes, those that stand out of the noise are "
+        "fitted; for a mount, its worm gives the worm period.", show_default=False)] = None,
     orders: Annotated[str | None, typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,2,9 (default: "
         "the drive's with --drive, else the strongest orders found).", show_default=False)] = None,

@@ -137,18 +137,27 @@ def _simulate(theta, d, grouping, cell, run, remainder_var: float, noise) -> dic
 
 
 def residual_orders(theta, resid, d, extra=(), most: int = RESIDUAL_ORDERS) -> tuple:
-    """The ``most`` orders of largest common-mode amplitude in ``resid`` (whole orders 1 ..
-    min(targets / 2, :data:`RESIDUAL_MAX_ORDER`) and the ``extra`` orders), each fitted alone:
-    ((order, common, differential) [rad], ...)."""
-    from wormgear_cli.compensation.scan import order_amplitudes
+    """The ``most`` orders that explain most of ``resid``, chosen one after the other (each on
+    top of those already chosen, so an order's aliases on the targets are not named again)
+    among whole orders 1 .. min(targets / 2, :data:`RESIDUAL_MAX_ORDER`) and the ``extra``
+    orders: ((order, common, differential) [rad], ...), the amplitudes of each order's step."""
+    from wormgear_cli.compensation.scan import harmonic_block, order_amplitudes
 
     distinct = np.unique(np.round(np.mod(theta, 2.0 * math.pi), 9)).size
     top = max(1, min(distinct // 2, RESIDUAL_MAX_ORDER))
     candidates = sorted(set(range(1, top + 1)) | {float(k) for k in extra if k > 0})
-    scan = order_amplitudes(theta, resid, d, candidates)
-    best = np.argsort(-scan.common)[:most]
-    return tuple((float(scan.orders[i]), float(scan.common[i]),
-                  float(scan.differential[i]) if math.isfinite(scan.differential[i]) else math.nan) for i in best)
+    both = bool(np.any(d > 0) and np.any(d < 0))
+    base = np.column_stack([np.ones_like(theta), d]) if both else np.ones((theta.shape[0], 1))
+    out = []
+    for _ in range(min(most, len(candidates))):
+        scan = order_amplitudes(theta, resid, d, candidates, base)
+        i = int(np.argmax(scan.reduction))
+        k = float(scan.orders[i])
+        out.append((k, float(scan.common[i]),
+                    float(scan.differential[i]) if math.isfinite(scan.differential[i]) else math.nan))
+        base = np.hstack([base, harmonic_block(theta, np.array([k]), d if both else None)[:, 0, :]])
+        candidates.remove(k)
+    return tuple(out)
 
 
 def predict_table(make_table: Callable, theta, y, direction, run, orders=(), parameters: int | None = None

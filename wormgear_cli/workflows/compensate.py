@@ -244,9 +244,10 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
 # --- the table path --------------------------------------------------------------------------------------
 
 
-def _strongest_table_orders(theta, y, d, run):
-    """The strongest orders of a rotary-axis measurement (a forward selection on the per-target
-    means; :func:`~wormgear_cli.compensation.scan.strongest_orders`)."""
+def _select_table_orders(theta, y, d, run, candidates=None):
+    """The orders of a rotary-axis measurement that stand out of the noise: a forward selection on
+    the per-target means (:func:`~wormgear_cli.compensation.scan.strongest_orders`) among
+    ``candidates`` (default: whole orders 1 to half the targets, at most 60)."""
     from wormgear_cli.compensation.noise import noise_components
     from wormgear_cli.compensation.scan import MAX_ORDERS, strongest_orders
     from wormgear_cli.measurement.coverage import coverage
@@ -260,8 +261,9 @@ def _strongest_table_orders(theta, y, d, run):
     noise = noise_components(cell, run, y)
     noise_var = noise.within if noise.replicated and math.isfinite(noise.within) and noise.within > 0 else None
     cov = coverage(theta, run)
-    top = min(max(targets.shape[0] // 2, 1), 60)
-    candidates = [float(k) for k in range(1, top + 1) if not cov.beyond(k)]
+    if candidates is None:
+        candidates = range(1, min(max(targets.shape[0] // 2, 1), 60) + 1)
+    candidates = [float(k) for k in candidates if not cov.beyond(k)]
     sel = strongest_orders(targets[index[first]], means, d[first], candidates, noise_var, weights=counts,
                            max_orders=MAX_ORDERS)
     return sel
@@ -277,9 +279,17 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     grid.check(writer.max_points)
     selection = None
     if choice.orders is None:
-        selection = _strongest_table_orders(theta, y, d, run)
+        selection = _select_table_orders(theta, y, d, run)
         source = f"the strongest found among whole orders 1 to {int(max(selection.candidates, default=0))}"
         choice = OrderChoice(tuple(selection.orders), None, None, source, choice.worm_order, choice.drive_name)
+    elif options.orders is None:  # the drive's orders: those that stand out of the noise (a table must not overfit)
+        selection = _select_table_orders(theta, y, d, run, choice.orders)
+        label = dict(zip(choice.orders, choice.labels))
+        kept = tuple(k for k in choice.orders if k in selection.orders)
+        choice = OrderChoice(kept, tuple(label[k] for k in kept), None,
+                             choice.source.replace("the drive's shafts and meshes", "the drive's shafts and meshes "
+                                                   "that stand out of the noise", 1), choice.worm_order,
+                             choice.drive_name)
     plan, analysis, test, model = plan_model(theta, y, d, choice.orders or (), choice.labels, choice.priority, run)
     dropped = tuple(uncarried(plan.orders, grid.spacing_deg))
     carried = model.without(dropped)
@@ -304,8 +314,8 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
     warnings, notes = [], list(_order_notes(t.analysis))
     if t.selection is not None:
         chosen = ", ".join(f"{k:g}" for k in t.selection.orders) or "none"
-        notes.append(f"orders searched (until the dominant-order scan replaces this): chose {chosen}; stopped "
-                     f"because {t.selection.reason}")
+        notes.append(f"orders selected by a forward selection on the per-target means: {chosen} of "
+                     f"{len(t.selection.candidates)} candidates; stopped because {t.selection.reason}")
     spacing = t.grid.spacing_deg
     amplitude = {it.order: it.common[0] for it in t.analysis.items if it.fitted}
     for k in t.dropped:
@@ -374,12 +384,12 @@ def _worm_order(th, y, run, options: CompensateOptions, choice: OrderChoice, sou
 def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
     from wormgear_cli.compensation import pec
 
-    theta, y, run = m.angle, m.error, m.run
     warnings, notes = [], []
+    keep = np.ones(len(m), dtype=bool)
     if np.any(m.direction > 0) and np.any(m.direction < 0):
         keep = m.direction > 0
-        theta, y, run = theta[keep], y[keep], run[keep]
         notes.append("the record holds both directions: the PEC curve is made from the forward (tracking) rows")
+    theta, y, run = m.angle[keep], m.error[keep], m.run[keep]
     th = pec.continuous(theta, run)
     worm, where = _worm_order(th, y, run, options, choice, m.source)
     period = pec.period_of(worm)
@@ -403,7 +413,7 @@ def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
     if options.steps_per_worm is None:
         warnings.append("no --steps-per-worm: the file has no !StepsPerWorm line and its motor column holds "
                         "seconds; EQASCOM phases the curve by motor position, so give the mount's steps per worm")
-    rate = _tracking_rate(m)
+    rate = _tracking_rate(m, keep)
     if rate is not None and abs(rate / (2.0 * math.pi / pec.SIDEREAL_DAY_S) - 1.0) > SIDEREAL_TOLERANCE:
         warnings.append(f"the axis angle advances at {math.degrees(rate) * 3600.0:.4g} deg/h, not the sidereal "
                         f"{360.0 * 3600.0 / pec.SIDEREAL_DAY_S:.4g} deg/h: the worm period in seconds assumes "
@@ -413,16 +423,19 @@ def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
     return PecDetails(curve, prediction, options.steps_per_worm), warnings, notes, choice
 
 
-def _tracking_rate(m) -> float | None:
-    """The axis angle's rate [rad/s] over the record's time (runs each with their own start), or None."""
-    if "time_s" not in m.present or not np.ptp(m.time) > 0:
+def _tracking_rate(m, keep) -> float | None:
+    """The axis angle's rate [rad/s] over the time of the rows ``keep`` (each run from its own
+    start), or None without a time column."""
+    if "time_s" not in m.present or not np.ptp(m.time[keep]) > 0:
         return None
     from wormgear_cli.compensation.pec import continuous
 
-    th = continuous(m.angle, m.run)
-    _, ri = np.unique(m.run, return_inverse=True)
+    run = m.run[keep]
+    th = continuous(m.angle[keep], run)
+    _, ri = np.unique(run, return_inverse=True)
     ri = ri.ravel()
-    t = m.time - (np.bincount(ri, weights=m.time) / np.bincount(ri))[ri]
+    time = m.time[keep]
+    t = time - (np.bincount(ri, weights=time) / np.bincount(ri))[ri]
     a = th - (np.bincount(ri, weights=th) / np.bincount(ri))[ri]
     tt = float(t @ t)
     return float(t @ a) / tt if tt > 0 else None
