@@ -106,3 +106,37 @@ def test_never_overwrites_the_input(runner, test_csv):
 def test_help_has_an_example(runner):
     r = run(runner, "--help")
     assert r.exit_code == 0 and "Example: wormgear compensate test.csv --orders 1,2,9 -o table.comp" in r.stdout
+
+
+FIELD = CONFIGS.parent / "tests" / "data" / "field"
+
+
+def test_field_partial_span_finds_its_order_and_says_the_range(runner, tmp_path):
+    """tests/data/field/partial-span-order144.csv: 11 deg of a scan with an order-144 error (its README)."""
+    rep = tmp_path / "r.json"
+    args = [FIELD / "partial-span-order144.csv", "-f", "csv", "--points", "1000", "--report", rep]
+    r = run(runner, *args)
+    assert r.exit_code == 0, r.stderr
+    assert "beyond the table's 0 to 360 deg (--range): the controller holds the end values there" in r.stderr
+    r = run(runner, *args, "--range=-11:1")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(rep.read_text())
+    assert doc["orders"]["requested"] == [144.0]
+    assert "as measured:  E_forward 20" in r.stderr and "A_forward -" in r.stderr
+    before, after = doc["prediction"]["before"]["E_forward"], doc["prediction"]["after"]["E_forward"]["median"]
+    assert after < before / 100
+    assert doc["prediction"]["method"] == "in-sample" and "in-sample, optimistic" in r.stderr
+
+
+def test_field_directions_not_stated_are_warned_about(runner):
+    r = run(runner, FIELD / "no-direction-column.csv", "-f", "csv")
+    assert r.exit_code == 0, r.stderr
+    assert "warning: no direction column: every row is taken as forward" in r.stderr
+    assert "warning: forward and reverse visits cannot be told apart" in r.stderr
+
+
+def test_a_mount_record_under_two_worm_cycles_is_not_cross_validated(runner):
+    r = run(runner, FIELD / "time-restarts-no-run.csv", "-f", "eqmod", "--drive", FIELD / "telescope-mount.toml")
+    assert r.exit_code == 0, r.stderr
+    assert "1.07 worm cycles recorded" in r.stderr and "as measured, not predicted" in r.stderr
+    assert "warning: the record holds 1.1 worm cycles: fewer than two" in r.stderr

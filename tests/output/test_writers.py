@@ -111,3 +111,43 @@ def test_csv_header_and_values_in_the_unit(unit, factor):
     rows = [list(map(float, line.split(","))) for line in lines[1:]]
     assert [r[0] for r in rows] == [0.0, 90.0, 180.0, 270.0, 360.0]
     assert rows[1][1] == pytest.approx(-20.0 * factor, rel=1e-11)
+
+
+def test_no_negative_zero_and_the_values_exact():
+    a = np.array([0.0, 180.0, 360.0])
+    tiny = np.array([-1e-14, -1e-14, 0.0])
+    t = CorrectionTable(a, np.array([-1e-14, 2e-5, -0.0]), np.array([0.0, -3e-5, 1e-4]))
+    lines = writers.get("linuxcnc").write(t, WriteOptions()).splitlines()
+    assert lines[0] == "0.000000 0.000000000 0.000000000"
+    assert lines[1] == f"180.000000 {2e-5 * 180 / math.pi:.9f} {-3e-5 * 180 / math.pi:.9f}"
+    csv_lines = writers.get("csv").write(CorrectionTable(a, -0.0 * tiny, tiny * 0.0), WriteOptions()).splitlines()
+    assert csv_lines[1:] == ["0,0,0", "180,0,0", "360,0,0"]
+    curve = _curve(4)
+    curve = PecCurve(180.0, 4.0, 4, (180.0,), (), 2 * math.pi + 0.5, np.array([-1e-12, 1e-5, -2e-5, 0.0]),
+                     curve.fit, 1.0)
+    text = writers.get("eqmod").write(curve, WriteOptions())
+    assert text.splitlines()[0] == "# PEC curve by wormgear compensate"
+    assert f"RA axis at {math.degrees(0.5):.4f} deg in the record" in text
+    assert text.splitlines()[3:] == ["0 0 0.0000", f"1 1 {1e-5 / ARCSEC:.4f}", f"2 2 {-2e-5 / ARCSEC:.4f}",
+                                     "3 3 0.0000"]
+
+
+def test_writers_without_instructions_have_none_and_messages_are_exact():
+    assert writers.get("csv").instructions() == []
+    assert writers.get("linuxcnc").instructions()[1] == "COMP_FILE = FILE"
+    assert writers.get("eqmod").instructions()[0].startswith("EQASCOM: PEC > load FILE,")
+    assert writers.get("eqmod").instructions(WriteOptions(path="p.pec")) == [
+        "EQASCOM: PEC > load p.pec, then enable PEC (gain 1, phase 0 to begin with)"]
+    with pytest.raises(UsageError) as e:
+        writers.get("bogus")
+    assert e.value.problems == ["--format: unknown format 'bogus'; expected one of linuxcnc, eqmod, csv"]
+    with pytest.raises(ValueError, match="^COMP_FILE_TYPE is 0 or 1$"):
+        writers.get("linuxcnc").write(_table(), WriteOptions(file_type=2))
+
+
+def test_csv_reverse_column_is_the_reverse_correction():
+    t = _table(5)
+    rows = [list(map(float, line.split(","))) for line in
+            writers.get("csv").write(t, WriteOptions()).splitlines()[1:]]
+    assert [r[2] for r in rows] == pytest.approx(list(t.reverse / ARCSEC), rel=1e-11, abs=1e-9)
+    assert [r[1] for r in rows] == pytest.approx(list(t.forward / ARCSEC), rel=1e-11, abs=1e-9)

@@ -245,7 +245,8 @@ class PecPrediction:
 
 
 def predict_pec(theta, y, run, curve: PecCurve, most: int = 3) -> PecPrediction:
-    """What the PEC curve will leave (module doc)."""
+    """What the PEC curve will leave (module doc); not cross-validated (``after`` NaN) unless
+    the record holds two worm cycles and every curve made without one of them a whole cycle."""
     from wormgear_cli.compensation.scan import order_amplitudes
 
     run = np.asarray(run)
@@ -254,7 +255,10 @@ def predict_pec(theta, y, run, curve: PecCurve, most: int = 3) -> PecPrediction:
     fold = cycle_folds(th, run, curve.worm_order)
     ids = np.unique(fold)
     orders = list(curve.harmonics) + list(curve.extra)
-    if ids.size < 2 or not curve.harmonics:
+    # each curve must be made from a whole worm cycle at least
+    enough = ids.size >= 2 and all(cycles_covered(th[fold != f], run[fold != f], curve.worm_order) >= 1.0
+                                   for f in ids)
+    if not enough or not curve.harmonics:
         return PecPrediction(curve.peak_to_peak, math.nan, 0, (), "not cross-validated")
     left = np.empty_like(y)
     for f in ids:

@@ -34,8 +34,8 @@ REPLICATE_ROWS = 4_000_000
 MIN_REPLICATES = 40
 #: seed of the simulated repeat tests (same input, same output)
 SEED = 20_230_201
-#: the figures predicted
-FIGURES = ("E", "B", "A", "M")
+#: the figures predicted (ISO 230-2 names; _up is forward, _down reverse)
+FIGURES = ("E", "B", "A", "M", "E_up", "A_up", "E_down", "A_down")
 #: orders named as the largest left in the residual
 RESIDUAL_ORDERS = 3
 #: highest whole order scanned in the residual (beyond the model's own orders)
@@ -140,17 +140,33 @@ def residual_orders(theta, resid, d, extra=(), most: int = RESIDUAL_ORDERS) -> t
     """The ``most`` orders that explain most of ``resid``, chosen one after the other (each on
     top of those already chosen, so an order's aliases on the targets are not named again)
     among whole orders 1 .. min(targets / 2, :data:`RESIDUAL_MAX_ORDER`) and the ``extra``
-    orders: ((order, common, differential) [rad], ...), the amplitudes of each order's step."""
+    orders: ((order, common, differential) [rad], ...), the amplitudes of each order's step.
+    Fitted on the means per angle and direction, weighted by their rows (the same fit as on the
+    rows, for far fewer rows when runs repeat the angles)."""
     from wormgear_cli.compensation.scan import harmonic_block, order_amplitudes
+    from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
 
-    distinct = np.unique(np.round(np.mod(theta, 2.0 * math.pi), 9)).size
-    top = max(1, min(distinct // 2, RESIDUAL_MAX_ORDER))
-    candidates = sorted(set(range(1, top + 1)) | {float(k) for k in extra if k > 0})
+    _, first, inverse, counts = np.unique(np.column_stack([theta, d]), axis=0, return_index=True,
+                                             return_inverse=True, return_counts=True)
+    resid = np.bincount(inverse.ravel(), weights=resid) / counts
+    theta, d = theta[first], d[first]
+    cov = coverage(theta)
+    if cov.distinct < 3:
+        return ()
+    top = max(1, min(cov.distinct // 2, RESIDUAL_MAX_ORDER))
+    candidates = sorted(k for k in set(range(1, top + 1)) | {float(k) for k in extra if k > 0} if not cov.beyond(k))
     both = bool(np.any(d > 0) and np.any(d < 0))
-    base = np.column_stack([np.ones_like(theta), d]) if both else np.ones((theta.shape[0], 1))
+    parts = [np.ones((theta.shape[0], 1))]
+    if not cov.full_turn:  # the slow part over a partial span is a trend
+        parts.append(trend_columns(theta, cov, max(0, min(TREND_DEGREE, cov.distinct - 2))))
+    base = np.hstack(parts)
+    if both:
+        base = np.hstack([base, base * d[:, None]])
     out = []
     for _ in range(min(most, len(candidates))):
-        scan = order_amplitudes(theta, resid, d, candidates, base)
+        scan = order_amplitudes(theta, resid, d, candidates, base, counts)
+        if not np.any(scan.reduction > 0):
+            break
         i = int(np.argmax(scan.reduction))
         k = float(scan.orders[i])
         out.append((k, float(scan.common[i]),

@@ -29,6 +29,10 @@ MAX_ORDERS = 8
 ALPHA = 0.01
 #: refinements of the strongest order, each on a grid ten times finer
 REFINEMENTS = 3
+#: a candidate is scanned only when its columns keep at least this share of their norm apart from the
+#: base (smallest eigenvalue of their correlation block once the base is projected out; below it the
+#: samples cannot tell the candidate from the base or from an order already chosen)
+MIN_DETERMINACY = 1e-3
 
 
 @dataclass(frozen=True)
@@ -36,9 +40,11 @@ class OrderScan:
     """Result of :func:`order_amplitudes`, one entry per candidate order.
 
     ``orders`` [cycles/rev]; ``common`` and ``differential``: amplitude of
-    each mode [unit of y] (differential NaN with one direction);
-    ``reduction``: weighted sum of squares the candidate removes from the
-    base fit [unit of y squared]; ``rss``: weighted residual sum of squares
+    each mode [unit of y] (differential NaN with one direction; both NaN for
+    a candidate the samples cannot tell from the base, see
+    :data:`MIN_DETERMINACY`); ``reduction``: weighted sum of squares the
+    candidate removes from the base fit [unit of y squared] (0 for such a
+    candidate); ``rss``: weighted residual sum of squares
     of the base fit; ``dof``: rows minus base columns; ``columns``: columns
     per candidate (2 or 4).
     """
@@ -112,15 +118,18 @@ def order_amplitudes(theta, y, direction, candidates: Sequence[float], base=None
     for a in range(0, ords.size, step):
         k = ords[a:a + step]
         x = harmonic_block(theta, k, d if both else None) * sw[:, None, None]
+        raw = np.sqrt(np.maximum(np.einsum("nkq,nkq->kq", x, x), 1e-300))
         x = x - np.einsum("nb,bkq->nkq", q_base, np.einsum("nb,nkq->bkq", q_base, x))
         gram = np.einsum("nkq,nkr->kqr", x, x)
         rhs = np.einsum("nkq,n->kq", x, yr)
+        determinacy = np.linalg.eigvalsh(gram / (raw[:, :, None] * raw[:, None, :]))[:, 0]
         gram = gram + 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] * np.eye(q) + 1e-300 * np.eye(q)
         beta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
-        common[a:a + step] = np.hypot(beta[:, 0], beta[:, 1])
+        poor = determinacy < MIN_DETERMINACY
+        common[a:a + step] = np.where(poor, np.nan, np.hypot(beta[:, 0], beta[:, 1]))
         if both:
-            diff[a:a + step] = np.hypot(beta[:, 2], beta[:, 3])
-        red[a:a + step] = np.maximum(np.einsum("kq,kq->k", beta, rhs), 0.0)
+            diff[a:a + step] = np.where(poor, np.nan, np.hypot(beta[:, 2], beta[:, 3]))
+        red[a:a + step] = np.where(poor, 0.0, np.maximum(np.einsum("kq,kq->k", beta, rhs), 0.0))
     return OrderScan(ords, common, diff, red, rss, n - q_base.shape[1], q)
 
 
@@ -172,6 +181,9 @@ def strongest_orders(theta, y, direction, candidates: Sequence[float], noise_var
         scan = order_amplitudes(theta, y, d, remaining, base_now, weights)
         i = int(np.argmax(scan.reduction))
         red = float(scan.reduction[i])
+        if red <= 0.0:
+            reason = "no further candidate can be told apart from the orders chosen on these angles"
+            break
         if noise_var is not None and noise_var > 0:
             p = float(chdtrc(scan.columns, red / noise_var))
         else:

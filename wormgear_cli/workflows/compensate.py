@@ -244,29 +244,56 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
 # --- the table path --------------------------------------------------------------------------------------
 
 
+#: highest whole order a search for a table's orders tries (the worm orders of tables and mounts)
+SEARCH_MAX_ORDER = 360
+#: per-target means a search works on at most, per direction (finer scans are averaged in bins)
+SEARCH_POINTS = 2048
+
+
 def _select_table_orders(theta, y, d, run, candidates=None):
     """The orders of a rotary-axis measurement that stand out of the noise: a forward selection on
     the per-target means (:func:`~wormgear_cli.compensation.scan.strongest_orders`) among
-    ``candidates`` (default: whole orders 1 to half the targets, at most 60)."""
+    ``candidates`` (default: whole orders 1 to the Nyquist order of the mean target spacing, at
+    most :data:`SEARCH_MAX_ORDER`)."""
     from wormgear_cli.compensation.noise import noise_components
     from wormgear_cli.compensation.scan import MAX_ORDERS, strongest_orders
-    from wormgear_cli.measurement.coverage import coverage
+    from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
     from wormgear_cli.measurement.iso230 import group_targets
 
     index, targets = group_targets(theta)
     cell = 2 * index + (d < 0)
     _, first, ci, counts = np.unique(cell, return_index=True, return_inverse=True, return_counts=True)
-    ci = ci.ravel()
-    means = np.bincount(ci, weights=y) / counts
+    means = np.bincount(ci.ravel(), weights=y) / counts
     noise = noise_components(cell, run, y)
     noise_var = noise.within if noise.replicated and math.isfinite(noise.within) and noise.within > 0 else None
     cov = coverage(theta, run)
     if candidates is None:
-        candidates = range(1, min(max(targets.shape[0] // 2, 1), 60) + 1)
+        nyquist = math.pi * cov.distinct / cov.span if cov.span > 0 else 0.0
+        candidates = range(1, int(min(SEARCH_MAX_ORDER, nyquist)) + 1)
     candidates = [float(k) for k in candidates if not cov.beyond(k)]
-    sel = strongest_orders(targets[index[first]], means, d[first], candidates, noise_var, weights=counts,
-                           max_orders=MAX_ORDERS)
-    return sel
+    at, dc, means, counts = _binned(targets[index[first]], d[first], means, counts, cov)
+    base = None
+    if not cov.full_turn:  # over a partial span the slow part is a trend, not an order
+        t = trend_columns(at, cov, max(0, min(TREND_DEGREE, cov.distinct - 2)))
+        both = bool(np.any(dc > 0) and np.any(dc < 0))
+        base = np.hstack([np.ones((at.size, 1)), t] + ([dc[:, None], t * dc[:, None]] if both else []))
+    return strongest_orders(at, means, dc, candidates, noise_var, weights=counts, max_orders=MAX_ORDERS,
+                            base=base)
+
+
+def _binned(at, dc, means, counts, cov):
+    """Per-target means averaged into at most :data:`SEARCH_POINTS` bins of angle per direction
+    (weighted by their rows), when there are more: (angles, directions, means, weights)."""
+    if at.size <= 2 * SEARCH_POINTS:
+        return at, dc, means, counts
+    u = np.mod(at - cov.start, 2.0 * math.pi)
+    width = max(cov.span, 1e-12) / SEARCH_POINTS
+    key = np.minimum((u / width).astype(np.int64), SEARCH_POINTS - 1) * 2 + (dc < 0)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    w = np.bincount(inv, weights=counts)
+    angle = np.bincount(inv, weights=counts * u) / w + cov.start
+    return angle, dc[first], np.bincount(inv, weights=counts * means) / w, w
 
 
 def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
@@ -280,7 +307,9 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     selection = None
     if choice.orders is None:
         selection = _select_table_orders(theta, y, d, run)
-        source = f"the strongest found among whole orders 1 to {int(max(selection.candidates, default=0))}"
+        top = int(max(selection.candidates, default=0))
+        source = (f"the strongest found among whole orders 1 to {top}" if top else
+                  "no whole order fits in the span and targets measured")
         choice = OrderChoice(tuple(selection.orders), None, None, source, choice.worm_order, choice.drive_name)
     elif options.orders is None:  # the drive's orders: those that stand out of the noise (a table must not overfit)
         selection = _select_table_orders(theta, y, d, run, choice.orders)
@@ -301,8 +330,23 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     prediction = predict_table(make, theta, y, d, run, tuple(plan.orders) + dropped, parameters(plan, theta, d))
     details = TableDetails(plan, carried, analysis, test, grid, table, dropped, interpolation_loss(carried, table),
                            prediction, selection)
-    warnings, notes = _table_findings(details, theta, options)
-    return details, warnings, notes, choice
+    warnings, notes = _structure(m)
+    more_warnings, more_notes = _table_findings(details, theta, options)
+    return details, warnings + more_warnings, notes + more_notes, choice
+
+
+def _structure(m) -> tuple[list, list]:
+    """What the file does not state (``measure``'s checks), as warnings and notes for a table."""
+    from wormgear_cli.measurement.checks import structure_findings
+    from wormgear_cli.measurement.iso230 import group_targets
+
+    findings, mixed = structure_findings(m, group_targets(m.angle)[0])
+    warnings = [f.text for f in findings if f.warning]
+    notes = [f.text for f in findings if not f.warning and f.text]
+    if mixed:
+        warnings.append("forward and reverse visits cannot be told apart: the table's two columns are the same "
+                        "mixture and lost motion is not corrected")
+    return warnings, notes
 
 
 def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple[list, list]:
@@ -451,10 +495,15 @@ def _u(x, unit: str):
     return float(to_unit(x, unit)) if math.isfinite(x) else None
 
 
+#: report names of the ISO 230-2 figures (the core's _up / _down are forward / reverse)
+_FIGURE_NAMES = {"E": "E", "B": "B", "A": "A", "M": "M", "R": "R", "E_up": "E_forward", "A_up": "A_forward",
+                 "E_down": "E_reverse", "A_down": "A_reverse"}
+
+
 def _table_doc(t: TableDetails, unit: str) -> dict:
     p = t.prediction
     test = t.target_test
-    before = {k: _u(getattr(p.before, k), unit) for k in ("E", "B", "A", "M", "R")}
+    before = {name: _u(getattr(p.before, k), unit) for k, name in _FIGURE_NAMES.items()}
     items = []
     for it in t.analysis.items:
         items.append({"order": it.order, "label": it.label, "status": it.status,
@@ -474,8 +523,8 @@ def _table_doc(t: TableDetails, unit: str) -> dict:
         "prediction": {
             "method": p.method, "runs_left_out": p.folds, "replicates": p.replicates,
             "before": before,
-            "after": {k: {"median": _u(f.median, unit), "low_5pct": _u(f.low, unit), "high_95pct": _u(f.high, unit)}
-                      for k, f in p.after.items()},
+            "after": {_FIGURE_NAMES[k]: {"median": _u(f.median, unit), "low_5pct": _u(f.low, unit),
+                                         "high_95pct": _u(f.high, unit)} for k, f in p.after.items()},
             "R_unchanged": before["R"],
             "noise": {"within_run": _u(math.sqrt(p.noise.within), unit) if math.isfinite(p.noise.within) else None,
                       "between_runs": _u(math.sqrt(p.noise.between_runs), unit)},
@@ -535,14 +584,16 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
         tb, pr = doc["table"], doc["prediction"]
         lines.append(f"table: {tb['points']} points, {tb['start_deg']:g} to {tb['end_deg']:g} deg every "
                      f"{tb['spacing_deg']:.4g} deg; largest correction {_fmt(tb['largest_correction'])} {unit}")
-        lines.append("as measured:  " + "  ".join(f"{k} {_fmt(v)}" for k, v in pr["before"].items()
-                                                   if k in ("E", "B", "A")) + f" {unit}")
+        shown = _shown_figures(pr["before"])
+        lines.append("as measured:  " + "  ".join(f"{k} {_fmt(pr['before'][k])}" for k in shown) + f" {unit}")
         how = (f"cross-validated over {pr['runs_left_out']} runs" if pr["method"] == "cross-validated"
                else "in-sample")
         lines.append(f"predicted after correction (a repeat of this test, {how}; 5-95 %):")
-        lines.append("              " + "  ".join(f"{k} {_fmt(f['median'])} ({_fmt(f['low_5pct'])}-"
-                                                   f"{_fmt(f['high_95pct'])})" for k, f in pr["after"].items()
-                                                   if k in ("E", "B", "A")) + f" {unit}")
+        after = pr["after"]
+        lines.append("              " + "  ".join(
+            f"{k} {_fmt(after[k]['median'])}" + (f" ({_fmt(after[k]['low_5pct'])}-{_fmt(after[k]['high_95pct'])})"
+                                                 if after[k]["low_5pct"] != after[k]["high_95pct"] else "")
+            for k in shown) + f" {unit}")
         left = pr["residual_orders"]
     else:
         pe = doc["pec"]
@@ -557,6 +608,14 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
                      + f" {unit}")
     lines += [f"load: {line}" for line in doc["load"]]
     return lines
+
+
+def _shown_figures(before: dict) -> tuple[str, ...]:
+    """The figures the summary shows: E, B, A; with one direction (no bidirectional E) that
+    direction's E and A."""
+    if before["E"] is not None or before["B"] is not None:
+        return ("E", "B", "A")
+    return ("E_forward", "A_forward") if before["E_forward"] is not None else ("E_reverse", "A_reverse")
 
 
 def _fmt(x) -> str:
