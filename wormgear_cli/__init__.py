@@ -12,7 +12,8 @@ not re-exported: those names are the core modules ``wormgear_cli.analysis.sweep`
 __version__ = "0.1.0"
 
 #: names of :mod:`wormgear_cli.api` available as ``wormgear_cli.NAME`` (never the name of a submodule)
-_API = ("Angle", "AngleArray", "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose")
+_API = ("Angle", "AngleArray", "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose",
+        "compensate")
 
 __all__ = ["__version__", *_API]
 
