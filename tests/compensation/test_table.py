@@ -70,3 +70,71 @@ def test_interpolation_loss_is_the_chord_error_of_the_sine(order):
     loss = interpolation_loss(model, build_table(model, grid))
     bound = amplitude * (1.0 - math.cos(order * math.radians(grid.spacing_deg) / 2.0))  # sag of a chord
     assert 0.5 * bound <= loss <= bound * 1.0001
+
+
+def test_grid_bounds_and_range_parsing():
+    from wormgear_cli.compensation.table import parse_range
+
+    TableGrid(2).check(256)
+    TableGrid(256).check(256)
+    TableGrid(361, 0.0, 1.0).check()  # spacings well below a degree are fine
+    TableGrid(3, -1e6, 1e6).check()
+    for grid in (TableGrid(5, 10.0, 10.0), TableGrid(5, -1e6 - 1, 0.0), TableGrid(5, 0.0, 1e6 + 1)):
+        with pytest.raises(UsageError):
+            grid.check()
+    with pytest.raises(UsageError) as e:
+        TableGrid(5, 0.0, 2e6).check()
+    assert e.value.problems == ["--range: the ends must lie within +/-1e6 deg"]
+    assert parse_range("0:360") == (0.0, 360.0) and parse_range("-360:720") == (-360.0, 720.0)
+    for bad in ("0-360", "1:2:3", "a:b"):
+        with pytest.raises(UsageError) as e:
+            parse_range(bad)
+        assert e.value.problems == [f"--range: expected START:END in deg, e.g. 0:360, got {bad!r}"]
+
+
+def test_carried_at_exactly_four_spacings():
+    assert uncarried([90.0], 1.0) == []  # period 4.0 deg = 4 spacings: carried
+    assert uncarried([90.1], 1.0) == [90.1]  # 3.996 spacings: not
+    assert uncarried([1.0], 100.0) == [1.0] and uncarried([0.0], 1.0) == []
+
+
+class _Reversal:
+    """error = +1 forward, -2 reverse (rad), and a one-direction plan."""
+
+    class plan:  # noqa: N801
+        both = False
+
+    def error(self, theta, direction):
+        return np.where(np.asarray(direction) > 0, 1.0, -2.0) * np.ones_like(theta)
+
+
+def test_build_table_evaluates_each_direction_and_keeps_the_plan():
+    from wormgear_cli.compensation.table import build_table
+
+    t = build_table(_Reversal(), TableGrid(3))
+    assert list(t.forward) == [-1.0] * 3 and list(t.reverse) == [2.0] * 3 and t.both is False
+    assert build_table(_Sine(1, 1.0), TableGrid(3)).both is True  # no plan: both directions assumed
+    d = np.array([1, -1, 1])
+    assert list(apply_table(t, np.zeros(3), d)) == [-1.0, 2.0, -1.0]
+
+
+class _Spike:
+    """A narrow bump of the reverse error halfway between two given table points."""
+
+    def __init__(self, centre_deg, width_deg=0.1):
+        self.centre, self.width = centre_deg, width_deg
+
+    def error(self, theta, direction):
+        deg = np.degrees(np.asarray(theta))
+        bump = np.clip(1.0 - np.abs(deg - self.centre) / self.width, 0.0, None)
+        return np.where(np.asarray(direction) < 0, 1e-4 * bump, 0.0)
+
+
+@pytest.mark.parametrize("interval", [0, 254])
+def test_interpolation_loss_looks_at_every_interval_in_reverse(interval):
+    from wormgear_cli.compensation.table import build_table
+
+    grid = TableGrid(256)
+    a = grid.angles_deg()
+    model = _Spike(0.5 * (a[interval] + a[interval + 1]))
+    assert interpolation_loss(model, build_table(model, grid)) == pytest.approx(1e-4, rel=0.02)

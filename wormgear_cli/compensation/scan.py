@@ -29,9 +29,10 @@ MAX_ORDERS = 8
 ALPHA = 0.01
 #: refinements of the strongest order, each on a grid ten times finer
 REFINEMENTS = 3
-#: a candidate is scanned only when its columns keep at least this share of their norm apart from the
-#: base (smallest eigenvalue of their correlation block once the base is projected out; below it the
-#: samples cannot tell the candidate from the base or from an order already chosen)
+#: a candidate is scanned only when its columns keep at least this share of the norm a sampled
+#: sinusoid has (the smallest eigenvalue of their Gram block once the base is projected out, over
+#: half the sum of the weights); below it the samples cannot tell the candidate from the base or from
+#: an order already chosen, or see one phase of it only (order 12 on 24 even targets)
 MIN_DETERMINACY = 1e-3
 
 
@@ -108,6 +109,7 @@ def order_amplitudes(theta, y, direction, candidates: Sequence[float], base=None
     q_base = _base_q(base, sw)
     yw = y * sw
     yr = yw - q_base @ (q_base.T @ yw)
+    total = max(float(sw @ sw), 1e-300)
     rss = float(yr @ yr)
     ords = np.atleast_1d(np.asarray(candidates, dtype=float))
     q = 4 if both else 2
@@ -118,11 +120,10 @@ def order_amplitudes(theta, y, direction, candidates: Sequence[float], base=None
     for a in range(0, ords.size, step):
         k = ords[a:a + step]
         x = harmonic_block(theta, k, d if both else None) * sw[:, None, None]
-        raw = np.sqrt(np.maximum(np.einsum("nkq,nkq->kq", x, x), 1e-300))
         x = x - np.einsum("nb,bkq->nkq", q_base, np.einsum("nb,nkq->bkq", q_base, x))
         gram = np.einsum("nkq,nkr->kqr", x, x)
         rhs = np.einsum("nkq,n->kq", x, yr)
-        determinacy = np.linalg.eigvalsh(gram / (raw[:, :, None] * raw[:, None, :]))[:, 0]
+        determinacy = np.linalg.eigvalsh(gram)[:, 0] / (0.5 * total)
         gram = gram + 1e-12 * np.trace(gram, axis1=1, axis2=2)[:, None, None] * np.eye(q) + 1e-300 * np.eye(q)
         beta = np.linalg.solve(gram, rhs[:, :, None])[:, :, 0]
         poor = determinacy < MIN_DETERMINACY
