@@ -101,7 +101,7 @@ def test_carried_at_exactly_four_spacings():
 class _Reversal:
     """error = +1 forward, -2 reverse (rad), and a one-direction plan."""
 
-    class plan:  # noqa: N801
+    class plan:
         both = False
 
     def error(self, theta, direction):
