@@ -182,3 +182,16 @@ def test_strongest_order_precision_range_drift_and_weights():
     spoiled[:1000] = 50 * np.sin(90.0 * th[:1000])
     w = np.r_[np.full(1000, 1e-9), np.ones(1000)]
     assert strongest_order(th, spoiled, np.ones_like(th), 60.0, 1000.0, weights=w)[0] == pytest.approx(180.37, abs=0.05)
+
+
+def test_selection_in_radians_with_a_zero_noise_and_its_record():
+    th = np.linspace(0, 2 * np.pi, 60, endpoint=False) + 0.02
+    rng = np.random.default_rng(2)
+    y = 5 * np.sin(th) + 4 * np.sin(2 * th + 1) + 3 * np.sin(3 * th + 2) + rng.normal(0, 0.1, 60)
+    d = np.ones(60)
+    two = strongest_orders(th, y, d, [1, 2, 3, 4], noise_var=0.01, max_orders=2)
+    assert len(two.orders) == 2 and two.candidates == (1.0, 2.0, 3.0, 4.0)
+    scaled = strongest_orders(th, y * 4.848e-6, d, [1, 2, 3, 4], noise_var=0.01 * 4.848e-6 ** 2)
+    assert sorted(scaled.orders) == [1.0, 2.0, 3.0]  # arcsec as radians: the same choice
+    zero = strongest_orders(th, y, d, [1, 2, 3, 4], noise_var=0.0)  # no noise figure: the F-test
+    assert zero == strongest_orders(th, y, d, [1, 2, 3, 4])
