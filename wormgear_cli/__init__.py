@@ -13,7 +13,7 @@ __version__ = "0.1.0"
 
 #: names of :mod:`wormgear_cli.api` available as ``wormgear_cli.NAME`` (never the name of a submodule)
 _API = ("Angle", "AngleArray", "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose",
-        "compare")
+        "compare", "compensate")
 
 __all__ = ["__version__", *_API]
 
