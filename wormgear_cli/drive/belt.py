@@ -31,8 +31,6 @@ the belt makers' design manuals, shared by the two spans).  Tooth deflection is 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source

@@ -57,8 +57,9 @@ class Source(NamedTuple):
     ``value(stage_key)`` (numbers or arrays: the same function gives the spec's amplitude and,
     vectorised, a sampled drive's); ``tier``: 0 the model's sources (always listed), 1 the full
     budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size);
-    ``lost_size(value)`` -> (c, a, s): the source's lost motion of a sampled drive (arrays) is
-    max(c + a sin(order theta + phase), 0) s [rad at the output] (None: no lost motion);
+    ``lost_size(value)`` -> (c, a, s, clipped): the source's lost motion of a sampled drive (arrays)
+    is max(c + a sin(order theta + phase), 0) s [rad at the output] (``clipped`` False: c >= |a|,
+    never negative, taken as it is) (None: no lost motion);
     ``curve_at(value, theta, phase)`` -> [rad]: the curve of a sampled drive for a source that is
     not a sinusoid (None: ``size(value) sin(order theta + phase)``)."""
 

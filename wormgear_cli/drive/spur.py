@@ -152,9 +152,9 @@ def _eccentricity_source(stage, t, origin) -> Source:
         def curve_at(v, theta, phase):  # the curve of sampled drives (Delta e an array)
             return model.gear_kinematic_te(o_p * theta + phase, r1, r2, v("eccentricity_mm"), alpha) / after
 
-        def lost_size(v):  # Delta e tan(alpha) (1 + sin) / R2, never negative
+        def lost_size(v):  # Delta e tan(alpha) (1 + sin) / R2, never negative (no clipping needed)
             c = v("eccentricity_mm") * (math.tan(alpha) / r2) / after
-            return c, c, 1.0
+            return c, c, 1.0, False
 
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
         peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after
@@ -182,7 +182,7 @@ def _eccentricity_source(stage, t, origin) -> Source:
             c = counts * v("eccentricity_mm") * (math.tan(alpha) / r2)
             fixed = (2.0 * math.tan(alpha) * v("centre_distance_error_mm") + v("gear.thickness_deviation_mm")
                      + v("pinion.thickness_deviation_mm"))
-            return (c + fixed / r2) / after, c / after, 1.0
+            return (c + fixed / r2) / after, c / after, 1.0, True
     return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
                   curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
                   stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0,

@@ -141,7 +141,7 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
 
     def lost_size(v):  # the paper's Delta j at no load +/- its half-width h_j (:func:`_lost_motion`)
         p = paper(stage, 0.0, v)
-        return p.backlash_profile + p.backlash_thickness, p.backlash_halfwidth, to_out
+        return p.backlash_profile + p.backlash_thickness, p.backlash_halfwidth, to_out, True
 
     out = [
         src("worm_lead_error", "lead_error_phase_deg", n_w, lambda v: v("lead_error_mm") * (0.5 * to_out),
