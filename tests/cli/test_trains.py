@@ -72,34 +72,8 @@ def test_the_radar_worm_mesh_is_at_480_in_measure_and_diagnose(runner, tmp_path)
     assert measured[480.0] == labels[480.0] and measured[240.0] == "worm shaft"
 
 
-def test_commands_not_yet_on_every_train_say_so(runner):
-    r = run(runner, "tolerance", EQ6, "--samples", "100", code=2)
-    assert "one worm stage followed by one spur stage" in r.stderr and "belt, worm" in r.stderr
+def test_a_ratio_sweep_of_a_drive_without_a_spur_stage_says_so(runner):
     r = run(runner, "sweep", EQ6, "--i", "2:12:3", "--l-mm", "100:300:3", code=2)
-    assert "one worm stage followed by one spur stage" in r.stderr
-
-
-def test_the_stage_form_of_a_legacy_drive_gives_the_same_tolerance_and_diagnosis(runner, tmp_path):
-    """The upgraded precision table samples the same drives (its [statistics] by stage path), and the
-    upgraded MCH50 fits the warm-up demo as the legacy file does; phase keys are the file's own paths."""
-    from wormgear_cli.spec.upgrade import upgrade_text
-
-    old = CONFIGS / "rotary-table-precision.toml"
-    new = tmp_path / "p.toml"
-    stats = '\n[statistics]\n"{}" = {{ distribution = "uniform" }}\n'
-    old_text = old.read_text() + stats.format("assembly.wheel_eccentricity_mm")
-    (tmp_path / "old.toml").write_text(old_text)
-    new.write_text(upgrade_text(old.read_text(), str(old)).text + stats.format("stage.1.wheel.runout_mm"))
-    a, b = (json.loads(run(runner, "tolerance", p, "--samples", "400", "--seed", "2", "-f", "json").stdout)
-            for p in (tmp_path / "old.toml", new))
-    for doc in (a, b):
-        doc.pop("spec", None)
-    assert a == b
-    mch = tmp_path / "m.toml"
-    mch.write_text(upgrade_text((CONFIGS / "mch50.toml").read_text(), "mch50.toml").text)
-    warm = CONFIGS / "mch50-warm.csv"
-    d_old, d_new = (json.loads(run(runner, "diagnose", p, warm, "-f", "json").stdout)
-                    for p in (CONFIGS / "mch50.toml", mch))
-    assert d_old["verdict"] == d_new["verdict"]
-    keys = json.dumps(d_new)
-    assert "stage.1.wheel.radial_composite_phase_deg" in keys and "worm_pair.wheel" not in keys
+    assert r.stderr == (f"error: --i/--l-mm: the ratio and centre-distance sweep varies a spur stage; {EQ6} has "
+                        "none (stages: 1 belt, 2 worm); sweep another key with --param KEY=START:STOP:N, e.g. "
+                        "stage.2.module_mm=...\n")
