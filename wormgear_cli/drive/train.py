@@ -92,9 +92,17 @@ class Order(NamedTuple):
     label: str
 
 
+#: words a stage's name cannot stand for it in a label (``gear of gear``): the members' and the default names
+_PLAIN_NAMES = frozenset({"worm", "wheel", "pinion", "gear", "belt", "driving pulley", "driven pulley"})
+
+
 def _of(t: Train, st) -> str:
-    """`` of NAME`` when the train has more than one stage of ``st``'s kind (names then tell them apart)."""
-    return f" of {st.name}" if sum(1 for s in t.stages if s.kind == st.kind) > 1 else ""
+    """`` of NAME`` when the train has more than one stage of ``st``'s kind (names then tell them apart;
+    `` of stage N`` for a name that is a member's word, such as ``gear``)."""
+    if sum(1 for s in t.stages if s.kind == st.kind) <= 1:
+        return ""
+    plain = st.name.rstrip("0123456789") in _PLAIN_NAMES  # gear, or a numbered default name such as gear3
+    return f" of stage {st.index}" if plain else f" of {st.name}"
 
 
 def shaft_label(t: Train, s: int) -> str:
