@@ -745,6 +745,11 @@ class Sweep:
     core: object = field(repr=False, compare=False)
     _data: dict = field(repr=False, compare=False)
 
+    @property
+    def stage(self):
+        """The swept spur stage (its record: ``index``, ``name``, ``module``, ...)."""
+        return self.core.stage
+
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear sweep --format json --unit UNIT``."""
         return _plain(_sweep_report(self.core, self._data, unit))

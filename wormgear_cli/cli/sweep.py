@@ -67,7 +67,7 @@ def sweep(
     stage: Annotated[int | None, typer.Option(
         "--stage", metavar="N", help="The spur stage --i/--l-mm vary: its position from the motor (1 = the "
                                      "first stage; default: the drive's last spur stage).",
-        show_default=False, click_type=count_type())] = None,
+        show_default=False, min=1)] = None,
     hold: Annotated[HoldMode | None, typer.Option(
         "--hold", help="What stays fixed as i and l change: the normal tooth forces (force, default) or "
                        "the output torque (torque).", case_sensitive=False, show_default=False)] = None,
