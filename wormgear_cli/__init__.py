@@ -1,4 +1,4 @@
-"""wormgear-cli: accuracy of two-stage worm + spur gear drives.
+"""wormgear-cli: accuracy of precision drives, worm, spur and belt stages in series.
 
 The Python API (:mod:`wormgear_cli.api`, docs/api.md) is re-exported here
 lazily: ``from wormgear_cli import analyze`` loads the API on first use, so

@@ -885,6 +885,11 @@ class Sweep:
     core: object = field(repr=False, compare=False)
     _data: dict = field(repr=False, compare=False)
 
+    @property
+    def stage(self):
+        """The swept spur stage (its record: ``index``, ``name``, ``module``, ...)."""
+        return self.core.stage
+
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear sweep --format json --unit UNIT``."""
         return _plain(_sweep_report(self.core, self._data, unit))
@@ -913,7 +918,7 @@ def _axis(value, option: str):
 
 
 def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | None = None,
-          min_pinion_teeth: int | None = None, jobs: int = 1) -> Sweep:
+          min_pinion_teeth: int | None = None, jobs: int = 1, stage: int | None = None) -> Sweep:
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
     Parameters
@@ -933,10 +938,13 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
         With ``module_mm``: skip designs whose smaller gear has fewer teeth.
     jobs : int
         Worker processes (0: every core); the result is the same whatever the count.
+    stage : int or None
+        The spur stage swept (1-based from the motor); None: the drive's last spur stage.
 
     Raises
     ------
     UsageError, SpecError
+        UsageError for a drive without a spur stage, or a ``stage`` that is not one.
 
     Examples
     --------
@@ -953,12 +961,11 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     _choice("hold", hold, ("force", "torque"))
     if min_pinion_teeth is not None and module_mm is None:
         raise UsageError("min_pinion_teeth applies only with module_mm")
-    core.check_train(spec)
-    gp = spec.gear_pair
-    i_values = _axis(i, "--i") if i is not None else [gp.output_gear.teeth / gp.pinion.teeth]
-    l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth
-                                                                             + gp.pinion.teeth) / 2.0]
-    sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth)
+    st = core.spur_stage(spec, stage)
+    i_values = _axis(i, "--i") if i is not None else [st.gear.teeth / st.pinion.teeth]
+    l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [st.module * (st.gear.teeth + st.pinion.teeth) / 2.0]
+    sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth,
+                                 stage=st.index)
     data = sw.collect(0, sw.size, jobs=_jobs(jobs))
     doc = _sweep_report(sw, data, "rad")  # the CLI's document in radians
     points = {c: (AngleArray(data[c]) if c in core.ANGLE_COLUMNS else data[c]) for c in sw.columns}

@@ -45,7 +45,8 @@ COUNT_OPTIONS = {
 }
 #: integer options that are not counts (identifiers and classes), read as plain integers
 NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("compare", "--seed"), ("grade", "--grade"),
-              ("compensate", "--type")}
+              ("compensate", "--type"),
+              ("sweep", "--stage")}  # a stage's position (1 = the first), checked against the drive
 
 
 def test_every_integer_option_is_a_count_or_named_as_not_one():

@@ -171,15 +171,12 @@ def choose_orders(options: CompensateOptions) -> OrderChoice:
     priority = worm = name = None
     if options.drive is not None:
         from wormgear_cli.analysis.accuracy import geometry
-        from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
         from wormgear_cli.spec.loader import load_spec
+        from wormgear_cli.workflows.measure import _orders_asked
 
-        spec = load_spec(options.drive)
-        name = spec.drive.name
-        geo, starts = geometry(spec), spec.worm_pair.worm.starts
-        physical = physical_orders(geo, options.harmonics, worm_starts=starts)
-        priority = tuple(physical_priority(geo, options.harmonics, worm_starts=starts))
-        worm = float(geo.worm_order)
+        _, _, priority, physical, name = _orders_asked(options.drive, None, options.harmonics)
+        priority = tuple(priority)
+        worm = float(geometry(load_spec(options.drive)).worm_order)
     if options.orders is not None:
         from wormgear_cli.workflows.measure import _label_for
 
