@@ -9,9 +9,11 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     FormatOption,
     OutputOption,
+    TableFormat,
     TextJsonFormat,
     UnitOption,
     csv_text,
@@ -30,8 +32,8 @@ from wormgear_cli.cli.helptext import HelpCommand
 @app.command(cls=HelpCommand)
 def analyze(
     drive: DriveArgument,
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
 ):
     """Transmission error and backlash of each stage and of the whole drive.
@@ -206,7 +208,7 @@ def _tables(r: dict, unit: str) -> list:
 def check(
     drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False,
                                                 metavar="DRIVE.toml...")],
-    format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = "text",
+    format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = TextJsonFormat.text,
     output: OutputOption = None,
 ):
     """Validate drive specs and check their [requirements].

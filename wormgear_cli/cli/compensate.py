@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import OutputOption, UnitOption, count_type, emit, output_format, say
+from wormgear_cli.cli.common import AngleUnit, OutputOption, UnitOption, count_type, emit, output_format, say
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
@@ -58,7 +58,7 @@ def compensate(
     file_type: Annotated[int, typer.Option(
         "--type", help="LinuxCNC COMP_FILE_TYPE: 1 = nominal, correction forward, correction reverse "
         "(correction = -error); 0 = nominal, position reached forward, reverse.")] = 1,
-    unit: UnitOption = "arcsec",
+    unit: UnitOption = AngleUnit.arcsec,
     max_correction: Annotated[float | None, typer.Option(
         "--max-correction", help="Largest correction allowed, in --unit: a larger one is a warning and exit "
         "code 1 (the file is still written).", show_default=False)] = None,

@@ -14,6 +14,7 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     FormatOption,
     JobsOption,
@@ -21,6 +22,7 @@ from wormgear_cli.cli.common import (
     PartOutput,
     Progress,
     ShardOption,
+    TableFormat,
     UnitOption,
     announce_written,
     count_type,
@@ -83,8 +85,8 @@ def sweep(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs "
                        "matplotlib).", show_default=False)] = None,
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
 ):
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.

@@ -10,6 +10,7 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     JobsOption,
     OutputOption,
@@ -89,7 +90,7 @@ def tolerance(
     format: Annotated[ToleranceFormat, typer.Option(
         "--format", "-f", help="Output format: the report (table, json) or the samples (csv, or npy: the metrics "
         "as binary columns, with -o).", case_sensitive=False)] = ToleranceFormat.table,
-    unit: UnitOption = "arcsec",
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
