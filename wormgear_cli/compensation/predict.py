@@ -9,10 +9,14 @@ systematically at the targets: its own noise and what the model misses.
 
 A single corrected test is one draw of noisy figures (E is a range over the targets, so its
 spread between repeat tests is some 10 to 20 %).  The prediction is therefore the distribution of
-the figures over simulated repeat tests of the same plan (targets, directions, runs): per cell a
-systematic remainder drawn with the cross-validated mean square (scaled by (R - 1) / R, the final
-table being made from all R runs), per run an offset and per row a scatter with the measured
-variances.  The median is the predicted figure, the 5 and 95 % points its range.
+the figures over simulated repeat tests of the same plan (targets, directions, runs): per cell the
+systematic remainder, per run an offset and per row a scatter with the measured variances.  The
+remainder repeats on a repeat test: it is the cross-validated rows' mean per cell (target and
+direction), so an order the table cannot carry keeps its shape (the same in both directions, a
+sinusoid's range over the targets), scaled to the variance the final table leaves (the
+cross-validated mean square less the scatter, see :func:`_remainder`).  Drawing it afresh per
+cell instead would turn a left-out order into independent errors per direction and overstate B
+and E.  The table's own noise (its fitted values' share of the scatter) is drawn afresh per cell.  The median is the predicted figure, the 5 and 95 % points its range.
 
 With a single run nothing can be left out: the figures of the table applied to its own data are
 given instead, said to be in-sample (optimistic).  Pure numpy.
@@ -109,8 +113,23 @@ def _figures(theta, x, d, grouping) -> dict:
     return {k: getattr(f, k) for k in FIGURES}
 
 
-def _simulate(theta, d, grouping, cell, run, remainder_var: float, noise) -> dict:
-    """Figures over simulated repeat tests -> name -> :class:`Figure`."""
+def systematic_remainder(cell, centred, remainder_var: float) -> np.ndarray:
+    """The remainder a repeat test shows at each row [rad], shape (n,): the mean of the
+    cross-validated, run-centred rows ``centred`` per cell (target and direction), scaled so
+    that its mean square over the rows is ``remainder_var`` (their noise taken out)."""
+    _, ci = np.unique(cell, return_inverse=True)
+    ci = ci.ravel()
+    means = (np.bincount(ci, weights=centred) / np.bincount(ci))[ci]
+    mean_square = float(np.mean(means**2))
+    if mean_square <= 0.0 or remainder_var <= 0.0:
+        return np.zeros_like(means)
+    return means * math.sqrt(remainder_var / mean_square)
+
+
+def _simulate(theta, d, grouping, cell, run, systematic, own: float, noise) -> dict:
+    """Figures over simulated repeat tests -> name -> :class:`Figure`: ``systematic`` [rad]
+    per row, the table's own noise per cell (variance ``own``), a run offset and a scatter per
+    row drawn with the measured variances."""
     rng = np.random.default_rng(SEED)
     n = theta.shape[0]
     _, ci = np.unique(cell, return_inverse=True)
@@ -118,9 +137,9 @@ def _simulate(theta, d, grouping, cell, run, remainder_var: float, noise) -> dic
     ci, ri = ci.ravel(), ri.ravel()
     count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(n, 1)))
     within = noise.within if math.isfinite(noise.within) else 0.0
-    draws = {k: [] for k in FIGURES}
+    draws: dict[str, list[float]] = {k: [] for k in FIGURES}
     for _ in range(count):
-        x = (rng.normal(0.0, math.sqrt(remainder_var), ci.max() + 1)[ci]
+        x = (systematic + rng.normal(0.0, math.sqrt(own), ci.max() + 1)[ci]
              + rng.normal(0.0, math.sqrt(noise.between_runs), ri.max() + 1)[ri]
              + rng.normal(0.0, math.sqrt(within), n))
         for k, v in _figures(theta, x, d, grouping).items():
@@ -212,27 +231,31 @@ def predict_table(make_table: Callable, theta, y, direction, run, orders=(), par
     centred = corrected - (np.bincount(ri, weights=corrected) / np.bincount(ri))[ri]
     tops = residual_orders(theta, centred, d, orders)
     if folds and math.isfinite(noise.within):
-        remainder = _remainder(float(np.mean(centred**2)), noise.within, folds, parameters, y.shape[0])
-        after = _simulate(theta, d, grouping, cell, run, remainder, noise)
+        missed, own = _remainder(float(np.mean(centred**2)), noise.within, folds, parameters, y.shape[0])
+        after = _simulate(theta, d, grouping, cell, run, systematic_remainder(cell, centred, missed), own, noise)
         count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(y.shape[0], 1)))
-        return TablePrediction("cross-validated", folds, before, after, noise, math.sqrt(remainder), tops, count)
+        return TablePrediction("cross-validated", folds, before, after, noise, math.sqrt(missed + own), tops, count)
     figs = _figures(theta, corrected, d, grouping)
     after = {k: Figure(v, v, v) for k, v in figs.items()}
     return TablePrediction("in-sample", 0, before, after, noise, float(np.sqrt(np.mean(centred**2))), tops, 0)
 
 
-def _remainder(mean_square: float, within: float, folds: int, parameters: int | None, rows: int) -> float:
-    """The variance the final table leaves systematically at a row [rad^2].
+def _remainder(mean_square: float, within: float, folds: int, parameters: int | None, rows: int
+               ) -> tuple[float, float]:
+    """The variances the final table leaves at a row [rad^2]: (what the model misses, m^2, a
+    systematic remainder with the shape of the cross-validated rows; the table's own noise,
+    independent per cell).
 
-    The cross-validated rows hold the scatter (``within``), what the model
-    misses (m^2) and the noise of a table made from (R - 1) of the R runs
-    (within x h x R / (R - 1), h = parameters / rows the mean leverage); the
-    final table, made from all runs, leaves m^2 + within x h."""
+    The cross-validated rows hold the scatter (``within``), m^2 and the noise of a table made
+    from (R - 1) of the R runs (within x h x R / (R - 1), h = parameters / rows the mean
+    leverage); the final table, made from all runs, leaves m^2 + within x h.  With
+    ``parameters`` None the two are not told apart: all of it is taken as systematic, scaled by
+    (R - 1) / R."""
     if parameters is None:
-        return max(0.0, mean_square - within) * (folds - 1) / folds
+        return max(0.0, mean_square - within) * (folds - 1) / folds, 0.0
     h = parameters / rows
     missed = max(0.0, mean_square - within * (1.0 + h * folds / (folds - 1)))
-    return missed + within * h
+    return missed, within * h
 
 
 def _iso(theta, y, d, grouping):
