@@ -16,7 +16,8 @@ direction), so an order the table cannot carry keeps its shape (the same in both
 sinusoid's range over the targets), scaled to the variance the final table leaves (the
 cross-validated mean square less the scatter, see :func:`_remainder`).  Drawing it afresh per
 cell instead would turn a left-out order into independent errors per direction and overstate B
-and E.  The table's own noise (its fitted values' share of the scatter) is drawn afresh per cell.  The median is the predicted figure, the 5 and 95 % points its range.
+and E.  The table's own noise (its fitted values' share of the scatter) is drawn afresh per
+cell.  The median is the predicted figure, the 5 and 95 % points its range.
 
 With a single run nothing can be left out: the figures of the table applied to its own data are
 given instead, said to be in-sample (optimistic).  Pure numpy.
