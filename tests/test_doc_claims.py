@@ -268,3 +268,25 @@ def test_check_judges_the_sampled_limits_by_yield_and_the_peak_by_the_corner(tmp
     assert rows["requirements.max_budget_peak_arcsec"] is False  # judged by the corner case
     assert not result.passed
     assert any("FAIL requirements.max_budget_peak_arcsec" in f for f in result.findings)
+
+
+def _python_examples() -> list[tuple[str, int, str]]:
+    """(page, block number, code) of every ```python block of the command pages (the reference
+    pages' blocks are signatures, not examples)."""
+    out = []
+    for page in sorted((ROOT / "docs" / "commands").glob("*.md")):
+        blocks = re.findall(r"```python\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
+        out += [(f"docs/commands/{page.name}", k, code) for k, code in enumerate(blocks)]
+    return out
+
+
+@pytest.mark.parametrize("page, block, code", _python_examples(), ids=lambda v: str(v)[:40])
+def test_python_examples_of_the_docs_run(page, block, code, monkeypatch, capsys):
+    """A reader pastes the docs' Python into a session at the repository's root: it runs, and a
+    value the docs show after ``#`` on a print line is what it prints."""
+    monkeypatch.chdir(ROOT)
+    exec(compile(code, f"{page}#{block}", "exec"), {})
+    printed = capsys.readouterr().out.split()
+    for claimed in re.findall(r"^print\(.*\)\s*#\s*(.+)$", code, re.M):
+        number = claimed.split()[0]
+        assert number in printed, f"{page}: shows {claimed!r}, prints {printed}"

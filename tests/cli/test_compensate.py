@@ -100,7 +100,8 @@ def test_usage_mistakes_are_one_line_and_exit_2(runner, test_csv, tmp_path, args
 
 def test_never_overwrites_the_input(runner, test_csv):
     r = run(runner, test_csv, "-f", "csv", "-o", test_csv)
-    assert r.exit_code == 2 and "refusing to overwrite the input file" in r.stderr
+    assert r.exit_code == 2  # refused before any work: no summary lines first
+    assert r.stderr == f"error: {test_csv}: refusing to overwrite the input file; choose another -o\n"
 
 
 def test_help_has_an_example(runner):

@@ -128,7 +128,8 @@ def test_output_is_deterministic_and_written_atomically(runner, tmp_path):
     assert out.read_text() == first
     result = invoke(runner, data, "-o", data)  # a .csv name: the CSV format, onto the input
     assert result.exit_code == 2
-    assert "refusing to overwrite the input file" in result.stderr
+    # refused before any work: no report, no other message first
+    assert result.stderr == f"error: {data}: refusing to overwrite the input file; choose another -o\n"
 
 
 def test_target_grouping_tolerance_and_one_direction_only(runner, tmp_path):

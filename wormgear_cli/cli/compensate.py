@@ -94,7 +94,7 @@ def compensate(
     Example: wormgear compensate guide.csv --format eqmod --drive mount.toml --steps-per-worm 50133 -o pec.txt
     """
     from wormgear_cli.compensation.table import parse_range
-    from wormgear_cli.files import refuse_same_outputs
+    from wormgear_cli.files import refuse_input, refuse_same_outputs
     from wormgear_cli.output.formats import json_text
     from wormgear_cli.units import from_unit
     from wormgear_cli.workflows.compensate import CompensateOptions, report, summary
@@ -105,8 +105,9 @@ def compensate(
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
     refuse_same_outputs([(output, "-o"), (report_path, "--report")])
+    refuse_input(output, inputs, "-o")  # before any work, not when the result is written
     if report_path is not None:
-        from wormgear_cli.files import check_output_path, refuse_input
+        from wormgear_cli.files import check_output_path
 
         check_output_path(report_path, "--report")
         refuse_input(report_path, inputs, "--report")
