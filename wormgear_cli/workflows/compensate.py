@@ -26,7 +26,7 @@ strongest period for a mount).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -327,13 +327,28 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     prediction = predict_table(make, theta, y, d, run, tuple(plan.orders) + dropped, parameters(plan, theta, d))
     details = TableDetails(plan, carried, analysis, test, grid, table, dropped, interpolation_loss(carried, table),
                            prediction, selection)
-    warnings, notes = _structure(m)
+    warnings, notes, mixed = _structure(m)
+    if mixed:  # forward and reverse cannot be told apart: no one-direction figure, no E, A, R or B
+        details = replace(details, prediction=_withheld(prediction))
     more_warnings, more_notes = _table_findings(details, theta, options)
     return details, warnings + more_warnings, notes + more_notes, choice
 
 
-def _structure(m) -> tuple[list, list]:
-    """What the file does not state (``measure``'s checks), as warnings and notes for a table."""
+def _withheld(prediction):
+    """The prediction with every figure that needs the directions told apart withheld (NaN):
+    all but M, as measured and after correction (``measure`` withholds the same)."""
+    from wormgear_cli.compensation.predict import Figure
+    from wormgear_cli.measurement.iso230 import withhold_directional
+
+    before = withhold_directional(prediction.before, "directions mixed: one-direction figures withheld")
+    before = replace(before, B=math.nan)
+    after = {k: (v if k == "M" else Figure(math.nan, math.nan, math.nan)) for k, v in prediction.after.items()}
+    return replace(prediction, before=before, after=after)
+
+
+def _structure(m) -> tuple[list, list, bool]:
+    """What the file does not state (``measure``'s checks), as warnings and notes for a table, and
+    whether forward and reverse visits are mixed."""
     from wormgear_cli.measurement.checks import structure_findings
     from wormgear_cli.measurement.iso230 import group_targets
 
@@ -343,7 +358,7 @@ def _structure(m) -> tuple[list, list]:
     if mixed:
         warnings.append("forward and reverse visits cannot be told apart: the table's two columns are the same "
                         "mixture and lost motion is not corrected")
-    return warnings, notes
+    return warnings, notes, mixed
 
 
 def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple[list, list]:
@@ -581,16 +596,12 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
         tb, pr = doc["table"], doc["prediction"]
         lines.append(f"table: {tb['points']} points, {tb['start_deg']:g} to {tb['end_deg']:g} deg every "
                      f"{tb['spacing_deg']:.4g} deg; largest correction {_fmt(tb['largest_correction'])} {unit}")
-        shown = _shown_figures(pr["before"])
-        lines.append("as measured:  " + "  ".join(f"{k} {_fmt(pr['before'][k])}" for k in shown) + f" {unit}")
-        how = (f"cross-validated over {pr['runs_left_out']} runs" if pr["method"] == "cross-validated"
-               else "in-sample")
-        lines.append(f"predicted after correction (a repeat of this test, {how}; 5-95 %):")
-        after = pr["after"]
-        lines.append("              " + "  ".join(
-            f"{k} {_fmt(after[k]['median'])}" + (f" ({_fmt(after[k]['low_5pct'])}-{_fmt(after[k]['high_95pct'])})"
-                                                 if after[k]["low_5pct"] != after[k]["high_95pct"] else "")
-            for k in shown) + f" {unit}")
+        shown = tuple(k for k in _shown_figures(pr["before"]) if pr["before"][k] is not None)
+        if not shown:
+            lines.append("ISO 230-2 figures withheld, as measured and predicted: forward and reverse visits "
+                         "cannot be told apart")
+        else:
+            lines += _prediction_lines(pr, shown, unit)
         left = pr["residual_orders"]
     else:
         pe = doc["pec"]
@@ -607,12 +618,28 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
     return lines
 
 
+def _prediction_lines(pr: dict, shown: tuple, unit: str) -> list[str]:
+    """The summary's figures as measured and predicted after correction."""
+    lines = ["as measured:  " + "  ".join(f"{k} {_fmt(pr['before'][k])}" for k in shown) + f" {unit}"]
+    how = (f"cross-validated over {pr['runs_left_out']} runs" if pr["method"] == "cross-validated"
+           else "in-sample")
+    lines.append(f"predicted after correction (a repeat of this test, {how}; 5-95 %):")
+    after = pr["after"]
+    lines.append("              " + "  ".join(
+        f"{k} {_fmt(after[k]['median'])}" + (f" ({_fmt(after[k]['low_5pct'])}-{_fmt(after[k]['high_95pct'])})"
+                                             if after[k]["low_5pct"] != after[k]["high_95pct"] else "")
+        for k in shown) + f" {unit}")
+    return lines
+
+
 def _shown_figures(before: dict) -> tuple[str, ...]:
     """The figures the summary shows: E, B, A; with one direction (no bidirectional E) that
     direction's E and A."""
     if before["E"] is not None or before["B"] is not None:
         return ("E", "B", "A")
-    return ("E_forward", "A_forward") if before["E_forward"] is not None else ("E_reverse", "A_reverse")
+    if before["E_forward"] is not None:
+        return ("E_forward", "A_forward")
+    return ("E_reverse", "A_reverse") if before["E_reverse"] is not None else ("M",)
 
 
 def _fmt(x) -> str:
