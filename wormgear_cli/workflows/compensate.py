@@ -596,8 +596,8 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
         tb, pr = doc["table"], doc["prediction"]
         lines.append(f"table: {tb['points']} points, {tb['start_deg']:g} to {tb['end_deg']:g} deg every "
                      f"{tb['spacing_deg']:.4g} deg; largest correction {_fmt(tb['largest_correction'])} {unit}")
-        shown = tuple(k for k in _shown_figures(pr["before"]) if pr["before"][k] is not None)
-        if not shown:
+        shown = _shown_figures(pr["before"])
+        if all(pr["before"][k] is None for k in shown):
             lines.append("ISO 230-2 figures withheld, as measured and predicted: forward and reverse visits "
                          "cannot be told apart")
         else:
