@@ -116,11 +116,12 @@ def test_field_partial_span_finds_its_order_and_says_the_range(runner, tmp_path)
     """tests/data/field/partial-span-order144.csv: 11 deg of a scan with an order-144 error (its README)."""
     rep = tmp_path / "r.json"
     args = [FIELD / "partial-span-order144.csv", "-f", "csv", "--points", "1000", "--report", rep]
-    r = run(runner, *args)
+    r = run(runner, *args, "--range", "0:360")
     assert r.exit_code == 0, r.stderr
     assert "beyond the table's 0 to 360 deg (--range): the controller holds the end values there" in r.stderr
-    r = run(runner, *args, "--range=-11:1")
+    r = run(runner, *args)  # by default the measured arc, rounded out to whole degrees: -11 to 1
     assert r.exit_code == 0, r.stderr
+    assert "1000 points, -11 to 1 deg" in r.stderr and "less than the table's" not in r.stderr
     doc = json.loads(rep.read_text())
     assert doc["orders"]["requested"] == [144.0]
     assert "as measured:  E_forward 20" in r.stderr and "A_forward -" in r.stderr

@@ -52,9 +52,10 @@ def compensate(
     points: Annotated[int | None, typer.Option(
         "--points", help="Table points, evenly spaced over --range, both ends included (default: 256 for "
         "linuxcnc, its most; 361 for csv).", show_default=False, click_type=count_type(2))] = None,
-    range_deg: Annotated[str, typer.Option(
-        "--range", metavar="START:END", help="Angles the table spans [deg]; 0 and 360 both covered by "
-        "default, as LinuxCNC holds the end values and does not wrap.")] = "0:360",
+    range_deg: Annotated[str | None, typer.Option(
+        "--range", metavar="START:END", help="Angles the table spans [deg] (default: 0:360 for data over a "
+        "full turn, both ends covered as LinuxCNC holds the end values and does not wrap; the measured arc "
+        "rounded out to whole degrees for a partial one).", show_default=False)] = None,
     file_type: Annotated[int, typer.Option(
         "--type", help="LinuxCNC COMP_FILE_TYPE: 1 = nominal, correction forward, correction reverse "
         "(correction = -error); 0 = nominal, position reached forward, reverse.")] = 1,
@@ -115,7 +116,7 @@ def compensate(
     options = CompensateOptions(
         format=fmt, drive=drive,
         orders=tuple(parse_orders(orders)) if orders is not None else None, harmonics=harmonics, points=points,
-        range_deg=parse_range(range_deg), file_type=file_type, unit=unit,
+        range_deg=parse_range(range_deg) if range_deg is not None else None, file_type=file_type, unit=unit,
         max_correction=from_unit(max_correction, unit) if max_correction is not None else None,
         worm_period_s=worm_period, steps_per_worm=steps_per_worm, output=str(output) if is_file else None)
     result = run(data, options, read_options(column_map, error_unit, angle_unit, input_format))

@@ -46,7 +46,7 @@ class CompensateOptions:
     ``format``: writer name (None: from the ``output`` file name's
     ending); ``drive``: spec path; ``orders``: orders to fit [cycles/rev];
     ``harmonics``: with ``drive``; ``points``: table points (None: the
-    writer's default); ``range_deg``: (start, end) of the table [deg];
+    writer's default); ``range_deg``: (start, end) of the table [deg] (None: :func:`_default_range`);
     ``file_type``: LinuxCNC COMP_FILE_TYPE; ``unit``: unit of the CSV
     values and the report; ``max_correction`` [rad]: the largest correction
     allowed (None: no limit); ``worm_period_s`` [s] and ``steps_per_worm``:
@@ -59,7 +59,7 @@ class CompensateOptions:
     orders: tuple[float, ...] | None = None
     harmonics: int = DEFAULT_HARMONICS
     points: int | None = None
-    range_deg: tuple[float, float] = (0.0, 360.0)
+    range_deg: tuple[float, float] | None = None
     file_type: int = 1
     unit: str = "arcsec"
     max_correction: float | None = None
@@ -299,7 +299,8 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
     from wormgear_cli.compensation.table import TableGrid, build_table, interpolation_loss, uncarried
 
     theta, y, d, run = m.angle, m.error, m.direction, m.run
-    grid = TableGrid(options.points or writer.default_points or 361, *options.range_deg)
+    span = options.range_deg or _default_range(m.angle)
+    grid = TableGrid(options.points or writer.default_points or 361, *span)
     grid.check(writer.max_points)
     selection = None
     if choice.orders is None:
@@ -332,6 +333,18 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
         details = replace(details, prediction=_withheld(prediction))
     more_warnings, more_notes = _table_findings(details, theta, options)
     return details, warnings + more_warnings, notes + more_notes, choice
+
+
+def _default_range(theta) -> tuple[float, float]:
+    """The table's span when --range is not given [deg]: 0 to 360 for data over a full turn; the
+    measured arc rounded out to whole degrees for a partial one (a table over the whole turn would
+    spend its points where nothing was measured, and spread them too far for the orders seen)."""
+    from wormgear_cli.measurement.coverage import coverage
+
+    if coverage(theta).full_turn:
+        return 0.0, 360.0
+    deg = np.degrees(theta)
+    return float(math.floor(deg.min())), float(math.ceil(deg.max()))
 
 
 def _withheld(prediction):
@@ -380,13 +393,12 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
                         f"of {spacing:.4g} deg: a table of {t.grid.points} points cannot carry it (fewer than 4 "
                         f"spacings per period), so it is left out and its {to_unit(amp, u):.3g} {u} amplitude stays")
     cov = t.plan.coverage
-    if not cov.full_turn:
-        start = math.degrees(cov.start)
-        warnings.append(f"the data cover {math.degrees(cov.span):.4g} deg ({start:.4g} to "
-                        f"{start + math.degrees(cov.span):.4g} deg), less than the table's {t.grid.start_deg:g} to "
-                        f"{t.grid.end_deg:g} deg: outside the measured arc the table holds the correction of the "
-                        "nearer end")
     deg = np.degrees(theta)
+    slack = max(spacing, 1.0)  # the default span is the measured arc rounded out to whole degrees
+    if not cov.full_turn and (deg.min() - t.grid.start_deg > slack or t.grid.end_deg - deg.max() > slack):
+        warnings.append(f"the data cover {math.degrees(cov.span):.4g} deg ({deg.min():.4g} to {deg.max():.4g} deg), "
+                        f"less than the table's {t.grid.start_deg:g} to {t.grid.end_deg:g} deg: outside the "
+                        "measured arc the table holds the correction of the nearer end")
     if deg.min() < t.grid.start_deg - 1e-9 or deg.max() > t.grid.end_deg + 1e-9:
         warnings.append(f"measured angles run from {deg.min():.4g} to {deg.max():.4g} deg, beyond the table's "
                         f"{t.grid.start_deg:g} to {t.grid.end_deg:g} deg (--range): the controller holds the end "
