@@ -462,3 +462,14 @@ def test_a_subsampled_heat_map_keeps_even_steps_and_says_which(runner, mch50_pat
     ordinal = {2: "2nd", 3: "3rd"}.get(k, f"{k}th")
     assert f"({len(shown)} of {n}: every {ordinal}" in caption
     assert "all points: --format csv" in caption
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_designs_skipped_by_the_module_are_said_on_stderr(runner, mch50_path, fmt):
+    """(i, l) = (8, 150) at m = 2.5: the pinion would have 150 / 9 / 1.25 = 13.3 -> 13 teeth < 17."""
+    r = run(runner, mch50_path, "--i", "4:8:2", "--l-mm", "150:250:2", "--module-mm", "2.5", "-f", fmt)
+    assert r.exit_code == 0, r.stderr
+    assert r.stderr == ("note: 1 design skipped: at m = 2.5 mm the smaller gear would have fewer than 17 teeth "
+                        "(--min-pinion-teeth)\n")
+    r = run(runner, mch50_path, "--i", "4:8:2", "--l-mm", "150:250:2", "-f", fmt)
+    assert r.exit_code == 0 and r.stderr == ""

@@ -252,3 +252,11 @@ def test_arbitrary_text_loads_or_raises_spec_error(text):
         loads_spec(text, "h.toml")
     except SpecError as exc:
         assert all(p.startswith("h.toml") for p in exc.problems)
+
+
+def test_a_file_of_neither_form_is_told_how_a_drive_is_written():
+    """Only [drive] (or another table of neither form): one line pointing to [[stage]] and the
+    template, not the legacy form's missing tables."""
+    assert problems_of({"drive": {"name": "x"}}) == [
+        'd.toml: stage: no stages: a drive is a list of [[stage]] tables from the motor to the output, each '
+        'with kind = "worm", "spur" or "belt"; start from a template: wormgear new FILE --stages worm']

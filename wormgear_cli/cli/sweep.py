@@ -32,6 +32,7 @@ from wormgear_cli.cli.common import (
     json_text,
     output_format,
     render,
+    say,
     shard_part,
     warn_if_absurd,
 )
@@ -196,6 +197,13 @@ def _require_matplotlib() -> None:
     pyplot()
 
 
+def _note_skipped(sw, skipped: int) -> None:
+    """Say on stderr how many designs --module-mm skipped (the CSV has no row for them)."""
+    if sw.module is not None and skipped > 0:
+        say(f"note: {skipped} design{'s' if skipped != 1 else ''} skipped: at m = {sw.module:g} mm the smaller "
+            f"gear would have fewer than {sw.min_teeth} teeth (--min-pinion-teeth)")
+
+
 def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
     from wormgear_cli.output import sweep as report
 
@@ -204,20 +212,26 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
     with Progress(stop - start, (stop - start) * _SECONDS_PER_RL_POINT, "sweep") as bar:
         if fmt == "csv" and plot is None:
             chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance, jobs)
+            rows = -1  # the header line
             if is_stdout(output):
                 for data in chunks:  # streamed block by block: memory stays constant
+                    rows += data.count(b"\n")
                     emit(data, None)
+                _note_skipped(sw, stop - start - rows)
                 return
             from wormgear_cli.files import atomic_stream
 
             with atomic_stream(output, (drive,)) as write:  # streamed to a staged file, renamed at the end
                 write_part = out.hash.wrap(write)
                 for data in chunks:
+                    rows += data.count(b"\n")
                     write_part(data)
             announce_written(output)
             out.finish([drive])
+            _note_skipped(sw, stop - start - rows)
             return
         data = sw.collect(start, stop, progress=bar.advance, jobs=jobs)
+    _note_skipped(sw, stop - start - int(data["_point"].size))
     from wormgear_cli.analysis.sweep import ANGLE_COLUMNS
 
     warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)

@@ -387,7 +387,11 @@ def spec_from_dict(data: dict, source: str = "<spec>", default_name: str = "driv
         problems.append(f"{source}: {path}: {message}")
 
     _walk_unknown(data, "", problems, source, _LEGACY)
-    for sec in REQUIRED_SECTIONS:
+    neither = not any(t in data for t in LEGACY_TABLES)
+    if neither:  # neither form: say how a drive is written today, not which legacy tables are missing
+        bad("stage", "no stages: a drive is a list of [[stage]] tables from the motor to the output, each with "
+                     "kind = \"worm\", \"spur\" or \"belt\"; start from a template: wormgear new FILE --stages worm")
+    for sec in REQUIRED_SECTIONS if not neither else ():
         parent = sec.rsplit(".", 1)[0] if "." in sec else ""
         if get_path(data, sec) is None and (not parent or isinstance(get_path(data, parent), dict)):
             bad(sec, f"missing section [{sec}]")
