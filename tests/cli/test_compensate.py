@@ -145,3 +145,16 @@ def test_a_mount_record_under_two_worm_cycles_is_not_cross_validated(runner):
     assert r.exit_code == 0, r.stderr
     assert "1.07 worm cycles recorded" in r.stderr and "as measured, not predicted" in r.stderr
     assert "warning: the record holds 1.1 worm cycles: fewer than two" in r.stderr
+
+
+def test_a_record_too_sparse_for_its_pec_curve_is_refused(runner, tmp_path):
+    """Six rows over a worm cycle cannot fix three harmonics and a cubic drift (10 terms): a
+    least-squares curve through them is any curve at all (it came out at 1e15 arcsec)."""
+    data = tmp_path / "few.csv"
+    data.write_text("angle_deg,error_arcsec\n0,1\n0.5,2\n1,3\n1.5,1\n2,2\n2.5,3\n")
+    out = tmp_path / "few.pec"
+    r = run(runner, data, "--drive", FIELD / "telescope-mount.toml", "-f", "eqmod", "-o", out)
+    assert r.exit_code == 2 and not out.exists()
+    assert r.stderr == (f"error: {data}: 6 rows cannot give a PEC curve of 10 terms (orders 144, 288, 432 and a "
+                        "drift per session; the rows tell 6 apart): at least 20 rows spread over the worm cycle "
+                        "are needed; record longer or more often, or fit fewer orders (--harmonics, --orders)\n")

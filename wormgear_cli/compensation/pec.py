@@ -109,6 +109,15 @@ def fit_harmonics(th, y, run, orders: Sequence[float], degree: int = DRIFT_DEGRE
     return HarmonicFit(ords, h[0::2], h[1::2], y - x @ coef)
 
 
+def determinacy(th, run, orders: Sequence[float], degree: int = DRIFT_DEGREE) -> tuple[int, int, int]:
+    """(rows, terms, terms the rows tell apart) of the fit :func:`fit_harmonics` makes: the
+    design's size and its numerical rank (scaled columns, relative tolerance 1e-10)."""
+    th = np.asarray(th, dtype=float)
+    x = np.hstack([drift_columns(th, np.asarray(run), degree), harmonic_columns(th, np.asarray(list(orders), float))])
+    scale = np.sqrt(np.maximum(np.einsum("ij,ij->j", x, x), 1e-300))
+    return x.shape[0], x.shape[1], int(np.linalg.matrix_rank(x / scale, tol=None))
+
+
 def peak_to_peak(fit: HarmonicFit, worm_order: float, orders: Sequence[float], start: float = 0.0) -> float:
     """Peak-to-peak [rad] over one worm cycle (from axis angle ``start``) of the fitted sinusoids at ``orders``."""
     theta = start + np.linspace(0.0, 2.0 * math.pi / worm_order, PP_POINTS, endpoint=False)

@@ -468,6 +468,12 @@ def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
     orders = list(options.orders) if options.orders else [worm * h for h in range(1, options.harmonics + 1)]
     if not any(abs(k - worm) <= 1e-9 * worm for k in orders):
         orders.insert(0, worm)
+    rows, terms, told = pec.determinacy(th, run, orders)
+    if told < terms or rows < 2 * terms:  # an underdetermined fit gives any curve at all
+        raise DataError(f"{m.source}: {rows} rows cannot give a PEC curve of {terms} terms (orders "
+                        f"{', '.join(f'{k:.6g}' for k in orders)} and a drift per session; the rows tell {told} "
+                        f"apart): at least {2 * terms} rows spread over the worm cycle are needed; record longer "
+                        "or more often, or fit fewer orders (--harmonics, --orders)")
     curve = pec.pec_curve(theta, y, run, worm, orders)
     prediction = pec.predict_pec(theta, y, run, curve)
     source = where if options.orders is None or options.worm_period_s or choice.worm_order else "--orders"
