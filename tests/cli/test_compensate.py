@@ -158,3 +158,13 @@ def test_a_record_too_sparse_for_its_pec_curve_is_refused(runner, tmp_path):
     assert r.stderr == (f"error: {data}: 6 rows cannot give a PEC curve of 10 terms (orders 144, 288, 432 and a "
                         "drift per session; the rows tell 6 apart): at least 20 rows spread over the worm cycle "
                         "are needed; record longer or more often, or fit fewer orders (--harmonics, --orders)\n")
+
+
+def test_a_file_name_of_another_format_names_the_endings_that_work(runner, test_csv, tmp_path):
+    r = run(runner, test_csv, "-o", tmp_path / "x.json")
+    assert r.exit_code == 2
+    assert r.stderr.endswith("not json; name the file .comp (linuxcnc) or .pec (eqmod) or .csv (csv)\n")
+    r = run(runner, test_csv, "-f", "linuxcnc", "-o", tmp_path / "x.pec")  # an EQMOD name for a LinuxCNC table
+    assert r.exit_code == 2 and not (tmp_path / "x.pec").exists()
+    assert r.stderr.endswith("the file name says eqmod, but --format linuxcnc was given; drop --format or name the "
+                             "file .comp\n")

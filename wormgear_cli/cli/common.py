@@ -84,9 +84,18 @@ SUFFIX_FORMATS = {".json": "json", ".csv": "csv", ".npy": "npy"}
 TEXT_SUFFIXES = (".txt", ".text", ".log")
 
 
+def _suffix_formats() -> dict[str, str]:
+    """File-name suffix -> format: the documents' (.json, .csv, .npy) and the writer registry's
+    (.comp, .tbl, .pec: files other programs load)."""
+    from wormgear_cli.output.writers import extensions
+
+    return {**extensions(), **SUFFIX_FORMATS}
+
+
 def _suffix_for(fmt: str) -> str:
-    """The file-name suffix of a format: .json, .csv, else .txt (tables and text)."""
-    return next((k for k, v in SUFFIX_FORMATS.items() if v == fmt), TEXT_SUFFIXES[0])
+    """The file-name suffix of a format: .json, .csv, a writer's own (.comp, .pec), else .txt
+    (tables and text)."""
+    return next((k for k, v in _suffix_formats().items() if v == fmt), TEXT_SUFFIXES[0])
 
 
 def _format_param(ctx):
@@ -119,7 +128,7 @@ def output_format(format, output: Path | None) -> str:
         return fmt
     choices = [getattr(c, "value", c) for c in getattr(param.type, "choices", ())]
     suffix = Path(output).suffix.lower()
-    named = SUFFIX_FORMATS.get(suffix)
+    named = (_suffix_formats() if "table" not in choices and "text" not in choices else SUFFIX_FORMATS).get(suffix)
     command = ctx.command_path
     if named is not None and named != fmt and explicit:
         raise UsageError(f"-o {output}: the file name says {named}, but --format {fmt} was given; drop "
