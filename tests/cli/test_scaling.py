@@ -227,9 +227,9 @@ def test_merge_refuses_missing_duplicate_changed_and_mismatched_parts(runner, tm
         "again",
         f"error: {bare}: no manifest (bare.npy.manifest.json); only parts written with --shard and -o can be "
         "merged (an interrupted part has none: run it again)",
-        f"error: {other}: from another seed (1 vs 0) than {p[1]}; merge parts of one run only",
+        f"error: {other}: not a part of the run of {p[1]} (seed 1 vs 0); merge parts of one run only",
         f"error: part 1/3 given twice ({p[1]}, {p[1]})",
-        "error: part 2/3 missing (run it with --shard 2/3)",
+        f"error: part 2/3 missing (given only from another run: {other}) (run it with --shard 2/3)",
         "error: part 3/3 missing (run it with --shard 3/3)",
     ]
 
@@ -292,3 +292,13 @@ def test_merge_takes_the_second_pass_of_large_runs(runner, tmp_path, monkeypatch
     for k, p in enumerate(paths, 1):
         run(runner, *base, "--format", "npy", "--shard", f"{k}/2", "-o", p)
     assert run(runner, "merge", *paths, "--format", "json").stdout == run(runner, *base, "--format", "json").stdout
+
+
+def test_a_part_in_a_format_merge_cannot_join_is_warned_about_before_it_runs(runner, tmp_path):
+    r = run(runner, "tolerance", MCH50, "-n", 2000, "--metrics", "paper", "--shard", "1/2", "-f", "json", "-o",
+            tmp_path / "p1.json")
+    assert r.stderr.startswith("warning: tolerance parts in json cannot be joined by wormgear merge; for a run in "
+                               "parts use --format csv or npy\n")
+    r = run(runner, "tolerance", MCH50, "-n", 2000, "--metrics", "paper", "--shard", "1/2", "-f", "npy", "-o",
+            tmp_path / "p1.npy")
+    assert "warning" not in r.stderr

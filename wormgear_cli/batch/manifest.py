@@ -109,19 +109,19 @@ def resume_note(path: str | Path, key: dict) -> str | None:
 
 
 def _difference(a: dict, b: dict) -> str:
-    """The first field in which two run keys differ, as words."""
+    """The first field in which two run keys differ, as words: "seed 1 vs 0" (b's value first)."""
     for field in ("command", "version", "drive_sha256"):
         if a.get(field) != b.get(field):
             what = {"command": "command", "version": "wormgear version", "drive_sha256": "drive file"}[field]
-            return f"another {what} ({b.get(field)} vs {a.get(field)})" if field != "drive_sha256" else \
+            return f"{what} {b.get(field)} vs {a.get(field)}" if field != "drive_sha256" else \
                 "another drive file (its SHA-256 differs)"
     pa, pb = a.get("parameters") or {}, b.get("parameters") or {}
     for name in sorted(set(pa) | set(pb)):
         if pa.get(name) != pb.get(name):
-            return f"another {name} ({pb.get(name)!r} vs {pa.get(name)!r})"
+            return f"{name} {pb.get(name)!r} vs {pa.get(name)!r}"
     qa, qb = a.get("part") or {}, b.get("part") or {}
     if qa.get("n") != qb.get("n"):
-        return f"another number of parts ({qb.get('n')} vs {qa.get('n')})"
+        return f"number of parts {qb.get('n')} vs {qa.get('n')}"
     return "another run"
 
 
@@ -150,10 +150,13 @@ def check_parts(paths: list) -> tuple[list[dict], list[str]]:
         return [], problems or ["no part to merge"]
     first_path, first = found[0]
     by_k: dict = {}
+    claimed: dict = {}  # part number -> the files of another run that claimed it
     for p, doc in found:
         key, ref = _key_of(doc), _key_of(first)
         if {**key, "part": None} != {**ref, "part": None} or (key["part"] or {}).get("n") != ref["part"].get("n"):
-            problems.append(f"{p}: from {_difference(ref, key)} than {first_path}; merge parts of one run only")
+            problems.append(f"{p}: not a part of the run of {first_path} ({_difference(ref, key)}); merge parts "
+                            "of one run only")
+            claimed.setdefault((key["part"] or {}).get("k"), []).append(p)
             continue
         by_k.setdefault(doc["part"]["k"], []).append(p)
     n = int(first["part"]["n"])
@@ -162,7 +165,8 @@ def check_parts(paths: list) -> tuple[list[dict], list[str]]:
             problems.append(f"part {k}/{n} given twice ({', '.join(map(str, by_k[k]))})")
     missing = [k for k in range(1, n + 1) if k not in by_k]
     for k in missing:
-        problems.append(f"part {k}/{n} missing (run it with --shard {k}/{n})")
+        given = f" (given only from another run: {', '.join(map(str, claimed[k]))})" if k in claimed else ""
+        problems.append(f"part {k}/{n} missing{given} (run it with --shard {k}/{n})")
     ordered = [dict(doc, path=str(p)) for k in sorted(by_k) for p, doc in found if p == by_k[k][0]]
     return ordered, problems
 

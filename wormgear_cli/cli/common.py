@@ -334,6 +334,12 @@ class PartOutput:
         if self.active:
             part_info = {"k": part.k, "n": part.n, "first": int(first), "stop": int(stop), "total": int(total)}
             self.key = manifest.run_key(command, __version__, manifest.file_sha256(drive), parameters, part_info)
+            from wormgear_cli.workflows.merge import MERGEABLE
+
+            fmt, mergeable = parameters.get("format"), MERGEABLE.get(command, ())
+            if fmt not in mergeable:  # said before the part runs, not when the parts are merged
+                say(f"warning: {command} parts in {fmt} cannot be joined by wormgear merge; for a run in parts "
+                    f"use --format {' or '.join(mergeable)}")
 
     def done(self) -> bool:
         if not self.active:
