@@ -124,18 +124,19 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
+    from wormgear_cli.measurement.arrays import unique as lean_unique
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
     from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.measurement.resolution import reading_resolution
 
     order_list, labels, priority, physical, drive_name = _orders_asked(drive, orders, harmonics)
     m = read_measurement(data, options=options)
-    unique = np.unique(m.angle, return_inverse=True)  # one sort of the rows, shared below
+    unique = lean_unique(m.angle)  # one sort of the rows, shared below
     grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
     figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
     resolution = reading_resolution(m.error, dict(m.units)["error"], target_index)
-    repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
+    repeated = (np.bincount(unique[1]) > 1)[unique[1]]
     findings, mixed = structure_findings(m, target_index, repeated=repeated)
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
