@@ -368,9 +368,10 @@ _AXIS_NAMES = {"R_up": "R_forward", "R_down": "R_reverse", "R": "R"}
 TARGET_BLOCK = 4096
 
 
-def target_row_blocks(t, unit: str, block: int = TARGET_BLOCK):
+def target_row_blocks(t, unit: str, block: int | None = None):
     """The per-target list of the document (:func:`report`'s ``per_target``), ``block`` targets at a
-    time: lists of dicts whose concatenation is the whole list."""
+    time (None: :data:`TARGET_BLOCK`): lists of dicts whose concatenation is the whole list."""
+    block = block or TARGET_BLOCK
     for a in range(0, len(t), block):
         yield _target_rows(t, unit, slice(a, a + block))
 
