@@ -33,8 +33,8 @@ from wormgear_cli.cli.read_options import (
     read_options,
 )
 
-#: peak memory per row of a measurement file in ``measure`` (reading, figures, orders; about
-#: 240 bytes per row at 10^6 rows, bench/bench_limits.py) [bytes]
+#: peak memory per row of a measurement file in ``measure`` (reading, figures, orders, the output; about
+#: 90 bytes a row on 13e6 short rows and 200 on a dense scan of 2e6 rows, bench/bench_memory.py) [bytes]
 MEASURE_BYTES_PER_ROW = 300
 
 #: per-target rows shown in the table format before it is left to --format csv
