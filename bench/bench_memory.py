@@ -12,7 +12,8 @@ Two files are written to a scratch folder (``--keep DIR`` keeps them there for a
 Each file is measured end to end in a fresh process (``wormgear measure FILE --drive
 configs/mch50.toml``, in the table format and with ``--format json``; the result goes to a pipe that is
 read and dropped): peak resident memory of the command (``ru_maxrss`` of the child, Python start-up and
-imports included, about 60 MB) per row, wall and CPU time.  ``--before TREE`` runs the same commands with
+imports included, about 60 MB) per row, wall and CPU time (user + system: the steadier figure on a
+shared machine).  ``--before TREE`` runs the same commands with
 an earlier source tree's ``wormgear_cli`` (a checkout of main: ``git archive main | tar -x -C DIR``) and
 prints the ratio before / after.
 
@@ -75,8 +76,9 @@ def line(name: str, rows: int, fmt: str, after: dict, before: dict | None) -> st
            f"(CPU {after['cpu']:.1f} s)")
     if before is not None:
         per_b = before["rss_kb"] * 1024.0 / rows
-        out += (f"; before {before['rss_kb'] / 1024:6.0f} MiB = {per_b:5.0f} B/row, {before['s']:5.1f} s: "
-                f"memory x{per_b / per:.1f} less, time x{before['s'] / after['s']:.2f}")
+        out += (f"; before {before['rss_kb'] / 1024:6.0f} MiB = {per_b:5.0f} B/row, {before['s']:5.1f} s "
+                f"(CPU {before['cpu']:.1f} s): memory x{per_b / per:.1f} less, "
+                f"CPU time x{before['cpu'] / after['cpu']:.2f}")
     return out
 
 

@@ -62,6 +62,7 @@ def test_streamed_list_is_the_documents(runner, monkeypatch, tmp_path):
     assert doc["per_target"] == rows
     assert any(r["R"] is None for r in rows)  # the one-direction cells: nulls inside the streamed blocks
     assert {k for k in want if k != "per_target"} < doc.keys()  # (and the schema version)
+    assert list(doc)[-1] == "per_target"  # after the notes, as the document was always written
     assert doc["targets"] == want["targets"] == len(rows)
 
 

@@ -166,8 +166,8 @@ def json_chunks(doc: dict, blocks):
     pieces: the list is written a block at a time (the same text as the whole list at once)."""
     import json
 
-    head = dict(doc)
-    head["per_target"] = []
+    head = {k: v for k, v in doc.items() if k != "per_target"}
+    head["per_target"] = []  # the list goes last (after the notes): a reader finds the figures first
     text = json_text(head)
     marker = '"per_target": []'
     assert text.count(marker) == 1
