@@ -155,15 +155,10 @@ def _check_roles(data: Path, drive: Path | None) -> None:
                          f"wormgear measure {drive} --drive {data}")
 
 
-def _json(doc: dict) -> str:
-    """``json_text`` of the document, with the per-target list written one
-    compact object per line (fast and readable for 100 000 targets)."""
-    return "".join(json_chunks(doc, [doc["per_target"]]))
-
-
 def json_chunks(doc: dict, blocks):
-    """:func:`_json` of ``doc`` whose per-target list is ``blocks`` (lists of rows, concatenated), in
-    pieces: the list is written a block at a time (the same text as the whole list at once)."""
+    """``json_text`` of the document, in pieces, with its per-target list (``blocks``: lists of rows,
+    concatenated; ``doc``'s own list is not read) written last, one compact object per line (fast and
+    readable for 100 000 targets), a block at a time: the same text as the whole list at once."""
     import json
 
     head = {k: v for k, v in doc.items() if k != "per_target"}
