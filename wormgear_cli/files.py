@@ -131,6 +131,73 @@ def read_text_file(path: str | Path, expected: str, error: type = UsageError, en
         ``max_line_bytes``, or not valid in ``encoding``.
     """
     path = Path(path)
+    chunks = list(_checked_chunks(path, expected, error, max_bytes, max_line_bytes))
+    _remember_input(path)
+    blob = b"".join(chunks)
+    del chunks
+    try:
+        if encoding == "utf-8-sig":  # the same text, without importing the utf_8_sig codec (start-up)
+            text = blob.decode("utf-8")
+            return text[1:] if text.startswith("\ufeff") else text
+        return blob.decode(encoding)
+    except UnicodeDecodeError as exc:
+        raise error(f"{quote(path)}: not UTF-8 text (byte {exc.start}), expected {expected}") from None
+
+
+def check_text_file(path: str | Path, expected: str, error: type = UsageError, max_bytes: int = MAX_INPUT_BYTES,
+                    max_line_bytes: int | None = None) -> tuple[os.stat_result, int]:
+    """Every check of :func:`read_text_file` (UTF-8 text) on a regular file, in one pass that keeps
+    nothing of it: for inputs read afterwards block by block (a measurement of millions of rows is
+    never held whole).  The same messages, in the same order: a problem anywhere in the file
+    (binary, a line too long) is said before a UTF-8 error, as when the file is decoded whole.
+
+    Returns the file's status when it was opened (size, modification time, inode), so that a
+    reader can tell when the file changed before it read it again, and its number of lines (line
+    ends + 1).
+
+    Raises
+    ------
+    error
+        As :func:`read_text_file`.
+    """
+    path = Path(path)
+    first_bad = None  # byte of the first invalid UTF-8 sequence
+    offset = 0
+    carry = b""
+    opened: list = []
+    lines = 1
+    for chunk in _checked_chunks(path, expected, error, max_bytes, max_line_bytes, opened):
+        lines += chunk.count(b"\n")
+        if first_bad is not None:
+            continue
+        data = carry + chunk if carry else chunk
+        cut = data.rfind(b"\n") + 1  # UTF-8 sequences never contain a line end: whole pieces decode alone
+        piece, carry = data[:cut], data[cut:]
+        first_bad = _utf8_error(piece, offset)
+        offset += cut
+    if first_bad is None and carry:
+        first_bad = _utf8_error(carry, offset)
+    _remember_input(path)
+    if first_bad is not None:
+        raise error(f"{quote(path)}: not UTF-8 text (byte {first_bad}), expected {expected}")
+    return opened[0], lines
+
+
+def _utf8_error(piece: bytes, offset: int) -> int | None:
+    """Byte (from the file's start) of the first invalid UTF-8 sequence of ``piece``, else None."""
+    if piece.isascii():
+        return None
+    try:
+        piece.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        return offset + exc.start
+    return None
+
+
+def _checked_chunks(path: Path, expected: str, error: type, max_bytes: int, max_line_bytes: int | None,
+                    opened: list | None = None):
+    """The bytes of ``path`` in chunks, each checked as :func:`read_text_file` says (missing,
+    directory, size, binary, line length, read errors); ``opened`` gets the file's status."""
     name = quote(path)
     if not path.exists():
         raise error(f"{name}: file not found")
@@ -138,11 +205,12 @@ def read_text_file(path: str | Path, expected: str, error: type = UsageError, en
         raise error(f"{name}: is a directory, expected {expected}")
     limit = _size_text(max_bytes)
     step = _READ_CHUNK if max_line_bytes is None else max(1, min(_READ_CHUNK, max_line_bytes))
-    chunks = []
     total = lines = run = 0  # run: bytes since the last line end
     try:
         with open(path, "rb", buffering=0) as fh:
             st = os.fstat(fh.fileno())
+            if opened is not None:
+                opened.append(st)
             if stat.S_ISREG(st.st_mode) and st.st_size > max_bytes:
                 raise error(f"{name}: {_size_text(st.st_size)}, larger than the {limit} accepted; "
                             f"expected {expected}")
@@ -160,22 +228,12 @@ def read_text_file(path: str | Path, expected: str, error: type = UsageError, en
                     n = chunk.count(b"\n")
                     lines += n
                     run = run + len(chunk) if n == 0 else len(chunk) - chunk.rfind(b"\n") - 1
-                chunks.append(chunk)
                 total += len(chunk)
                 if total > max_bytes:
                     raise error(f"{name}: more than the {limit} accepted; expected {expected}")
+                yield chunk
     except OSError as exc:
         raise error(f"{name}: cannot read ({exc.strerror})") from None
-    _remember_input(path)
-    blob = b"".join(chunks)
-    del chunks
-    try:
-        if encoding == "utf-8-sig":  # the same text, without importing the utf_8_sig codec (start-up)
-            text = blob.decode("utf-8")
-            return text[1:] if text.startswith("\ufeff") else text
-        return blob.decode(encoding)
-    except UnicodeDecodeError as exc:
-        raise error(f"{name}: not UTF-8 text (byte {exc.start}), expected {expected}") from None
 
 
 def _size_text(n: int) -> str:

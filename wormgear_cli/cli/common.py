@@ -291,6 +291,22 @@ def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
     announce_written(output)
 
 
+def emit_stream(chunks: Iterable, output: Path | None, inputs: Iterable = ()) -> None:
+    """:func:`emit` of a result given in pieces (str or bytes), each written as it comes: to stdout,
+    or to a staged file renamed over ``output`` at the end (:func:`wormgear_cli.files.atomic_stream`);
+    a big result is never held whole."""
+    if is_stdout(output):
+        for data in chunks:
+            write_stdout(data)
+        return
+    from wormgear_cli.files import atomic_stream
+
+    with atomic_stream(output, tuple(inputs)) as write:
+        for data in chunks:
+            write(data)
+    announce_written(output)
+
+
 # --- --jobs and --shard ------------------------------------------------------------------
 
 

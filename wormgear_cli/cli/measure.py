@@ -18,7 +18,7 @@ from wormgear_cli.cli.common import (
     announce_written,
     count_type,
     csv_text,
-    emit,
+    emit_stream,
     fmt_angle,
     json_text,
     output_format,
@@ -35,8 +35,8 @@ from wormgear_cli.cli.read_options import (
     read_options,
 )
 
-#: peak memory per row of a measurement file in ``measure`` (reading, figures, orders; about
-#: 240 bytes per row at 10^6 rows, bench/bench_limits.py) [bytes]
+#: peak memory per row of a measurement file in ``measure`` (reading, figures, orders, the output; about
+#: 90 bytes a row on 13e6 short rows and 200 on a dense scan of 2e6 rows, bench/bench_memory.py) [bytes]
 MEASURE_BYTES_PER_ROW = 300
 
 #: per-target rows shown in the table format before it is left to --format csv
@@ -100,7 +100,7 @@ def measure(
     Example: wormgear measure export.csv --map angle_deg="Position (deg)" --map error_arcsec=Deviation
     """
     from wormgear_cli.workflows.measure import measure as run
-    from wormgear_cli.workflows.measure import parse_orders, report
+    from wormgear_cli.workflows.measure import parse_orders, report, target_row_blocks
 
     _check_roles(data, drive)
     unit = getattr(unit, "value", unit)
@@ -120,7 +120,9 @@ def measure(
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
     few = len(result.figures.targets) <= MAX_TABLE_TARGETS
-    doc = report(result, unit, per_target=fmt != "table" or few)
+    # the per-target part of json and csv is streamed a block of targets at a time (a dense scan has a
+    # target a row); the table shows it only for a few targets
+    doc = report(result, unit, per_target=fmt == "table" and few)
     for w in doc["warnings"]:
         say(f"warning: {w}")
 
@@ -130,13 +132,12 @@ def measure(
         deviation_chart(result.figures, result.measurement, unit, plot, title=Path(data).name)
         announce_written(plot)
     if fmt == "json":
-        emit(_json(doc), output, inputs)
+        emit_stream(json_chunks(doc, target_row_blocks(result.figures.targets, unit)), output, inputs)
     elif fmt == "csv":
         say(f"note: {doc['verdict']}")
         for note in doc["notes"]:
             say(f"note: {note}")
-        cols = [c if c in PLAIN_COLUMNS else f"{c}_{unit}" for c in TARGET_COLUMNS]
-        emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
+        emit_stream(_csv_chunks(target_row_blocks(result.figures.targets, unit), unit), output, inputs)
     else:
         render(_tables(doc, len(result.figures.targets)), output, inputs)
 
@@ -157,23 +158,40 @@ def _check_roles(data: Path, drive: Path | None) -> None:
                          f"wormgear measure {drive} --drive {data}")
 
 
-def _json(doc: dict) -> str:
-    """``json_text`` of the document, with the per-target list written one
-    compact object per line (fast and readable for 100 000 targets)."""
+def json_chunks(doc: dict, blocks):
+    """``json_text`` of the document, in pieces, with its per-target list (``blocks``: lists of rows,
+    concatenated; ``doc``'s own list is not read) written last, one compact object per line (fast and
+    readable for 100 000 targets), a block at a time: the same text as the whole list at once."""
     import json
 
-    head = dict(doc)
-    rows = head.pop("per_target")
-    text = json_text({**head, "per_target": []})
-    if not rows:
-        return text
-    # one C-encoder pass; the rows hold only numbers (NaN for undefined), so "}, {" only occurs between
-    # rows and "NaN" only stands for an undefined value
-    flat = json.dumps(rows, allow_nan=True, separators=(", ", ": ")).replace("NaN", "null")
-    body = "    " + flat[1:-1].replace("}, {", "},\n    {")
+    head = {k: v for k, v in doc.items() if k != "per_target"}
+    head["per_target"] = []  # the list goes last (after the notes): a reader finds the figures first
+    text = json_text(head)
     marker = '"per_target": []'
     assert text.count(marker) == 1
-    return text.replace(marker, '"per_target": [\n' + body + "\n  ]")
+    at = text.index(marker)
+    first = True
+    for rows in blocks:
+        if not rows:
+            continue
+        # one C-encoder pass a block; the rows hold only numbers (NaN for undefined), so "}, {" only
+        # occurs between rows and "NaN" only stands for an undefined value
+        flat = json.dumps(rows, allow_nan=True, separators=(", ", ": ")).replace("NaN", "null")
+        yield (text[:at] + '"per_target": [\n') if first else ",\n"
+        first = False
+        yield "    " + flat[1:-1].replace("}, {", "},\n    {")
+    yield text if first else "\n  ]" + text[at + len(marker):]
+
+
+def _csv_chunks(blocks, unit: str):
+    """The per-target CSV (header, then a row a target) in pieces, a block of targets at a time."""
+    cols = [c if c in PLAIN_COLUMNS else f"{c}_{unit}" for c in TARGET_COLUMNS]
+    header = True
+    for rows in blocks:
+        yield csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in rows), header=header)
+        header = False
+    if header:
+        yield csv_text(cols, [])
 
 
 def _tables(doc: dict, ntargets: int) -> list:

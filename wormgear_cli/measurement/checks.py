@@ -23,13 +23,18 @@ class Finding:
     verdict: str | None = None
 
 
+#: rows hashed or compared at a time by :func:`duplicate_rows` (its temporaries stay small)
+BLOCK = 1 << 16
+
+
 def duplicate_rows(m, repeated=None) -> int:
     """Number of rows that repeat an earlier row exactly (every canonical value equal).
 
     Rows are sorted by a 64-bit mix of their values (one sort), and rows with
     equal keys compared value by value.  ``repeated`` (bool per row): the
     rows whose angle occurs more than once, the only ones that can be
-    duplicates (a dense scan then needs no sort).  No column is copied."""
+    duplicates (a dense scan then needs no sort).  No column is copied: the
+    keys are mixed and the candidates compared a block of rows at a time."""
     cols = [m.angle, m.error, m.direction, m.run] + [
         getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
         if c in m.present]
@@ -39,25 +44,32 @@ def duplicate_rows(m, repeated=None) -> int:
     sel = None if repeated is None else np.flatnonzero(repeated)
     if sel is not None and sel.size < 2:
         return 0
-    key = np.zeros(n, dtype=np.uint64)
-    with np.errstate(over="ignore"):
-        for i, c in enumerate(cols):
-            bits = np.ascontiguousarray(c, dtype=float).view(np.uint64)
-            key ^= bits
-            key *= np.uint64(0x9E3779B97F4A7C15 + 2 * i)
-    rows = np.arange(n) if sel is None else sel
-    if sel is not None:
-        key = key[sel]
+    size = n if sel is None else sel.shape[0]
+    key = np.empty(size, dtype=np.uint64)
+    for a in range(0, size, BLOCK):
+        rows = slice(a, a + BLOCK) if sel is None else sel[a:a + BLOCK]
+        part = np.zeros(key[a:a + BLOCK].shape[0], dtype=np.uint64)
+        with np.errstate(over="ignore"):
+            for i, c in enumerate(cols):
+                part ^= np.ascontiguousarray(c[rows], dtype=float).view(np.uint64)
+                part *= np.uint64(0x9E3779B97F4A7C15 + 2 * i)
+        key[a:a + BLOCK] = part
     order = np.argsort(key, kind="stable")
-    ks = key[order]
-    cand = np.flatnonzero(ks[1:] == ks[:-1])
-    if cand.size == 0:
-        return 0
-    first, second = rows[order[cand]], rows[order[cand + 1]]
-    same = np.ones(cand.size, dtype=bool)
-    for c in cols:
-        same &= c[first] == c[second]
-    return int(np.count_nonzero(same))
+    key = key[order]  # sorted
+    same = 0
+    for a in range(0, size - 1, BLOCK):
+        b = min(a + BLOCK, size - 1)
+        cand = np.flatnonzero(key[a + 1:b + 1] == key[a:b]) + a
+        if cand.size == 0:
+            continue
+        first, second = order[cand], order[cand + 1]
+        if sel is not None:
+            first, second = sel[first], sel[second]
+        equal = np.ones(cand.size, dtype=bool)
+        for c in cols:
+            equal &= c[first] == c[second]
+        same += int(np.count_nonzero(equal))
+    return same
 
 
 def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list, bool]:

@@ -15,6 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.measurement.arrays import RANK_BLOCK as BLOCK
+from wormgear_cli.measurement.arrays import non_decreasing, unwrap
+from wormgear_cli.measurement.arrays import unique as lean_unique
+
 #: degree of the polynomial trend that stands for the orders longer than a partial span
 TREND_DEGREE = 3
 #: a circular gap counts as a sampling gap (not an uncovered arc) up to this many times the median other gap
@@ -123,13 +127,15 @@ def coverage(theta, passes=None, unique=None, orders=None) -> Coverage:
     spans: tuple[float, ...] = ()
     if passes is not None:
         pid = np.asarray(passes)
-        ids, inverse = np.unique(pid, return_inverse=True)
+        ids, inverse = lean_unique(pid)
         if ids.size == 1:
             spans = (span,)
         elif ids.size <= MAX_PASS_SPANS:
-            order = np.argsort(inverse, kind="stable")
-            bounds = np.searchsorted(inverse[order], np.arange(ids.size + 1))
-            spans = tuple(_arc(theta[order[bounds[k]:bounds[k + 1]]], slowest=slowest)[0] for k in range(ids.size))
+            # the rows of each pass together (as they are when the passes follow one another)
+            order = None if non_decreasing(inverse) else np.argsort(inverse, kind="stable")
+            bounds = np.searchsorted(inverse if order is None else inverse[order], np.arange(ids.size + 1))
+            spans = tuple(_arc(theta[bounds[k]:bounds[k + 1]] if order is None else
+                               theta[order[bounds[k]:bounds[k + 1]]], slowest=slowest)[0] for k in range(ids.size))
     return Coverage(span, start, full, distinct, spans, gap)
 
 
@@ -157,10 +163,20 @@ def unwrap_passes(theta, passes=None) -> np.ndarray:
     theta = as_1d("theta", theta)
     if theta.size == 0:
         return theta
-    u = np.unwrap(theta)
-    pid = np.zeros(theta.shape[0], dtype=np.int64) if passes is None else np.asarray(passes)
-    first = np.ones(theta.shape[0], dtype=bool)
+    u = unwrap(theta)
+    n = theta.shape[0]
+    pid = np.zeros(1, dtype=np.int64) if passes is None else np.asarray(passes).reshape(-1)
+    first = np.ones(n if passes is not None else 1, dtype=bool)
     first[1:] = pid[1:] != pid[:-1]
-    block = np.cumsum(first) - 1
-    turns = np.floor(u[first] / (2.0 * math.pi))
-    return u - 2.0 * math.pi * turns[block]
+    turns = np.floor(u[:first.shape[0]][first] / (2.0 * math.pi))
+    shift = 2.0 * math.pi * turns  # per pass
+    if passes is None:
+        u -= shift[0]
+        return u
+    carry = -1
+    for a in range(0, n, BLOCK):  # u -= shift of each row's pass, the pass numbers counted a block at a time
+        block = np.cumsum(first[a:a + BLOCK])
+        block += carry
+        carry = int(block[-1])
+        u[a:a + BLOCK] -= shift[block]
+    return u

@@ -37,11 +37,13 @@ Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from wormgear_cli.measurement.arrays import unique as lean_unique
 from wormgear_cli.measurement.coverage import Coverage, coverage, unwrap_passes
 from wormgear_cli.measurement.coverage import as_1d as _as_1d
 from wormgear_cli.measurement.drift import MIN_PERIOD_SHARE, SlowPart, drift_size, slow_model
@@ -314,13 +316,15 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     th = unwrap_passes(theta, passes)
     cov = coverage(theta, orders=[1.0, *[float(k) for k in opt.held]])
     slow = slow_model(theta, cov, passes, d, t)
-    base, slow_at = _base_columns(th, d, slow.columns, opt.held)
+    slow_at = _slow_at(d, slow.columns)
     lo, hi, resolution, nyquist = _range(th, cov, slow.kind, opt)
     spt = opt.seconds_per_turn if opt.seconds_per_turn else _seconds_per_turn(th, t, passes)
     empty = n < 8 or cov.distinct < 3 or not hi >= lo
     grid = _grid(lo, hi, resolution, cov.full_turn, opt.oversample) if not empty else np.zeros(0)
     both = bool(np.any(d > 0) and np.any(d < 0))
-    scan = _make_scan(th, y, d if both else None, base, grid, cov, slow.kind != "time")
+    scan = _make_scan(th, y, d if both else None, functools.partial(_base_matrix, th, d, slow.columns, opt.held),
+                      grid, cov, slow.kind != "time")
+    del th  # the scan holds what it needs (the distinct angles when it works on units)
     resid = scan.refresh()
     independent = max(1, int(round((hi - lo) / resolution)) + 1) if grid.size else 0
     found, method = _peaks(scan, resid, independent, opt) if grid.size else ([], "")
@@ -344,23 +348,36 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
                     fit["rms"], fit["serial"], spt, cov, note)
 
 
-def _make_scan(th, y, d, base, grid, cov: Coverage, reducible: bool) -> _Scan:
+def _make_scan(th, y, d, base_of, grid, cov: Coverage, reducible: bool) -> _Scan:
     """The scan over the rows, or, when the model is a function of angle and direction (no drift in time)
     and rows repeat their (angle, direction) at least four times on average, over those units: the unit
-    means weighted by sqrt(rows) give the rows' least squares exactly, for a fraction of the work."""
+    means weighted by sqrt(rows) give the rows' least squares exactly, for a fraction of the work.
+    ``base_of()``: the model's columns at every row (made once the units are known, and dropped after)."""
     n = th.shape[0]
     if reducible and cov.distinct * 4 <= n:  # (distinct angles on the circle: no more than in th)
-        ut, inv = np.unique(th, return_inverse=True)
-        key = inv.reshape(-1).astype(np.int64) * 2 + (0 if d is None else (d > 0).astype(np.int64))
-        uk, first, unit = np.unique(key, return_index=True, return_inverse=True)
+        key = lean_unique(th)[1]  # the row's distinct angle, made the (angle, direction) key in place
+        key *= 2
+        if d is not None:
+            key += d > 0
+        uk, first, unit = lean_unique(key, return_index=True)
+        del key
         if uk.shape[0] * 4 <= n:
-            unit = unit.reshape(-1)
             counts = np.bincount(unit).astype(float)
             sw = np.sqrt(counts)
             mean = np.bincount(unit, weights=y) / counts
-            return _Scan(th[first], mean * sw, base[first] * sw[:, None], grid, cov.span, cov.full_turn,
+            return _Scan(th[first], mean * sw, base_of()[first] * sw[:, None], grid, cov.span, cov.full_turn,
                          None if d is None else d[first], sw=sw, rows=(y, unit))
-    return _Scan(th, y, base, grid, cov.span, cov.full_turn, d)
+    return _Scan(th, y, base_of(), grid, cov.span, cov.full_turn, d)
+
+
+def _slow_at(d, slow_cols) -> slice:
+    """Where the slow part sits among the base columns (:func:`_base_columns`)."""
+    first = 2 if np.any(d > 0) and np.any(d < 0) else 1
+    return slice(first, first + slow_cols.shape[1])
+
+
+def _base_matrix(theta, d, slow_cols, held) -> np.ndarray:
+    return _base_columns(theta, d, slow_cols, held)[0]
 
 
 def _base_columns(theta, d, slow_cols, held) -> tuple[np.ndarray, slice]:

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.measurement.arrays import unique as lean_unique
 from wormgear_cli.measurement.coverage import TREND_DEGREE, Coverage, trend_columns
 
 #: a pass counts as a traversal of the arc when it spans at least this share of it
@@ -70,11 +71,13 @@ def pass_keys(passes, direction) -> np.ndarray:
     d = None if direction is None else np.asarray(direction, dtype=float).reshape(-1)
     n = (d.shape[0] if d is not None else np.asarray(passes).reshape(-1).shape[0])
     if passes is None:
-        run = np.zeros(n, dtype=np.int64)
+        key = np.zeros(n, dtype=np.intp)
     else:
-        run = np.unique(np.asarray(passes).reshape(-1), return_inverse=True)[1].reshape(-1).astype(np.int64)
-    key = run * 2 + (0 if d is None else (d > 0).astype(np.int64))
-    return np.unique(key, return_inverse=True)[1].reshape(-1)
+        key = lean_unique(passes)[1]  # the run's rank, a new array: made the key in place
+    key *= 2
+    if d is not None:
+        key += d > 0
+    return lean_unique(key)[1]
 
 
 def traversals(theta, cov: Coverage, passes=None, direction=None) -> int:

@@ -134,7 +134,10 @@ def group_targets(angle: np.ndarray, tol: float = TARGET_TOL, unique=None) -> tu
         if ut.shape[0]:
             new[0] = True
             new[1:] = np.diff(ut) > tol
-        index = (np.cumsum(new) - 1)[np.ravel(inverse)]
+        inverse = np.ravel(inverse)
+        # every distinct angle its own target (the usual case): the targets are the distinct angles'
+        # indices, so the index is the inverse itself (no second array of the rows' size)
+        index = inverse if new.all() else (np.cumsum(new) - 1)[inverse]
         count = np.bincount(index)
         return index, np.bincount(index, weights=angle) / count
     order = np.argsort(angle, kind="stable")

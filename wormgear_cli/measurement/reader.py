@@ -50,8 +50,9 @@ MAX_FILE_BYTES = 256 * 1024 * 1024
 MAX_LINE_BYTES = 1024 * 1024
 #: data lines sampled for the delimiter and decimal-comma detection
 SNIFF_LINES = 50
-#: rows converted per block on the fast path (bounds the temporary memory)
-BLOCK_CHARS = 4_000_000
+#: characters (bytes, for a file) of the data lines read and converted per block: a block's
+#: temporaries (its text, its cells) are the reader's only memory besides the typed columns
+BLOCK_CHARS = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,9 @@ class ReadOptions:
     require_error : bool
         Whether the error (or the actual position) is required; False for planned angles
         (``simulate --at``).
+    block_chars : int
+        Characters (bytes, for a file) of data lines read per block (:data:`BLOCK_CHARS`; a
+        small value in tests puts block boundaries everywhere).
     """
 
     column_map: tuple = ()
@@ -85,6 +89,7 @@ class ReadOptions:
     max_bytes: int = MAX_FILE_BYTES
     input_format: str | None = None
     require_error: bool = True
+    block_chars: int = BLOCK_CHARS
 
     def __post_init__(self):
         from wormgear_cli.errors import UsageError
@@ -117,7 +122,7 @@ class Measurement:
     from the file, or derived: see ``derived``).  ``derived``: the columns
     inferred rather than read (``run`` from restarts of ``time_s``).
     ``header``: the original header cells; ``rows``: the original text
-    cells of every data row (parsed again on demand, to write rows back);
+    cells of every data row (read again from the file when asked for, to write rows back);
     ``comments``: the leading ``#`` lines.  ``notes``: what the reader
     inferred; ``warnings``: what looks wrong (a likely unit mix-up), each a
     sentence with the likely fix.  ``columns``: canonical name -> header
@@ -148,9 +153,12 @@ class Measurement:
     preamble: tuple = ()
     stated_units: frozenset = frozenset()
     input_format: str = "csv"
+    #: the rows' cells as a sequence read on demand (:class:`~wormgear_cli.measurement.readers.text.Rows`)
+    _cells: object = field(default=None, repr=False, compare=False)
+    #: a reader without a block source: the data lines' text, their delimiter and the indices of its data
+    #: rows that are rows of the measurement (None: all)
     _body: str = field(default="", repr=False, compare=False)
     _delimiter: str = field(default=",", repr=False, compare=False)
-    #: indices of the body's data rows that are rows of the measurement (None: all; standstill rows left out)
     _kept: object = field(default=None, repr=False, compare=False)
 
     def __len__(self) -> int:
@@ -169,9 +177,12 @@ class Measurement:
         return self.error / ARCSEC
 
     @property
-    def rows(self) -> tuple:
-        """The text cells of every row of the measurement, in file order (comment and blank lines, and
-        rows the reader left out, are not rows)."""
+    def rows(self):
+        """The text cells of every row of the measurement (tuples of str), in file order (comment and
+        blank lines, and rows the reader left out, are not rows): a sequence read from the file when it
+        is asked for (``rows[a:b]`` reads only those rows), not kept in memory."""
+        if self._cells is not None:
+            return self._cells
         reader = csv.reader(self._body.rstrip("\n").split("\n"), delimiter=self._delimiter, strict=True)
         rows = tuple(tuple(r) for r in reader if r and any(c.strip() for c in r)
                      and not r[0].lstrip().startswith("#"))

@@ -110,10 +110,12 @@ def reading_resolution(error, unit: str, target_index) -> Resolution | None:
     """
     error = np.asarray(error, dtype=float)
     target_index = np.asarray(target_index)
-    ok = np.isfinite(error)
-    if error.shape[0] > SAMPLE:
+    if error.shape[0] > SAMPLE:  # every stride-th reading (the others are not looked at)
         stride = -(-error.shape[0] // SAMPLE)
-        ok[np.arange(error.shape[0]) % stride != 0] = False
+        ok = np.zeros(error.shape[0], dtype=bool)
+        ok[::stride] = np.isfinite(error[::stride])
+    else:
+        ok = np.isfinite(error)
     scale = RAD_PER_UNIT[unit]
     values, index = error[ok] / scale, target_index[ok]
     if values.size == 0:

@@ -34,6 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.measurement.arrays import RANK_BLOCK as BLOCK
+from wormgear_cli.measurement.arrays import unique as lean_unique
+
 #: |lag-1 autocorrelation| x sqrt(pairs) below which the rows are taken as independent (two-sided 1 %)
 WHITE_Z = 2.58
 #: the autocorrelation used in the block-length rule is clipped to this (the rule diverges at 1)
@@ -53,7 +56,8 @@ class SerialBlocks:
     each row (in the caller's row order; None for independent rows);
     ``rho``: the AR(1) coefficient of the prewhitening (0: none);
     ``order`` / ``first``: the rows in time order and whether each of them
-    (in that order) starts a pass."""
+    (in that order) starts a pass; ``in_order``: the rows are in time order
+    already (``order`` is 0, 1, 2, ...)."""
 
     method: str
     lag1: float
@@ -63,6 +67,7 @@ class SerialBlocks:
     rho: float = 0.0
     order: np.ndarray | None = None
     first: np.ndarray | None = None
+    in_order: bool = False
 
     @property
     def independent(self) -> bool:
@@ -73,11 +78,13 @@ class SerialBlocks:
         r = np.asarray(resid, dtype=float).reshape(-1)
         if self.rho == 0.0 or self.order is None:
             return r
-        ro = r[self.order]
+        ro = r if self.in_order else r[self.order]
         v = np.empty_like(ro)
         v[1:] = ro[1:] - self.rho * ro[:-1]
         v[0] = ro[0]
         v[self.first] = ro[self.first] * math.sqrt(1.0 - self.rho**2)
+        if self.in_order:
+            return v
         out = np.empty_like(v)
         out[self.order] = v
         return out
@@ -96,35 +103,77 @@ class SerialBlocks:
                 f"after AR(1) prewhitening (batch means; residual lag-1 autocorrelation {rho})")
 
 
-def _time_order(n: int, passes, time) -> tuple[np.ndarray, np.ndarray]:
-    """(row order, pass id of each ordered row): by pass (first appearance), then time, then file order."""
-    pid = np.zeros(n, dtype=np.int64) if passes is None else np.asarray(passes).reshape(-1)
-    _, first, inverse = np.unique(pid, return_index=True, return_inverse=True)
-    rank = np.argsort(np.argsort(first))[inverse.reshape(-1)]  # passes in the order they appear
+def _time_order(n: int, passes, time) -> tuple[np.ndarray, np.ndarray, bool]:
+    """(row order, pass id of each ordered row, whether the order is the rows' own): by pass (first
+    appearance), then time, then file order.  Rows already in that order (passes one after the other,
+    time going forward in each) are not sorted."""
+    if passes is None:
+        rank = np.zeros(n, dtype=np.intp)
+    else:
+        _, first, inverse = lean_unique(passes, return_index=True)
+        rank = np.argsort(np.argsort(first))[inverse]  # passes in the order they appear
+        del inverse
+    t = None if time is None else np.asarray(time, dtype=float).reshape(-1)
+    if _in_time_order(rank, t):
+        return np.arange(n), rank, True
     keys = [np.arange(n)]
-    if time is not None:
-        keys.append(np.asarray(time, dtype=float))
+    if t is not None:
+        keys.append(t)
     keys.append(rank)
     order = np.lexsort(tuple(keys))
-    return order, rank[order]
+    return order, rank[order], False
+
+
+def _in_time_order(rank: np.ndarray, time) -> bool:
+    """Whether rows with pass ranks ``rank`` and times ``time`` (or None) are sorted by pass, then time."""
+    for a in range(0, rank.shape[0] - 1, BLOCK):
+        b = min(a + BLOCK, rank.shape[0] - 1)
+        r0, r1 = rank[a:b], rank[a + 1:b + 1]
+        ok = r1 >= r0 if time is None else (r1 > r0) | ((r1 == r0) & (time[a + 1:b + 1] >= time[a:b]))
+        if not np.all(ok):
+            return False
+    return True
+
+
+def _starts(pid: np.ndarray) -> np.ndarray:
+    """(N,) bool: whether each row (in time order) starts a pass."""
+    new = np.empty(pid.shape[0], dtype=bool)
+    new[:1] = True
+    np.not_equal(pid[1:], pid[:-1], out=new[1:])
+    return new
 
 
 def lag1_autocorrelation(resid, passes=None, time=None) -> tuple[float, int]:
     """(rho, pairs): the pooled lag-1 autocorrelation of ``resid`` (N,) within passes in time order,
-    each pass's mean removed; NaN with fewer than 3 pairs."""
+    each pass's mean removed; NaN with fewer than 3 pairs.  Computed with a few arrays of the rows'
+    size (the same sums as the plain formula, in the same order)."""
     r = np.asarray(resid, dtype=float).reshape(-1)
-    order, pid = _time_order(r.shape[0], passes, time)
-    ro = r[order]
-    starts = np.flatnonzero(np.r_[True, pid[1:] != pid[:-1]])
-    counts = np.diff(np.r_[starts, pid.shape[0]])
+    order, pid, in_order = _time_order(r.shape[0], passes, time)
+    ro = r if in_order else r[order]
+    del order
+    new = _starts(pid)
+    same = ~new[1:]
+    starts = np.flatnonzero(new)
+    del new, pid
+    counts = np.diff(np.r_[starts, ro.shape[0]])
     means = np.add.reduceat(ro, starts) / counts if starts.size else np.zeros(0)
-    dev = ro - np.repeat(means, counts)
-    same = pid[1:] == pid[:-1]
+    dev = np.empty_like(ro)
+    for a in range(0, ro.shape[0], BLOCK):  # dev = ro - each row's pass mean
+        seg = np.searchsorted(starts, np.arange(a, min(a + BLOCK, ro.shape[0])), side="right") - 1
+        np.subtract(ro[a:a + BLOCK], means[seg], out=dev[a:a + BLOCK])
     pairs = int(np.count_nonzero(same))
     den = float(dev @ dev)
     if pairs < 3 or den <= 0:
         return math.nan, pairs
-    return float(np.sum(dev[1:][same] * dev[:-1][same]) / den), pairs
+    prod = dev[1:] * dev[:-1]
+    del dev
+    if pairs < prod.shape[0]:  # keep the pairs within a pass, packed in place in their order
+        kept = 0
+        for a in range(0, prod.shape[0], BLOCK):
+            part = prod[a:a + BLOCK][same[a:a + BLOCK]]
+            prod[kept:kept + part.shape[0]] = part
+            kept += part.shape[0]
+    return float(np.sum(prod[:pairs]) / den), pairs
 
 
 def andrews_block_length(rho: float, n: int) -> int:
@@ -157,26 +206,46 @@ def serial_blocks(resid, passes=None, time=None, block_rows: int | None = None) 
     r = np.asarray(resid, dtype=float).reshape(-1)
     n = r.shape[0]
     rho, pairs = lag1_autocorrelation(r, passes, time)
-    order, pid = _time_order(n, passes, time)
-    new_pass = np.r_[True, pid[1:] != pid[:-1]]
     pre = 0.0
+    if block_rows is None and (not math.isfinite(rho) or abs(rho) * math.sqrt(max(pairs, 1)) < WHITE_Z or rho <= 0):
+        return SerialBlocks("independent rows", rho, 1, n)
+    order, pid, in_order = _time_order(n, passes, time)
+    new_pass = _starts(pid)
+    del pid
     if block_rows is None:
-        if not math.isfinite(rho) or abs(rho) * math.sqrt(max(pairs, 1)) < WHITE_Z or rho <= 0:
-            return SerialBlocks("independent rows", rho, 1, n)
         pre = min(rho, MAX_RHO)
-        probe = SerialBlocks("blocks", rho, 1, n, np.zeros(n, dtype=np.int64), pre, order, new_pass)
+        probe = SerialBlocks("blocks", rho, 1, n, np.zeros(1, dtype=np.int64), pre, order, new_pass, in_order)
         rho_v, _ = lag1_autocorrelation(probe.whiten(r), passes, time)
         block_rows = andrews_block_length(rho_v if math.isfinite(rho_v) else 0.0, n)
         block_rows = max(1, min(block_rows, n // MIN_BLOCKS))
-    pass_start = np.maximum.accumulate(np.where(new_pass, np.arange(n), 0))
-    position = np.arange(n) - pass_start
-    new_block = new_pass | (position % block_rows == 0)
-    ordered_id = np.cumsum(new_block) - 1
-    block_id = np.empty(n, dtype=np.int64)
-    block_id[order] = ordered_id
+    ordered_id = _block_numbers(new_pass, block_rows)
+    if in_order:
+        block_id = ordered_id
+    else:
+        block_id = np.empty(n, dtype=np.int64)
+        block_id[order] = ordered_id
     blocks = int(ordered_id[-1]) + 1 if n else 0
     longest = int(np.max(np.bincount(ordered_id))) if n else 0
-    return SerialBlocks("blocks", rho, longest, blocks, block_id, pre, order, new_pass)
+    return SerialBlocks("blocks", rho, longest, blocks, block_id, pre, order, new_pass, in_order)
+
+
+def _block_numbers(new_pass: np.ndarray, block_rows: int) -> np.ndarray:
+    """(N,) int64: the block of each row in time order: a new block at the start of each pass and every
+    ``block_rows`` rows into it (counted a block of rows at a time)."""
+    n = new_pass.shape[0]
+    out = np.empty(n, dtype=np.int64)
+    start, carry = 0, -1
+    for a in range(0, n, BLOCK):
+        b = min(a + BLOCK, n)
+        at = np.arange(a, b)
+        pass_start = np.maximum.accumulate(np.where(new_pass[a:b], at, start))
+        start = int(pass_start[-1])
+        new_block = new_pass[a:b] | ((at - pass_start) % block_rows == 0)
+        part = out[a:b]
+        np.cumsum(new_block, out=part)
+        part += carry
+        carry = int(part[-1])
+    return out
 
 
 def block_covariance(gram_inv: np.ndarray, score_sums: np.ndarray, n: int) -> np.ndarray:
@@ -196,10 +265,21 @@ def point_noise(resid, passes=None, time=None) -> float:
     r = np.asarray(resid, dtype=float).reshape(-1)
     n = r.shape[0]
     pid = np.zeros(n, dtype=np.int64) if passes is None else np.asarray(passes).reshape(-1)
-    t = np.arange(n, dtype=float) if time is None else np.asarray(time, dtype=float)
-    order = np.lexsort((np.arange(n), t, pid))
-    p = pid[order]
-    diff = np.diff(r[order])[p[1:] == p[:-1]]
+    t = None if time is None else np.asarray(time, dtype=float).reshape(-1)
+    if _in_time_order(pid, t):  # the rows in order already: the differences packed in place, no sort
+        diff = np.diff(r)
+        kept = 0
+        for a in range(0, diff.shape[0], BLOCK):
+            b = min(a + BLOCK, diff.shape[0])
+            part = diff[a:b][pid[a + 1:b + 1] == pid[a:b]]
+            diff[kept:kept + part.shape[0]] = part
+            kept += part.shape[0]
+        diff = diff[:kept]
+    else:
+        order = np.lexsort((np.arange(n), np.arange(n, dtype=float) if t is None else t, pid))
+        p = pid[order]
+        diff = np.diff(r[order])[p[1:] == p[:-1]]
     if diff.shape[0] < 3:
         return math.nan
-    return float(1.4826 * np.median(np.abs(diff)) / math.sqrt(2.0))
+    np.abs(diff, out=diff)
+    return float(1.4826 * np.median(diff, overwrite_input=True) / math.sqrt(2.0))

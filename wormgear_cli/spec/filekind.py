@@ -38,7 +38,23 @@ def _content_lines(text: str, most: int) -> list[str]:
 def looks_like_drive(text: str) -> bool:
     """True when ``text`` reads as a TOML drive spec: a ``[drive]``, ``[gear_pair]``... table
     header and a ``key = value`` line among its first lines."""
-    lines = _content_lines(text, 60)
+    return _drive_lines(_content_lines(text, 60))
+
+
+def looks_like_drive_lines(lines) -> bool:
+    """:func:`looks_like_drive` of the text that ``lines`` (an iterable of its lines, without line
+    ends, read only as far as needed) make: a big file is not read whole to say what it is."""
+    out: list[str] = []
+    for line in lines:
+        for piece in line.splitlines():
+            if piece.strip() and not piece.lstrip().startswith("#"):
+                out.append(piece)
+        if len(out) >= 60:
+            break
+    return _drive_lines(out[:60])
+
+
+def _drive_lines(lines: list[str]) -> bool:
     sections = {m.group(0).strip(" []").split(".")[0] for m in map(_SECTION.match, lines) if m}
     return bool(sections & set(DRIVE_SECTIONS)) and any(_KEY_VALUE.match(line) for line in lines)
 

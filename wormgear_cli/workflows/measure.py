@@ -124,18 +124,19 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
+    from wormgear_cli.measurement.arrays import unique as lean_unique
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
     from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.measurement.resolution import reading_resolution
 
     order_list, labels, priority, physical, drive_name = _orders_asked(drive, orders, harmonics)
     m = read_measurement(data, options=options)
-    unique = np.unique(m.angle, return_inverse=True)  # one sort of the rows, shared below
+    unique = lean_unique(m.angle)  # one sort of the rows, shared below
     grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
     figures = iso230_figures(m.angle, m.error, m.direction, grouping=grouping)
     resolution = reading_resolution(m.error, dict(m.units)["error"], target_index)
-    repeated = np.bincount(unique[1].ravel())[unique[1].ravel()] > 1
+    repeated = (np.bincount(unique[1]) > 1)[unique[1]]
     findings, mixed = structure_findings(m, target_index, repeated=repeated)
     if mixed:
         figures = withhold_directional(figures, "directions mixed (no direction column, targets repeat within a "
@@ -362,26 +363,40 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
 _AXIS_NAMES = {"R_up": "R_forward", "R_down": "R_reverse", "R": "R"}
 
 
-def _target_rows(t, unit: str) -> list[dict]:
-    """The per-target list of the document: numbers in ``unit``; s and R of a cell whose readings are all
-    equal are None (below the resolution of the data), said by ``below_resolution``."""
+#: targets made into rows of the document at a time by :func:`target_row_blocks` (a dict a target is
+#: about 1 kB: a dense scan's per-target part is written a block at a time, never held whole)
+TARGET_BLOCK = 4096
+
+
+def target_row_blocks(t, unit: str, block: int | None = None):
+    """The per-target list of the document (:func:`report`'s ``per_target``), ``block`` targets at a
+    time (None: :data:`TARGET_BLOCK`): lists of dicts whose concatenation is the whole list."""
+    block = block or TARGET_BLOCK
+    for a in range(0, len(t), block):
+        yield _target_rows(t, unit, slice(a, a + block))
+
+
+def _target_rows(t, unit: str, part: slice = slice(None)) -> list[dict]:
+    """The per-target list of the document (the targets ``part``): numbers in ``unit``; s and R of a cell
+    whose readings are all equal are None (below the resolution of the data), said by ``below_resolution``."""
     from wormgear_cli.units import to_unit
 
     def column(values, blank=None) -> list:
         # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
-        values = np.asarray(values, dtype=float)
+        values = np.asarray(values, dtype=float)[part]
         if blank is not None and np.any(blank):
             values = np.where(blank, np.nan, values)
         return np.asarray(to_unit(values, unit)).tolist()
 
-    eq_up = t.equal_up if t.equal_up is not None else np.zeros(len(t), dtype=bool)
-    eq_dn = t.equal_down if t.equal_down is not None else np.zeros(len(t), dtype=bool)
+    target = t.target[part]
+    eq_up = t.equal_up[part] if t.equal_up is not None else np.zeros(target.shape[0], dtype=bool)
+    eq_dn = t.equal_down[part] if t.equal_down is not None else np.zeros(target.shape[0], dtype=bool)
     below = np.array([None, "forward", "reverse", "both"], dtype=object)[eq_up.astype(int) + 2 * eq_dn.astype(int)]
     # rounded to 1e-9 deg: removes the rad -> deg round-off, far below the grouping tolerance
     cols = {
-        "target_deg": np.round(np.degrees(t.target), 9).tolist(),
-        "n_forward": t.n_up.tolist(),
-        "n_reverse": t.n_down.tolist(),
+        "target_deg": np.round(np.degrees(target), 9).tolist(),
+        "n_forward": t.n_up[part].tolist(),
+        "n_reverse": t.n_down[part].tolist(),
         "mean_forward": column(t.mean_up),
         "s_forward": column(t.s_up, eq_up),
         "mean_reverse": column(t.mean_down),

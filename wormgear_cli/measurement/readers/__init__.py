@@ -9,6 +9,15 @@ An input format is a module with two pure functions, registered by one line in :
   normalisation) read into the record every command uses; ``name`` is the file's name for messages
   (``name:line: ...``), ``options`` the column map, units and ``require_error``.
 
+and, optionally, a third that reads big files in bounded memory (the sixth field of
+:class:`InputFormat`, the function's name; None: the format has none):
+
+* ``read_source(source, name: str, options: ReadOptions) -> Measurement``: the same record from a
+  :mod:`~.source` (the file read block by block: ``source.lines()`` for a header or metadata,
+  ``source.blocks(line)`` for the data lines; delimited data goes through
+  :class:`~.text.DelimitedBody`, which converts a block at a time into typed columns).  A format
+  without it gets ``read(source.text(), ...)``: the whole text in memory, as before.
+
 The first format whose ``detect`` accepts the head reads the file; the delimited table (``csv``)
 accepts any text and comes last.  Adding a format touches only this list and its own module.
 Modules are imported when a file is read (a registry of names keeps start-up free of them).
@@ -39,9 +48,10 @@ class InputFormat(NamedTuple):
     module: str
     detect: str
     read: str
+    read_source: str | None = None
 
     def function(self, which: str):
-        """The module's ``detect`` or ``read`` function (the module imported on first use)."""
+        """The module's ``detect``, ``read`` or ``read_source`` function (the module imported on first use)."""
         return getattr(importlib.import_module(self.module), getattr(self, which))
 
 
@@ -52,9 +62,9 @@ class InputFormat(NamedTuple):
 #: placed before "csv".
 FORMATS = (
     InputFormat("twincat-scope", "a TwinCAT Scope CSV export", "wormgear_cli.measurement.readers.twincat",
-                "looks_like_twincat_scope", "read_twincat_scope"),
+                "looks_like_twincat_scope", "read_twincat_scope", "read_twincat_source"),
     InputFormat("csv", "a delimited table with a header line", "wormgear_cli.measurement.readers.delimited",
-                "looks_like_table", "read_table"),
+                "looks_like_table", "read_table", "read_table_source"),
 )
 
 
@@ -82,12 +92,12 @@ def detect_format(text: str) -> InputFormat:
     return FORMATS[-1]
 
 
-def _normalised(text: str) -> str:
-    if text.startswith("\ufeff"):
-        text = text[1:]
-    if "\r" in text:
-        text = text.replace("\r\n", "\n").replace("\r", "\n")
-    return text
+def read_source(source, name: str, options: ReadOptions) -> Measurement:
+    """A :mod:`~.source`'s measurement in its format (named in ``options`` or detected from its head)."""
+    fmt = find_format(options.input_format) if options.input_format else detect_format(source.head(HEAD_CHARS))
+    if fmt.read_source:
+        return fmt.function("read_source")(source, name, options)
+    return fmt.function("read")(source.text(), name, options)
 
 
 def parse_measurement(text: str, name: str = "<data>", require_error: bool = True,
@@ -111,17 +121,19 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
         One line per problem, naming file, line and column.
     """
     from wormgear_cli.measurement.reader import ReadOptions
+    from wormgear_cli.measurement.readers.source import TextSource, normalised
 
     options = options or ReadOptions()
     if options.require_error != require_error:
         options = dataclasses.replace(options, require_error=require_error)
-    text = _normalised(text)
-    fmt = find_format(options.input_format) if options.input_format else detect_format(text)
-    return fmt.function("read")(text, name, options)
+    return read_source(TextSource(normalised(text), name, options.block_chars), name, options)
 
 
 def read_measurement(path: str | Path, require_error: bool = True, options: ReadOptions | None = None) -> Measurement:
     """Read and validate a measurement file in any registered format (see the module doc).
+
+    A regular file is checked whole (size, binary, line length, UTF-8) without being kept, then read
+    block by block: the memory is the typed columns', not the text's.
 
     Parameters
     ----------
@@ -138,12 +150,15 @@ def read_measurement(path: str | Path, require_error: bool = True, options: Read
         One line per problem, naming file, line and column.
     """
     from wormgear_cli.errors import DataError
-    from wormgear_cli.measurement.reader import ReadOptions, read_bytes_bounded
-    from wormgear_cli.spec.filekind import looks_like_drive
+    from wormgear_cli.measurement.reader import MAX_LINE_BYTES, ReadOptions
+    from wormgear_cli.measurement.readers.source import open_source
+    from wormgear_cli.spec.filekind import looks_like_drive_lines
 
     options = options or ReadOptions()
-    text = read_bytes_bounded(path, "a CSV file", options.max_bytes)
-    if looks_like_drive(text):  # a drive spec where the data belong: say so, not "missing columns"
+    if options.require_error != require_error:
+        options = dataclasses.replace(options, require_error=require_error)
+    source = open_source(path, "a CSV file", options.max_bytes, MAX_LINE_BYTES, options.block_chars)
+    if looks_like_drive_lines(line for _, line in source.lines()):  # a drive spec where the data belong: say so
         raise DataError(f"{path}: a TOML drive spec, not a measurement; expected a CSV file with a header "
                         "line such as angle_deg,error_arcsec")
-    return parse_measurement(text, str(path), require_error, options)
+    return read_source(source, str(path), options)

@@ -17,6 +17,7 @@ The table itself (columns, units, checks, formed columns) is :mod:`~.table`'s.
 from __future__ import annotations
 
 import csv
+import itertools
 
 from wormgear_cli.errors import DataError
 from wormgear_cli.measurement.reader import REQUIRED, SNIFF_LINES, Measurement, ReadOptions
@@ -68,33 +69,34 @@ def find_header(lines: list[tuple[int, str]]) -> int:
     return best
 
 
-def _preamble(text: str, name: str) -> tuple[int, int, list[str], list[str]]:
-    """(position of the header line, its line number, ``#`` comments, preamble lines) of ``text``."""
-    pos, line_no, size = 0, 1, len(text)
+def _preamble(source, name: str) -> tuple[int, list[str], list[str]]:
+    """(line number of the header line, ``#`` comments, preamble lines) of a source's text (its
+    first lines only are read)."""
+    line_no = 0
     comments: list[str] = []
-    candidates: list[tuple[int, str, int]] = []  # (line number, text, position) of other lines
-    while pos < size and len(candidates) < PREAMBLE_LINES + DATA_AFTER_HEADER + 1:
-        end = text.find("\n", pos)
-        end = size if end < 0 else end
-        line = text[pos:end]
+    seen: list[str] = []  # every line up to the last candidate (comments among a preamble)
+    candidates: list[tuple[int, str]] = []  # (line number, text) of other lines
+    for line_no, line in source.lines():
+        if len(candidates) >= PREAMBLE_LINES + DATA_AFTER_HEADER + 1:
+            break
+        seen.append(line)
         if line.strip() and not line.lstrip().startswith("#"):
-            candidates.append((line_no, line, pos))
+            candidates.append((line_no, line))
         elif line.strip() and not candidates:
             comments.append(line)
-        pos = end + 1
+    else:
         line_no += 1
     if not candidates:
         if comments:
             raise DataError(f"{name}:{line_no}: no CSV header after the comment lines, expected one "
                             f"with {', '.join(REQUIRED)}")
         raise DataError(f"{name}:1: empty file, expected a CSV header with {', '.join(REQUIRED)}")
-    k = find_header([(n, t) for n, t, _ in candidates[:PREAMBLE_LINES + DATA_AFTER_HEADER + 1]]) \
-        if _first_is_not_header(candidates) else 0
-    preamble = [t for _, t, _ in candidates[:k]]
-    line_no, _, pos = candidates[k]
+    k = find_header(candidates) if _first_is_not_header(candidates) else 0
+    preamble = [t for _, t in candidates[:k]]
+    header_line = candidates[k][0]
     if k:  # '#' lines between preamble lines are comments too
-        comments = [line for line in text[:pos].split("\n") if line.lstrip().startswith("#")]
-    return pos, line_no, comments, preamble
+        comments = [line for line in seen[:header_line - 1] if line.lstrip().startswith("#")]
+    return header_line, comments, preamble
 
 
 def _first_is_not_header(candidates) -> bool:
@@ -114,32 +116,30 @@ def _first_is_not_header(candidates) -> bool:
 
 def read_table(text: str, name: str, options: ReadOptions) -> Measurement:
     """Read a delimited table (see the module doc); ``text`` with ``\\n`` line ends, no BOM."""
+    from wormgear_cli.measurement.readers.source import TextSource
+
+    return read_table_source(TextSource(text, name, options.block_chars), name, options)
+
+
+def read_table_source(source, name: str, options: ReadOptions) -> Measurement:
+    """Read a delimited table from a source (:mod:`~.source`: a file read block by block)."""
     # the csv module refuses a cell over 128 KiB with its own exception (a traceback, not a DataError);
     # a cell is at most as long as the text, so it is parsed and then judged like any other cell
     limit = csv.field_size_limit()
-    csv.field_size_limit(max(limit, len(text) + 1))
+    csv.field_size_limit(max(limit, source.size + 1))
     try:
-        return build_measurement(_source(text, name), options)
+        return build_measurement(_source(source, name), options)
     finally:
         csv.field_size_limit(limit)
 
 
-def _source(text: str, name: str) -> TableSource:
+def _source(source, name: str) -> TableSource:
     """The header, the data lines and the dialect of a delimited table."""
-    pos, header_line_no, comments, preamble = _preamble(text, name)
-    size = len(text)
-    end = text.find("\n", pos)
-    end = size if end < 0 else end
-    header_text = text[pos:end]
-    body = text[end + 1:] if end < size else ""
-    sample_end = 0
-    for _ in range(SNIFF_LINES):
-        nxt = body.find("\n", sample_end)
-        if nxt < 0:
-            sample_end = len(body)
-            break
-        sample_end = nxt + 1
-    delim, decimal_comma, _how = detect_dialect(header_text, body[:sample_end].split("\n"))
+    header_line_no, comments, preamble = _preamble(source, name)
+    lines = source.lines(header_line_no)
+    header_text = next(lines)[1]
+    sample = [text for _, text in itertools.islice(lines, SNIFF_LINES)]
+    delim, decimal_comma, _how = detect_dialect(header_text, sample)
     header = [h.strip() for h in split_cells(header_text, delim, name, header_line_no, "header")]
     notes = []
     if preamble:
@@ -148,7 +148,7 @@ def _source(text: str, name: str) -> TableSource:
                      f"preamble (metadata without '#', up to line {last}): "
                      + "; ".join(_clip(p) for p in preamble[:2]) + ("; ..." if len(preamble) > 2 else ""))
     return TableSource(name=name, header=header, header_line=header_line_no,
-                       body=DelimitedBody(body, header_line_no + 1, delim, len(header), name),
+                       body=DelimitedBody(source, header_line_no + 1, delim, len(header), name),
                        decimal_comma=decimal_comma, comments=tuple(comments), preamble=tuple(preamble), notes=notes)
 
 

@@ -67,16 +67,43 @@ def plausibility(angle: np.ndarray, error: np.ndarray, angle_unit: str, error_un
                 out.append(f"the errors span {p2p:.4g} arcsec peak to peak read as {error_unit}, implausible for a "
                            f"positioning error; if the column is in {u}, use {fix}")
     if angle_unit == "deg" and angle.size and not angle_stated:
-        deg = np.degrees(angle)
-        if (np.max(np.abs(deg)) <= 2 * np.pi + 1e-9 and float(np.ptp(deg)) > 1.0
-                and np.unique(deg).size >= 8):
-            out.append(f"the angles all lie within +/-2 pi and span {float(np.ptp(deg)):.3g} deg: if they are "
-                       "radians, use --angle-unit rad")
-        whole = np.round(deg)
-        if float(np.max(np.abs(deg))) > 720.0 and np.all(np.abs(deg - whole) < 1e-9) and np.unique(whole).size >= 8:
-            out.append(f"the angles are whole numbers from {float(deg.min()):.0f} to {float(deg.max()):.0f} read as "
-                       "degrees: if they are encoder counts, convert them to degrees (counts x 360 / counts per "
-                       "turn); the tool does not read counts")
+        out += _angle_warnings(angle)
+    return out
+
+
+#: rows looked at a time (the checks hold no copy of a column)
+_BLOCK = 1 << 16
+
+
+def _distinct_at_least(angle: np.ndarray, k: int, of) -> bool:
+    """Whether ``of(angle)`` has at least ``k`` distinct values (judged block by block, stopping early)."""
+    seen = np.empty(0)
+    for a in range(0, angle.shape[0], _BLOCK):
+        seen = np.unique(np.concatenate([seen, of(angle[a:a + _BLOCK])]))
+        if seen.size >= k:
+            return True
+    return False
+
+
+def _angle_warnings(angle: np.ndarray) -> list[str]:
+    """Radians or encoder counts read as degrees (see :func:`plausibility`); the figures of the whole
+    column in degrees without a copy of it (degrees are monotone: the extremes are the extremes')."""
+    out = []
+    lo, hi = float(np.degrees(angle.min())), float(np.degrees(angle.max()))
+    top, span = max(abs(lo), abs(hi)), hi - lo
+    if top <= 2 * np.pi + 1e-9 and span > 1.0 and _distinct_at_least(angle, 8, np.degrees):
+        out.append(f"the angles all lie within +/-2 pi and span {span:.3g} deg: if they are "
+                   "radians, use --angle-unit rad")
+
+    def whole(a):
+        deg = np.degrees(a)
+        return np.round(deg)
+
+    if top > 720.0 and all(np.all(np.abs(np.degrees(angle[a:a + _BLOCK]) - whole(angle[a:a + _BLOCK])) < 1e-9)
+                           for a in range(0, angle.shape[0], _BLOCK)) and _distinct_at_least(angle, 8, whole):
+        out.append(f"the angles are whole numbers from {lo:.0f} to {hi:.0f} read as "
+                   "degrees: if they are encoder counts, convert them to degrees (counts x 360 / counts per "
+                   "turn); the tool does not read counts")
     return out
 
 

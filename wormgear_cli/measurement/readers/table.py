@@ -38,10 +38,11 @@ from wormgear_cli.measurement.readers.header import canonical_unit, resolve_head
 from wormgear_cli.measurement.readers.plausibility import plausibility, size_note
 from wormgear_cli.measurement.readers.text import DelimitedBody
 from wormgear_cli.measurement.readers.values import (
+    BLOCK,
     DIRECTION_HINT,
     check_range,
-    direction_tokens,
-    floats,
+    first_row,
+    not_a_number,
     orient_rotation,
 )
 from wormgear_cli.units import RAD_PER_UNIT
@@ -82,59 +83,36 @@ def _label(canon: str, header: list, index: dict) -> str:
     return canon if cell == canon else f"{canon} ({cell!r})"
 
 
-def _cells(src: TableSource, index: dict, cols: list) -> dict:
-    """The columns ``cols`` of every data row: floats, the direction as strings where it is written in
-    words.  DataError for no or one data row, a cell that is not a number."""
+def _cells(src: TableSource, index: dict, cols: list) -> tuple[dict, np.ndarray | None]:
+    """The columns ``cols`` of every data row as floats (the direction as +1, -1 or NaN where a cell is
+    no direction), and where the direction is a rotation word (None: nowhere).  DataError for no or
+    one data row, a cell that is not a number (the first of the first column that has one)."""
     body, name = src.body, src.name
-    words = (cols.index("direction"),) if "direction" in cols else ()
-    arrs = body.fast([index[c] for c in cols], src.decimal_comma, words)
-    if arrs is not None:
-        n = arrs[0].shape[0] if arrs else 0
-        if n == 0:
-            raise DataError(f"{name}:{src.header_line}: no data rows after the header")
-        if n < 2:
-            raise DataError(f"{name}:{src.header_line + 1}: only one data row; at least two are needed")
-        return dict(zip(cols, arrs))
-    rows, lines = body.slow()
-    if not rows:
+    direction = cols.index("direction") if "direction" in cols else None
+    got = body.read([index[c] for c in cols], src.decimal_comma, direction)
+    if got.n == 0:
         raise DataError(f"{name}:{src.header_line}: no data rows after the header")
-    if len(rows) < 2:
-        raise DataError(f"{name}:{lines[0]}: only one data row; at least two are needed")
-    values = {}
-    for c in cols:
-        cells = [r[index[c]] for r in rows]
-        if c == "direction" and not all(_plain_number(x) for x in cells):
-            values[c] = np.char.strip(np.asarray(cells, dtype=str))
-        else:
-            values[c] = floats(name, _label(c, src.header, index), cells, lines, src.decimal_comma)
-    return values
+    if got.n < 2:
+        raise DataError(f"{name}:{body.line_of(0)}: only one data row; at least two are needed")
+    for i, c in enumerate(cols):
+        if i == direction and not got.plain:  # words: judged as directions below
+            continue
+        k = got.odd[i] if got.odd[i] is not None else got.bad[i]
+        if k is not None:
+            raise not_a_number(name, body.line_of(k), _label(c, src.header, index), body.cell_of(k, index[c]),
+                               src.decimal_comma)
+    return dict(zip(cols, got.values)), got.rotation
 
 
-def _plain_number(cell: str) -> bool:
-    try:
-        float(cell.replace(",", "."))
-    except ValueError:
-        return False
-    return True
-
-
-def _directions(src: TableSource, index: dict, values: dict) -> tuple[np.ndarray | None, str | None]:
-    """The direction column as +1/-1 and where it holds rotation words (CW/CCW); DataError at the first
-    cell that is no direction."""
+def _directions(src: TableSource, index: dict, values: dict) -> None:
+    """DataError at the first direction cell that is no direction."""
     if "direction" not in values:
-        return None, None
-    raw = values["direction"]
-    if raw.dtype.kind in "US":
-        value, rotation = direction_tokens(raw)
-    else:
-        value, rotation = np.where((raw == 1.0) | (raw == -1.0), raw, np.nan), np.zeros(raw.shape[0], dtype=bool)
-    bad = np.flatnonzero(~np.isfinite(value))
+        return
+    bad = np.flatnonzero(~np.isfinite(values["direction"]))
     if bad.size:
         k = int(bad[0])
         raise DataError(f"{src.name}:{src.body.line_of(k)}: column {_label('direction', src.header, index)}: "
                         f"expected {DIRECTION_HINT}, got {src.body.cell_of(k, index['direction'])!r}")
-    values["direction"] = value
-    return value, rotation
 
 
 @dataclass
@@ -209,9 +187,8 @@ def _check(src: TableSource, index: dict, values: dict, scale: dict) -> None:
         check_range(src.name, c, _label(c, src.header, index), arr, scale.get(c, 1.0), body.line_of,
                     lambda k, j=index[c]: body.cell_of(k, j))
     if "run" in values:
-        bad = np.flatnonzero(values["run"] != np.round(values["run"]))
-        if bad.size:
-            k = int(bad[0])
+        k = first_row(lambda a, b: values["run"][a:b] != np.round(values["run"][a:b]), values["run"].shape[0])
+        if k is not None:
             raise DataError(f"{src.name}:{body.line_of(k)}: column {_label('run', src.header, index)}: expected an "
                             f"integer, got {body.cell_of(k, index['run'])!r}")
 
@@ -251,20 +228,27 @@ def _row_lines(src: TableSource, rows: np.ndarray) -> str:
     return f"line{'s' if rows.size != 1 else ''} {', '.join(str(x) for x in first)}{more}"
 
 
-def _error(src: TableSource, index: dict, values: dict, u: _Units, notes: list) -> np.ndarray | None:
-    """The error [rad]: the error column in its unit, else actual - target wrapped to +/-180 deg (the
-    error's unit is then the positions'), else None."""
+def _error(src: TableSource, index: dict, values: dict, u: _Units, notes: list, angle: np.ndarray) -> np.ndarray | None:
+    """The error [rad]: the error column in its unit, else actual - target (``angle`` [rad]) wrapped to
+    +/-180 deg (the error's unit is then the positions'), else None.  The columns read are made radians
+    in place (the same numbers as a new array, without one)."""
     if "error_arcsec" in values:
         if "actual_deg" in values:
             notes.append(f"column {src.header[index['actual_deg']]!r} (actual position) not used: the file has an "
                          "error column")
-        return values["error_arcsec"] * RAD_PER_UNIT[u.error]
+        error = values.pop("error_arcsec")
+        error *= RAD_PER_UNIT[u.error]
+        return error
     if "actual_deg" not in values:
         return None
-    target = values["angle_deg"] * RAD_PER_UNIT[u.angle]
-    raw = values["actual_deg"] * RAD_PER_UNIT[u.actual] - target
-    error = np.mod(raw + math.pi, 2.0 * math.pi) - math.pi
-    wrapped = int(np.count_nonzero(np.abs(error - raw) > math.pi))
+    raw = values.pop("actual_deg")
+    raw *= RAD_PER_UNIT[u.actual]
+    raw -= angle
+    error = raw + math.pi
+    np.mod(error, 2.0 * math.pi, out=error)
+    error -= math.pi
+    wrapped = sum(int(np.count_nonzero(np.abs(error[a:a + BLOCK] - raw[a:a + BLOCK]) > math.pi))
+                  for a in range(0, error.shape[0], BLOCK))
     u.error = u.actual
     u.stated.add("error")  # the positions' unit: --error-unit does not apply, so none is proposed
     notes.append(f"error formed as actual - target: {src.header[index['actual_deg']]!r} - "
@@ -276,7 +260,7 @@ def _error(src: TableSource, index: dict, values: dict, u: _Units, notes: list) 
 def _passes(src: TableSource, values: dict, n: int, kept, notes: list, present: set, derived: set) -> np.ndarray:
     """The run of every row: the run column, else passes where ``time_s`` goes backwards (said), else 0."""
     if "run" in values:
-        return values["run"].astype(np.int64)
+        return values.pop("run").astype(np.int64)
     run = np.zeros(n, dtype=np.int64)
     if "time_s" not in values or n < 2:
         return run
@@ -304,10 +288,10 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
     index, hunit = resolve_header(src.header, options.column_map, src.name, src.header_line, required,
                                   src.defaults, sample=src.body.sample_cells, hint=src.hint)
     cols = [c for c in CANONICAL if c in index]
-    values = _cells(src, index, cols)
+    values, rotation = _cells(src, index, cols)
     notes: list = list(src.notes)
-    if src.body.blank_rows:
-        k = len(src.body.blank_rows)
+    if src.body.blank_count:
+        k = src.body.blank_count
         first = ", ".join(str(line) for line in src.body.blank_rows[:3])
         more = f" and {k - 3} more" if k > 3 else ""
         notes.append(f"{k} row{'s' if k != 1 else ''} with every cell empty left out (line{'s' if k != 1 else ''} "
@@ -315,7 +299,7 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
     u = _units(src, options, index, hunit)
     notes += u.notes
     _time(src, index, hunit, values, notes)
-    _, rotation = _directions(src, index, values)
+    _directions(src, index, values)
     scale = {"angle_deg": RAD_PER_UNIT[u.angle] / RAD_PER_UNIT["deg"],
              "actual_deg": RAD_PER_UNIT[u.actual] / RAD_PER_UNIT["deg"],
              "error_arcsec": RAD_PER_UNIT[u.error] / RAD_PER_UNIT["arcsec"]}
@@ -327,26 +311,28 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
     n = values["angle_deg"].shape[0]
     present = {c for c in OPTIONAL if c in values} | ({"direction"} if "direction" in derived else set())
     run = _passes(src, values, n, kept, notes, present, derived)
-    angle = values["angle_deg"] * RAD_PER_UNIT[u.angle]
-    error = _error(src, index, values, u, notes)
+    angle = values.pop("angle_deg")
+    angle *= RAD_PER_UNIT[u.angle]
+    read_error = "error_arcsec" in values
+    error = _error(src, index, values, u, notes, angle)
     has_error = error is not None
     if error is None:
-        error = np.full(n, np.nan)
-    direction = values.get("direction", np.full(n, DEFAULTS["direction"]))
+        error = np.broadcast_to(np.float64(np.nan), (n,))
+    direction = values["direction"] if "direction" in values else np.full(n, DEFAULTS["direction"])
     if rotation is not None and np.any(rotation):
         direction, said = orient_rotation(direction, rotation, angle, run)
         notes.append(said)
     warnings = u.warnings + plausibility(angle, error, u.angle, u.error, has_error, "error" in u.stated,
                                          "angle" in u.stated)
     if has_error and "error" in u.stated:
-        how = ("as the positions it is formed from" if "error_arcsec" not in values else
+        how = ("as the positions it is formed from" if not read_error else
                "as --error-unit says" if options.error_unit else "as the header states")
         said = size_note(error, u.error, how)
         if said:
             notes.append(said)
 
-    def col(c):
-        return values[c] if c in values else np.full(n, DEFAULTS[c])
+    def col(c):  # an absent column: its default, one value seen n times (no memory per row; read-only)
+        return values[c] if c in values else np.broadcast_to(np.float64(DEFAULTS[c]), (n,))
 
     return Measurement(
         source=src.name, angle=angle, error=error, direction=direction, run=run, load=col("load_Nm"),
@@ -354,5 +340,4 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
         header=tuple(src.header), comments=tuple(src.comments), derived=frozenset(derived), notes=tuple(notes),
         warnings=tuple(warnings), columns=tuple((c, src.header[index[c]]) for c in cols),
         units=(("angle", u.angle), ("error", u.error)), preamble=tuple(src.preamble),
-        stated_units=frozenset(u.stated), input_format=src.format_name, _body=src.body.body,
-        _delimiter=src.body.delim, _kept=kept)
+        stated_units=frozenset(u.stated), input_format=src.format_name, _cells=src.body.rows(kept))

@@ -49,24 +49,19 @@ def looks_like_twincat_scope(head: str) -> bool:
     return "SampleTime" in keys and ("SymbolName" in keys or "Data-Type" in keys)
 
 
-def _metadata(text: str, name: str) -> tuple[str, list[tuple[int, list[str]]], int, int]:
-    """(separator, metadata lines as (line number, cells), position and line number of the first data
-    row): the metadata ends at the first line whose first cell is a number."""
-    sep = text[4]
+def _metadata(source, name: str) -> tuple[str, list[tuple[int, list[str]]], int]:
+    """(separator, metadata lines as (line number, cells), line number of the first data row): the
+    metadata ends at the first line whose first cell is a number."""
+    sep = source.head(5)[4]
     meta: list[tuple[int, list[str]]] = []
-    pos, line_no, size = 0, 1, len(text)
-    while pos < size:
-        end = text.find("\n", pos)
-        end = size if end < 0 else end
-        line = text[pos:end]
+    line_no = 0
+    for line_no, line in source.lines():
         if line.strip():
             cells = split_cells(line, sep, name, line_no)
             if cells and NUMBER.match(cells[0]):
-                return sep, meta, pos, line_no
+                return sep, meta, line_no
             meta.append((line_no, [c.strip() for c in cells]))
-        pos = end + 1
-        line_no += 1
-    raise DataError(f"{name}:{line_no}: no data rows after the TwinCAT Scope metadata (expected rows of a time "
+    raise DataError(f"{name}:{line_no + 1}: no data rows after the TwinCAT Scope metadata (expected rows of a time "
                     "stamp and one value per channel)")
 
 
@@ -119,13 +114,18 @@ def _roles(names: list[str], props: dict) -> tuple[tuple, str, str]:
 
 def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measurement:
     """Read a TwinCAT Scope CSV export (see the module doc); ``text`` with ``\\n`` line ends, no BOM."""
-    sep, meta, pos, first_line = _metadata(text, name)
+    from wormgear_cli.measurement.readers.source import TextSource
+
+    return read_twincat_source(TextSource(text, name, options.block_chars), name, options)
+
+
+def read_twincat_source(source, name: str, options: ReadOptions) -> Measurement:
+    """Read a TwinCAT Scope CSV export from a source (:mod:`~.source`: a file read block by block)."""
+    sep, meta, first_line = _metadata(source, name)
     header_line, names, props = _channels(meta, name)
-    body = text[pos:]
-    end = body.rstrip("\n")
-    if end.endswith("\nEOF"):  # the export's end-of-file tag
-        body = end[:-3]
-    first = split_cells(body[:body.find("\n")] if "\n" in body else body, sep, name, first_line)
+    body = DelimitedBody(source, first_line, sep, 0, name, end_tag="EOF")
+    lines = body.head_lines(50)
+    first = split_cells(lines[0] if lines else "", sep, name, first_line)
     if len(first) == len(names) + 1:
         stamp = float(first[0].replace(",", "."))
         header = ["time (FILETIME)" if stamp > FILETIME_FLOOR else "time (ms)"] + names
@@ -135,6 +135,7 @@ def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measuremen
         raise DataError(f"{name}:{first_line}: {len(first)} cells per data row for {len(names)} channels "
                         f"({', '.join(names)}): export with one time column (Timelines: 'For each sampletime') "
                         "or none")
+    body.ncols = len(header)
     units = {}
     for canon in ("angle_deg", "actual_deg"):
         stated = {stated_unit(f"x ({u})", canon) for u in props.get("Unit", []) if u and u != "(None)"}
@@ -150,10 +151,8 @@ def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measuremen
     if not units and any(c in dict(roles) for c in ("angle_deg", "actual_deg")) and not options.angle_unit:
         notes.append("the export states no position unit (Unit (None)): positions read in degrees, as for a "
                      "rotary axis; use --angle-unit rad if they are radians")
-    sample = body.split("\n", 50)[:50]
-    src = TableSource(name=name, header=header, header_line=header_line,
-                      body=DelimitedBody(body, first_line, sep, len(header), name),
-                      decimal_comma=decimal_comma(sample, sep), comments=(),
+    src = TableSource(name=name, header=header, header_line=header_line, body=body,
+                      decimal_comma=decimal_comma(lines, sep), comments=(),
                       preamble=tuple(sep.join(cells) for cells in meta_lines), notes=notes, defaults=roles,
                       units=units, format_name="twincat-scope", hint=hint)
     return build_measurement(src, options)

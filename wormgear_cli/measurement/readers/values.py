@@ -45,26 +45,65 @@ def shown(cell: str, most: int = 40) -> str:
     return repr(cell) if len(cell) <= most else f"{cell[:most]!r}... ({len(cell)} characters)"
 
 
-def floats(name: str, col: str, cells: list[str], line_numbers: list[int], decimal_comma: bool) -> np.ndarray:
-    """Cells of one column as floats; DataError naming the first bad cell."""
+def lenient_floats(cells: list[str], decimal_comma: bool) -> tuple[np.ndarray, int | None, int | None]:
+    """Cells of one column as floats, NaN where a cell is not a number, and the first bad cells of
+    the two kinds a message names, in this order: (values, index of the first cell with a digit
+    separator ``_`` or a non-ASCII character, index of the first other cell that is not a number).
+    A column is judged whole (over every block of a file): a cell of the first kind anywhere is
+    named before one of the second."""
     if decimal_comma:
         cells = [c.replace(",", ".") for c in cells]
     joined = "".join(cells)
+    odd = None
     if "_" in joined or not joined.isascii():
-        for k, cell in enumerate(cells):
-            if "_" in cell or not cell.isascii():
-                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got {shown(cell)}")
+        odd = next(k for k, cell in enumerate(cells) if "_" in cell or not cell.isascii())
     try:
-        return np.asarray(cells, dtype=float)
+        return np.asarray(cells, dtype=float), odd, None
     except ValueError:
         arr = np.empty(len(cells))
+        bad = None
         for k, cell in enumerate(cells):
             try:
                 arr[k] = float(cell)
             except ValueError:
-                raise DataError(f"{name}:{line_numbers[k]}: column {col}: expected a number, got "
-                                f"{shown(cell)}") from None
-        return arr
+                arr[k] = np.nan
+                bad = k if bad is None else bad
+        return arr, odd, bad
+
+
+def not_a_number(name: str, line: int, col: str, cell: str, decimal_comma: bool) -> DataError:
+    """The message for a cell that is not a number (as read: a decimal comma made a point)."""
+    if decimal_comma:
+        cell = cell.replace(",", ".")
+    return DataError(f"{name}:{line}: column {col}: expected a number, got {shown(cell)}")
+
+
+def plain_number(cell: str) -> bool:
+    """Whether a cell reads as a number (decimal point or comma); a direction column of such cells
+    only is a column of numbers (+1/-1), else of words."""
+    try:
+        float(cell.replace(",", "."))
+    except ValueError:
+        return False
+    return True
+
+
+def direction_cells(cells, decimal_comma: bool) -> tuple[np.ndarray, np.ndarray, bool, int | None, int | None]:
+    """Direction cells as they are in the file -> (+1, -1 or NaN where not a direction; True where a
+    rotation word; whether every cell reads as a number; the first cells that are not numbers, of
+    the two kinds of :func:`lenient_floats`, named when the column is numbers).  Each distinct cell
+    is judged once."""
+    uniq, inverse = np.unique(np.asarray(cells, dtype=str), return_inverse=True)
+    inverse = np.ravel(inverse)
+    value, rotation = direction_tokens(uniq)
+    distinct = uniq.tolist()
+    plain = all(plain_number(c) for c in distinct)
+    flags = np.zeros((2, len(distinct)), dtype=bool)  # (a digit separator or non-ASCII, another non-number)
+    for u, cell in enumerate(distinct):
+        _, odd, bad = lenient_floats([cell], decimal_comma)
+        flags[:, u] = odd is not None, bad is not None
+    firsts = [int(np.flatnonzero(f[inverse])[0]) if f.any() else None for f in flags]
+    return value[inverse], rotation[inverse], plain, firsts[0], firsts[1]
 
 
 def direction_tokens(tokens) -> tuple[np.ndarray, np.ndarray]:
@@ -120,17 +159,34 @@ def orient_rotation(direction: np.ndarray, rotation: np.ndarray, angle: np.ndarr
                  "+1/-1 instead")
 
 
+#: rows judged at a time by the checks (their temporaries stay a few hundred kB whatever the file)
+BLOCK = 1 << 16
+
+
+def first_row(bad, n: int, block: int = BLOCK) -> int | None:
+    """The first index ``k`` < ``n`` where ``bad(a, b)`` (a bool array for rows ``a`` to ``b - 1``) is
+    True, judged ``block`` rows at a time; None when there is none."""
+    for a in range(0, n, block):
+        hit = np.flatnonzero(bad(a, min(a + block, n)))
+        if hit.size:
+            return a + int(hit[0])
+    return None
+
+
 def check_range(name: str, col: str, label: str, arr: np.ndarray, scale: float, line_of, cell_of) -> None:
     """Finite and within :data:`RANGES` (after conversion by ``scale`` to the canonical unit)."""
-    bad = np.flatnonzero(~np.isfinite(arr))
-    if bad.size:
-        k = int(bad[0])
+    n = arr.shape[0]
+    k = first_row(lambda a, b: ~np.isfinite(arr[a:b]), n)
+    if k is not None:
         raise DataError(f"{name}:{line_of(k)}: column {label}: expected a finite number, got {shown(str(cell_of(k)))}")
     lo, hi = RANGES[col]
-    conv = arr * scale if scale != 1.0 else arr
-    bad = np.flatnonzero((conv < lo) | (conv > hi))
-    if bad.size:
-        k = int(bad[0])
+
+    def outside(a, b):
+        conv = arr[a:b] * scale if scale != 1.0 else arr[a:b]
+        return (conv < lo) | (conv > hi)
+
+    k = first_row(outside, n)
+    if k is not None:
         unit = "" if scale == 1.0 else f" ({col.split('_', 1)[1]})"
         raise DataError(f"{name}:{line_of(k)}: column {label}: expected a number in [{lo:g}, {hi:g}]{unit}, got "
                         f"{cell_of(k)!r}")
