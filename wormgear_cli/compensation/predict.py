@@ -118,7 +118,7 @@ def _simulate(theta, d, grouping, cell, run, remainder_var: float, noise) -> dic
     ci, ri = ci.ravel(), ri.ravel()
     count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(n, 1)))
     within = noise.within if math.isfinite(noise.within) else 0.0
-    draws = {k: [] for k in FIGURES}
+    draws: dict[str, list[float]] = {k: [] for k in FIGURES}
     for _ in range(count):
         x = (rng.normal(0.0, math.sqrt(remainder_var), ci.max() + 1)[ci]
              + rng.normal(0.0, math.sqrt(noise.between_runs), ri.max() + 1)[ri]
