@@ -25,7 +25,6 @@ MAX_FUNCTION_LINES = 100
 
 #: functions still longer than MAX_FUNCTION_LINES, to be split; this list only shrinks
 KNOWN_LONG: set[str] = {
-    "wormgear_cli/diagnosis/scoring.py::__init__",
     "wormgear_cli/analysis/synth.py::synthesize",
     "wormgear_cli/measurement/harmonics.py::_solve_blocks_each",
     "wormgear_cli/cli/simulate.py::synth",
@@ -103,7 +102,7 @@ def test_every_module_imports_on_its_own():
 
 #: modules mypy still checks with their errors ignored (pyproject's type-check debt); the number only
 #: goes down: lower it when a module comes off the list
-TYPE_DEBT_MODULES = 54
+TYPE_DEBT_MODULES = 49
 
 
 def test_the_type_check_debt_only_shrinks():

@@ -190,8 +190,8 @@ def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     for s in sources:
         labels.setdefault(s.order, s.name)
     orders = sorted({*labels, *(c.order for c in cands.values() if c is not None and c.order is not None)})
-    groups, folded = aliasing(theta, orders)
-    folded = set(folded)
+    groups, folded_orders = aliasing(theta, orders)
+    folded = set(folded_orders)
     out = {}
     for name, c in cands.items():
         if c is None or c.order is None:
