@@ -39,12 +39,16 @@ import itertools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from wormgear_cli.batch import shards
 from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.errors import UsageError, did_you_mean
+
+if TYPE_CHECKING:
+    from wormgear_cli.drive.train import Train
 
 #: the columns of the (i, l) sweep, in order; the first five are the stable interface
 BASE_COLUMNS = ("i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash",
@@ -249,7 +253,7 @@ def _reference(spec, st) -> _Reference:
     from wormgear_cli.drive.registry import build
 
     reg = build(spec)
-    t, k = reg.train, st.index
+    t, k = cast("Train", reg.train), st.index  # (the registry's record holds its train untyped)
     i_k = t.ratios[k - 1]
     down = [r for r in reg.results if r.index > k]
     up = [r for r in reg.results if r.index < k]
@@ -352,6 +356,8 @@ class RatioDistanceSweep:
         Returns (z1, z2, keep) with keep = min(z1, z2) >= min_teeth.  Rounding is half-to-even.
         """
         m = self.module
+        if m is None:
+            raise ValueError("snap: the sweep has no module to snap to")
         zsum = np.rint(2.0 * np.asarray(l, dtype=float) / m)
         z2 = np.rint(zsum / (1.0 + np.asarray(i, dtype=float)))
         z1 = zsum - z2
@@ -444,6 +450,8 @@ class RatioDistanceSweep:
         if st.anti_backlash != "none":  # a split pinion: the deflection's part and the stated residual
             bl = 0.0 + bl_def + float(st.residual_lost_motion)
         ref = self.reference
+        w_te: np.ndarray | float
+        w_bl: np.ndarray | float
         if self.hold == "torque" and ref.worm_force > 0.0:
             # the loads before the swept stage follow its input torque T_out / (O_k i): those stages at
             # their scaled loads, by the same models as analyze (the deflection is not linear in the force:
@@ -630,7 +638,7 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
     i_ref = float(np.clip(ref.i, i_min, i_max))
     l_ref = float(np.clip(ref.l, l_min, l_max))
     te = sweep.gear_te
-    out = []
+    out: list[dict[str, object]] = []
 
     # 1: elasticities on a subsample of the grid
     si = np.unique(np.linspace(0, iv.size - 1, min(iv.size, max_axis)).round().astype(int))

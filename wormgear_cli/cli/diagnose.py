@@ -107,6 +107,49 @@ def diagnose(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = (drive, data)
+    output = _check_paths(drive, data, output, write_spec, plot)
+    spec = load_spec(drive)
+    check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
+
+    def run(progress=None):
+        return run_diagnose(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                            resamples=resamples, jobs=jobs_count(jobs), progress=progress, data_name=str(data),
+                            write_spec=None if write_spec is None else str(write_spec))
+
+    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
+        console = terminal_console(stderr=True)
+        with console.status("diagnosing") as status:
+            result = run(progress=lambda text: status.update(text))
+    else:
+        result = run()
+    doc = result.document
+    figure = None
+    if plot is not None:
+        from wormgear_cli.plots.diagnose import draw
+
+        figure = draw(result.diagnosis, doc, unit)
+    if write_spec is not None and result.spec_toml is not None:
+        from wormgear_cli.files import atomic_write
+
+        atomic_write(write_spec, result.spec_toml, inputs)
+        announce_written(write_spec)
+    if plot is not None and figure is not None:
+        from wormgear_cli.plots.diagnose import save
+
+        save(figure, plot)
+        announce_written(plot)
+    if fmt == "json":
+        emit(json_text(doc), output, inputs)
+    else:
+        render(_tables(doc, unit), output, inputs)
+
+
+def _check_paths(drive: Path, data: Path, output: Path | None, write_spec: Path | None,
+                 plot: Path | None) -> Path | None:
+    """Refuse outputs that would overwrite an input or each other, and a plot or spec file of the wrong
+    kind, before any work; returns ``output`` (None for stdout)."""
+    from wormgear_cli.errors import UsageError
     from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
 
     if output is not None and str(output) == "-":
@@ -114,7 +157,7 @@ def diagnose(
     targets = [(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")]
     for target, what in targets:
         check_output_path(target, what)
-        refuse_input(target, inputs, what)
+        refuse_input(target, (drive, data), what)
     refuse_same_outputs(targets)
     if plot is not None:
         import importlib.util
@@ -126,39 +169,7 @@ def diagnose(
             raise UsageError(INSTALL_HINT)
     if write_spec is not None and Path(write_spec).suffix.lower() != ".toml":
         raise UsageError(f"{write_spec}: --write-spec writes a drive spec; expected a file name ending in .toml")
-
-    spec = load_spec(drive)
-    check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
-    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
-    options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
-                   jobs=jobs_count(jobs),
-                   data_name=str(data), write_spec=None if write_spec is None else str(write_spec))
-    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
-        console = terminal_console(stderr=True)
-        with console.status("diagnosing") as status:
-            result = run_diagnose(spec, meas, progress=lambda text: status.update(text), **options)
-    else:
-        result = run_diagnose(spec, meas, **options)
-    doc = result.document
-    figure = None
-    if plot is not None:
-        from wormgear_cli.plots.diagnose import draw
-
-        figure = draw(result.diagnosis, doc, unit)
-    if write_spec is not None:
-        from wormgear_cli.files import atomic_write
-
-        atomic_write(write_spec, result.spec_toml, inputs)
-        announce_written(write_spec)
-    if figure is not None:
-        from wormgear_cli.plots.diagnose import save
-
-        save(figure, plot)
-        announce_written(plot)
-    if fmt == "json":
-        emit(json_text(doc), output, inputs)
-    else:
-        render(_tables(doc, unit), output, inputs)
+    return output
 
 
 def _tables(doc: dict, unit: str) -> list:

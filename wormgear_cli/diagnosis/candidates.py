@@ -269,6 +269,13 @@ def effect_order(name: str, geometry) -> float | None:
     return float(eff.order(geometry)) if eff.order is not None else None
 
 
+def catalogue_orders(geometry) -> list[float]:
+    """The orders [cycles/rev] of the periodic catalogue effects of this drive's train (in catalogue order)."""
+    from wormgear_cli.physics.effects import train_effects
+
+    return [o for n in train_effects(geometry) if (o := effect_order(n, geometry)) is not None]
+
+
 def aliased_effects(theta, name: str, names, geometry) -> list[tuple[str, float]]:
     """Catalogue effects among ``names`` that the target spacing makes indistinguishable from ``name``.
 

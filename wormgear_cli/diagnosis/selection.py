@@ -109,8 +109,8 @@ class Diagnosis:
     ``amplitude_arcsec``; ``rms_with_nuisance``: the RMS gap with them in the
     model [arcsec] (None without nuisance terms)."""
 
-    spec: object
-    meas: object
+    spec: Spec
+    meas: Measurement
     groups: Groups
     info: DataInfo
     sources: list
@@ -213,9 +213,9 @@ def _setup(spec, meas, opt: DiagnoseOptions) -> _Setup:
     from wormgear_cli.analysis.simulate import simulate
 
     if not (0.0 < opt.alpha < 0.5):
-        raise UsageError(f"--alpha: expected a number in (0, 0.5), got {opt.alpha:g}")
+        raise UsageError(f"alpha: expected a number in (0, 0.5), got {opt.alpha:g}", parameter="alpha")
     if opt.max_effects < 0:
-        raise UsageError(f"--max-effects: expected an integer >= 0, got {opt.max_effects}")
+        raise UsageError(f"max_effects: expected an integer >= 0, got {opt.max_effects}", parameter="max_effects")
     if np.any(np.isnan(meas.error)):
         raise DataError(f"{meas.source}: no error_arcsec column; diagnose needs measured errors")
     sig = meas.signals()
