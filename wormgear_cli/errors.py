@@ -38,7 +38,7 @@ class UsageError(WormgearError):
     """An option or parameter value that makes no sense.
 
     ``parameter``: the API parameter (keyword) the first problem is about, that problem starting
-    "NAME: " with it; the core speaks the API's words, and the command line shows its own flag
+    with it ("NAME: ..." or "NAME VALUE: ..."); the core speaks the API's words, and the command line shows its own flag
     for that parameter there instead (``alpha: ...`` from Python, ``--alpha: ...`` from the shell).
     """
 
@@ -52,9 +52,10 @@ class UsageError(WormgearError):
     def in_flags(self, flags: dict[str, str]) -> list[str]:
         """The problems as the command line says them: ``flags`` maps API parameters to the command's flags."""
         flag = flags.get(self.parameter or "")
-        if flag is None or not self.problems or not self.problems[0].startswith(f"{self.parameter}:"):
+        first = self.problems[0] if self.problems else ""
+        if flag is None or not first.startswith((f"{self.parameter}:", f"{self.parameter} ")):
             return self.problems
-        return [flag + self.problems[0][len(self.parameter or ""):], *self.problems[1:]]
+        return [flag + first[len(self.parameter or ""):], *self.problems[1:]]
 
 
 def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: float = 0.6) -> str:

@@ -462,3 +462,11 @@ def test_a_subsampled_heat_map_keeps_even_steps_and_says_which(runner, mch50_pat
     ordinal = {2: "2nd", 3: "3rd"}.get(k, f"{k}th")
     assert f"({len(shown)} of {n}: every {ordinal}" in caption
     assert "all points: --format csv" in caption
+
+
+def test_the_core_names_stage_and_the_command_line_says_dash_dash_stage(runner):
+    """The core's message names the API's parameter (``stage``); the command shows its own flag there."""
+    drive = "configs/radar-pedestal-2start.toml"
+    r = run(runner, drive, "--i", "2:4:3", "--l-mm", "100:200:3", "--stage", "2", "--format", "csv")
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: --stage 2: stage 2 of {drive} is a worm stage")

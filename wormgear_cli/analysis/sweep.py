@@ -190,10 +190,10 @@ def undercut_min_teeth(pressure_angle: float) -> int:
 
 
 def check_module(module: float) -> None:
-    """Refuse (UsageError naming --module-mm) a snapping module outside :data:`MODULE_RANGE_MM`."""
+    """Refuse (UsageError naming ``module_mm``) a snapping module outside :data:`MODULE_RANGE_MM`."""
     lo, hi = MODULE_RANGE_MM
     if not (math.isfinite(module) and lo <= module <= hi):
-        raise UsageError(f"--module-mm {module:g}: expected a module from {lo:g} to {hi:g} [mm]")
+        raise UsageError(f"module_mm {module:g}: expected a module from {lo:g} to {hi:g} [mm]", parameter="module_mm")
 
 
 @dataclass(frozen=True)
@@ -239,13 +239,13 @@ def spur_stage(spec, stage: int | None = None):
                              f"{spec.stages[-1].paths.get('module_mm', 'stage.1.module_mm')}=...")
         return spurs[-1]
     if not 1 <= stage <= len(spec.stages):
-        raise UsageError(f"--stage {stage}: {spec.source} has {len(spec.stages)} stage"
-                         f"{'s' if len(spec.stages) != 1 else ''} (stages: {kinds})")
+        raise UsageError(f"stage {stage}: {spec.source} has {len(spec.stages)} stage"
+                         f"{'s' if len(spec.stages) != 1 else ''} (stages: {kinds})", parameter="stage")
     if spec.stages[stage - 1].kind != "spur":
         hint = (f"; its spur stage{'s are' if len(spurs) > 1 else ' is'} "
                 + ", ".join(str(s.index) for s in spurs)) if spurs else "; it has no spur stage"
-        raise UsageError(f"--stage {stage}: stage {stage} of {spec.source} is a {spec.stages[stage - 1].kind} stage, "
-                         f"the ratio and centre-distance sweep varies a spur stage{hint}")
+        raise UsageError(f"stage {stage}: stage {stage} of {spec.source} is a {spec.stages[stage - 1].kind} stage, "
+                         f"the ratio and centre-distance sweep varies a spur stage{hint}", parameter="stage")
     return spec.stages[stage - 1]
 
 
@@ -292,7 +292,8 @@ class RatioDistanceSweep:
         if module is not None:
             check_module(module)
         if min_teeth is not None and min_teeth < 1:
-            raise UsageError(f"--min-pinion-teeth {min_teeth}: expected a whole number >= 1")
+            raise UsageError(f"min_pinion_teeth {min_teeth}: expected a whole number >= 1",
+                             parameter="min_pinion_teeth")
         self.spec = spec
         self.stage = st
         self.i_values = np.asarray(i_values, dtype=float)
@@ -300,9 +301,9 @@ class RatioDistanceSweep:
         if module is not None and self.l_values.size:
             zsum = 2.0 * float(self.l_values.max()) / module
             if zsum > MAX_TOOTH_SUM:
-                raise UsageError(f"--module-mm {module:g}: l = {float(self.l_values.max()):g} mm needs {zsum:.3g} "
+                raise UsageError(f"module_mm {module:g}: l = {float(self.l_values.max()):g} mm needs {zsum:.3g} "
                                  f"teeth (z1 + z2 = 2 l / m); at most {MAX_TOOTH_SUM} are supported, use a larger "
-                                 "module or a shorter --l-mm range")
+                                 "module or a shorter --l-mm range", parameter="module_mm")
         self.hold = hold
         self.module = module
         self.alpha = st.pressure_angle

@@ -465,7 +465,7 @@ def _rich_table(t):
     out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header,
                 box=getattr(box, t.box.upper()), padding=(0, t.padding))
     for c in t.columns:
-        out.add_column(escape(c.header), justify=c.justify)
+        out.add_column(escape(c.header), justify=c.justify, min_width=c.min_width)
     for row in t.rows:
         out.add_row(*(Text(printable(c.text, "\n"), style=c.style or "") if isinstance(c, Cell) else escape(str(c))
                       for c in row))

@@ -19,10 +19,12 @@ class Cell:
 
 @dataclass(frozen=True)
 class Column:
-    """A table column: header text and alignment ("left" or "right")."""
+    """A table column: header text, alignment ("left" or "right") and ``min_width``: the
+    narrowest it may be drawn (a number column kept whole on a narrow terminal), None: any."""
 
     header: str
     justify: str = "left"
+    min_width: int | None = None
 
 
 #: how a table's rules are drawn: a frame with a heavier rule under the header (the default), or no
