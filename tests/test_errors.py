@@ -70,3 +70,32 @@ def test_toml_keys_are_bare_only_when_toml_allows():
     assert toml_key("output_gear-runout2") == "output_gear-runout2"
     assert toml_key("a b") == '"a b"' and toml_key("a.b") == '"a.b"' and toml_key("") == '""'
     assert toml_key('x"\n') == '"x\\"\\n"'
+
+
+# --- the core speaks the API's words, the command line its flags (issue 17) ----------------------------------
+
+
+def test_a_usage_error_names_the_parameter_and_the_cli_shows_its_flag():
+    import pickle
+
+    from wormgear_cli.errors import UsageError
+
+    err = UsageError(["max_effects: expected an integer >= 0, got -1", "second line"], parameter="max_effects")
+    assert err.in_flags({"max_effects": "--max-effects"}) == ["--max-effects: expected an integer >= 0, got -1",
+                                                             "second line"]
+    assert err.in_flags({}) == err.problems  # a command without that flag: the API's word stays
+    assert UsageError("alpha is bad").in_flags({"alpha": "--alpha"}) == ["alpha is bad"]  # no parameter named
+    back = pickle.loads(pickle.dumps(err))  # raised in a --jobs worker, reported by the parent
+    assert (back.problems, back.parameter) == (err.problems, err.parameter)
+
+
+def test_the_api_says_alpha_where_the_command_line_says_dash_dash_alpha(runner):
+    from wormgear_cli import api
+    from wormgear_cli.cli import app
+    from wormgear_cli.errors import UsageError
+
+    with pytest.raises(UsageError, match=r"^alpha: expected a number in \(0, 0.5\), got 0.7$"):
+        api.diagnose("configs/mch50.toml", "configs/mch50-warm.csv", alpha=0.7)
+    res = runner.invoke(app, ["diagnose", "configs/mch50.toml", "configs/mch50-warm.csv", "--alpha", "0.7"])
+    assert res.exit_code == 2
+    assert "error: --alpha: expected a number in (0, 0.5), got 0.7" in res.output

@@ -79,7 +79,8 @@ class _MovedFinder:
             return None
         import importlib.util
 
-        return importlib.util.spec_from_loader(fullname, _MovedLoader(fullname, new))
+        # (a PEP 451 loader, create_module/exec_module; typeshed's LoaderProtocol asks for the legacy load_module)
+        return importlib.util.spec_from_loader(fullname, _MovedLoader(fullname, new))  # type: ignore[arg-type]
 
 
 class _MovedLoader:

@@ -62,11 +62,13 @@ def command_help() -> dict[str, str]:
         Command name -> help text as click renders it at :data:`HELP_WIDTH`
         columns, with ``Usage: wormgear NAME``; sorted by name.
     """
+    from typer.core import TyperGroup
     from typer.main import get_command
 
     from wormgear_cli.cli import app
 
     group = get_command(app)
+    assert isinstance(group, TyperGroup)  # (the app has several commands)
     width = dict(terminal_width=HELP_WIDTH, max_content_width=HELP_WIDTH)
     # each command's own context class: typer's click (vendored as typer._click since 0.26), not
     # a separately installed click
@@ -182,8 +184,8 @@ def render_spec() -> str:
         for member in MEMBERS[kind]:
             out += ["", f"### `[stage.{member}]` ({kind} stage)", "",
                     *_rows([f for f in fields if f.path.startswith(member + ".")], key=lambda f: f.key)]
-    for section, fields in drive.items():
-        rows = fields + (legacy_requirements if section == "requirements" else [])
+    for section, section_fields in drive.items():
+        rows = section_fields + (legacy_requirements if section == "requirements" else [])
         out += ["", f"## `[{section}]`", "", *_rows(rows, extra=lambda f: _stage_form(f, LEGACY_KEYS))]
     out += ["", "## The legacy two-table form", "",
             "A file without `[[stage]]` tables describes the paper's drive, one worm stage followed by one spur "
@@ -194,8 +196,8 @@ def render_spec() -> str:
     for f in FIELDS:
         if f.section.split(".")[0] in LEGACY_TABLES:
             legacy.setdefault(f.section, []).append(f)
-    for section, fields in legacy.items():
-        out += ["", f"## `[{section}]`", "", *_rows(fields, extra=lambda f: _stage_form(f, LEGACY_KEYS))]
+    for section, section_fields in legacy.items():
+        out += ["", f"## `[{section}]`", "", *_rows(section_fields, extra=lambda f: _stage_form(f, LEGACY_KEYS))]
     return "\n".join(out) + "\n"
 
 
@@ -245,7 +247,7 @@ def render_effects() -> str:
         sig = inspect.signature(e.function)
         sig = sig.replace(parameters=[q.replace(annotation=q.empty) for q in sig.parameters.values()],
                           return_annotation=sig.empty)
-        sig = f"{e.function.__name__}{sig}"
+        call = f"{e.function.__name__}{sig}"
         doc = inspect.getdoc(e.function) or ""
         out += ["", f"## `{name}`", "", _cell(e.doc[:1].upper() + e.doc[1:]) + ".", "",
                 "| key | unit | range | default | meaning |", "|---|---|---|---|---|"]
@@ -253,7 +255,7 @@ def render_effects() -> str:
             default = "**required**" if p.default is None else f"`{_num(p.default)}`"
             out.append(f"| `{p.key}` | {_cell(p.unit)} | [{_num(p.lo)}, {_num(p.hi)}] | {default} | "
                        f"{_cell(p.doc)} |")
-        out += ["", "Signature:", "", "```python", sig, "```", "", "```text", doc, "```"]
+        out += ["", "Signature:", "", "```python", call, "```", "", "```text", doc, "```"]
     return "\n".join(out) + "\n"
 
 

@@ -172,14 +172,14 @@ class Angle:
         return Angle(self._rad - self._other(other)) if isinstance(other, Angle) else NotImplemented
 
     def __mul__(self, k):
-        return Angle(self._rad * k) if isinstance(k, numbers.Real) else NotImplemented
+        return Angle(self._rad * float(k)) if isinstance(k, numbers.Real) else NotImplemented
 
     __rmul__ = __mul__
 
     def __truediv__(self, other):
         if isinstance(other, Angle):
             return self._rad / other._rad
-        return Angle(self._rad / other) if isinstance(other, numbers.Real) else NotImplemented
+        return Angle(self._rad / float(other)) if isinstance(other, numbers.Real) else NotImplemented
 
     def __neg__(self):
         return Angle(-self._rad)
@@ -271,7 +271,7 @@ class AngleArray:
             return bool(np.array_equal(self._rad, other._rad))
         return NotImplemented
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # arrays compare by value and are not hashable
 
     def min(self) -> Angle:
         """Smallest angle."""

@@ -28,11 +28,20 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Union
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Union
 
 from wormgear_cli.angles import Angle, AngleArray
+
+if TYPE_CHECKING:
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
+    from wormgear_cli.diagnosis.selection import Diagnosis as _DiagnosisRecord
+    from wormgear_cli.measurement.reader import Measurement as _MeasurementRecord
+    from wormgear_cli.workflows.compensate import CompensateResult as _CompensateRecord
+    from wormgear_cli.workflows.measure import MeasureResult as _MeasureRecord
 
 __all__ = [
     "Angle", "AngleArray",
@@ -43,6 +52,11 @@ __all__ = [
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _fs(path) -> str | Path:
+    """A path argument as the core takes it: a str or Path as given, any other os.PathLike as a Path."""
+    return path if isinstance(path, (str, Path)) else Path(os.fspath(path))
 
 # --- bridges to the report builders (the same functions the commands call) ------------------------------------
 
@@ -68,6 +82,16 @@ def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects)
 
     r = at_rows(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
     return r.text, r.curves
+
+
+def _simulate_text(spec, points, revs, temperature_c, load_nm, phases, effects, unit: str) -> str:
+    """The JSON text of ``wormgear simulate`` in ``unit`` (a :class:`Simulation`'s document)."""
+    return _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects)[0]
+
+
+def _simulate_at_text(spec, at, temperature_c, load_nm, phases, effects, unit: str) -> str:
+    """The JSON text of ``wormgear simulate --at`` in ``unit`` (a :class:`SimulationAt`'s document)."""
+    return _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects)[0]
 
 
 def _sweep_report(sw, data, unit) -> dict:
@@ -135,7 +159,7 @@ def load_spec(source: PathLike | str):
 
     if isinstance(source, str) and "\n" in source:
         return core.loads_spec(source)
-    return core.load_spec(source)
+    return core.load_spec(_fs(source))
 
 
 # --- analyze -------------------------------------------------------------------------------------------------
@@ -312,11 +336,11 @@ class Simulation:
     reverse: AngleArray
     common: AngleArray
     lost_motion: AngleArray
-    _args: tuple = field(repr=False, compare=False)
+    _text: Callable[[str], str] = field(repr=False, compare=False)  # unit -> the JSON text
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear simulate --format json --unit UNIT``."""
-        return json.loads(_simulate_report(*self._args[:3], unit, *self._args[3:])[0])
+        return json.loads(self._text(unit))
 
 
 @dataclass(frozen=True)
@@ -333,11 +357,11 @@ class SimulationAt:
     direction: object
     simulated: AngleArray
     measured: AngleArray | None
-    _args: tuple = field(repr=False, compare=False)
+    _text: Callable[[str], str] = field(repr=False, compare=False)  # unit -> the JSON text
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear simulate --at FILE --format json --unit UNIT``."""
-        return json.loads(_simulate_at_report(*self._args[:2], unit, *self._args[2:])[0])
+        return json.loads(self._text(unit))
 
 
 def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None = None,
@@ -395,12 +419,13 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None
             raise UsageError(f"points: expected an integer in [2, 10000000], got {points}")
     _check_conditions(temperature_c, load_nm, None if at is not None else revs)
     eff = _effects(spec, effects)
+    t_c, l_nm = float(temperature_c), float(load_nm)
     if at is not None:
-        args = (spec, at, float(temperature_c), float(load_nm), phases, eff)
-        _, c = _simulate_at_report(*args[:2], "rad", *args[2:])
+        _, c = _simulate_at_report(spec, at, "rad", t_c, l_nm, phases, eff)
         return SimulationAt(spec.drive.name, c["angle_deg"], c["direction"], AngleArray(c["simulated"]),
-                            None if c["measured"] is None else AngleArray(c["measured"]), args)
-    args = (spec, int(points), float(revs), float(temperature_c), float(load_nm), phases, eff)
+                            None if c["measured"] is None else AngleArray(c["measured"]),
+                            partial(_simulate_at_text, spec, at, t_c, l_nm, phases, eff))
+    n_points, n_revs = int(points), float(revs)
     # the curves straight from the core model (the report builder would also format the whole
     # curve as text, 20x the cost); to_dict() asks the report builder, and tests/test_api.py
     # checks that both give the same curve
@@ -411,11 +436,11 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None
     from wormgear_cli.workflows.simulate import phase_map as phase_map_of
 
     phase_map = phase_map_of(spec, phases)
-    angle_deg = np.arange(args[1]) * (360.0 * args[2] / args[1])
+    angle_deg = np.arange(n_points) * (360.0 * n_revs / n_points)
     theta = np.radians(angle_deg)
-    f, r = (run(spec, Signals.make(theta, d, args[4], args[3], 0.0), phase_map, effects=eff) for d in (1.0, -1.0))
+    f, r = (run(spec, Signals.make(theta, d, l_nm, t_c, 0.0), phase_map, effects=eff) for d in (1.0, -1.0))
     return Simulation(spec.drive.name, angle_deg, AngleArray(f), AngleArray(r), AngleArray(0.5 * (f + r)),
-                      AngleArray(r - f), args)
+                      AngleArray(r - f), partial(_simulate_text, spec, n_points, n_revs, t_c, l_nm, phases, eff))
 
 
 # --- measurements --------------------------------------------------------------------------------------------
@@ -443,7 +468,7 @@ class Measurement:
     columns: dict
     notes: tuple
     warnings: tuple
-    core: object = field(repr=False, compare=False)
+    core: _MeasurementRecord = field(repr=False, compare=False)
     path: object = field(repr=False, compare=False, default=None)
     options: object = field(repr=False, compare=False, default=None)
 
@@ -499,7 +524,7 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
     from wormgear_cli.measurement import readers as core
 
     options = _read_options(column_map, error_unit, angle_unit, input_format)
-    m = core.read_measurement(path, require_error=require_error, options=options)
+    m = core.read_measurement(_fs(path), require_error=require_error, options=options)
     return Measurement(m.source, AngleArray(m.angle), AngleArray(m.error), m.direction, m.run, m.load,
                        m.temperature, m.time, dict(m.columns), tuple(m.notes), tuple(m.warnings), m, path, options)
 
@@ -549,12 +574,14 @@ class MeasureResult:
     notes: tuple
     resolution: Angle | None = None
     below_resolution: tuple = ()
-    core: object = field(repr=False, compare=False, default=None)
+    core: _MeasureRecord | None = field(repr=False, compare=False, default=None)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear measure --format json --unit UNIT``."""
         from wormgear_cli.workflows.measure import report
 
+        if self.core is None:
+            raise ValueError("this MeasureResult was made without its run: it has no document")
         return _plain(report(self.core, unit))
 
 
@@ -603,7 +630,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         from wormgear_cli.workflows.measure import parse_orders
 
         orders = parse_orders(",".join(repr(float(k)) for k in orders))
-    core = run(path, options, drive, orders, int(harmonics))
+    core = run(_fs(path), options, None if drive is None else _fs(drive), orders, int(harmonics))
     doc = report(core, "rad", per_target=False)  # the CLI's document in radians
     items = []
     for it in doc["orders"]["items"]:
@@ -650,7 +677,7 @@ class Compensation:
     exceeded: bool
     warnings: tuple
     notes: tuple
-    core: object = field(repr=False, compare=False)
+    core: _CompensateRecord = field(repr=False, compare=False)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear compensate --report FILE --unit UNIT``."""
@@ -662,7 +689,7 @@ class Compensation:
         """Write the file to ``path`` atomically."""
         from wormgear_cli.files import atomic_write
 
-        atomic_write(path, self.text)
+        atomic_write(_fs(path), self.text)
 
 
 def _compensation(core) -> Compensation:
@@ -764,14 +791,15 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
 @dataclass(frozen=True)
 class Gap:
     """Measured - model over matched forward/reverse targets: ``rms``, ``max`` and the same for
-    the common and differential modes, as :class:`Angle`."""
+    the common and differential modes, as :class:`Angle` (None where no forward/reverse pair
+    of targets was measured)."""
 
-    rms: Angle
-    max: Angle
-    common_rms: Angle
-    common_max: Angle
-    differential_rms: Angle
-    differential_max: Angle
+    rms: Angle | None
+    max: Angle | None
+    common_rms: Angle | None
+    common_max: Angle | None
+    differential_rms: Angle | None
+    differential_max: Angle | None
 
 
 def _gap(d: dict | None) -> Gap | None:
@@ -800,7 +828,7 @@ class Diagnosis:
     gap_before: Gap | None
     gap_after: Gap | None
     noise_floor: Angle | None
-    core: object = field(repr=False, compare=False)
+    core: _DiagnosisRecord = field(repr=False, compare=False)
     _doc: dict = field(repr=False, compare=False)
     _data_name: str = field(repr=False, compare=False, default="")
 
@@ -884,7 +912,7 @@ class Sweep:
     points: dict
     best: dict
     findings: tuple
-    core: object = field(repr=False, compare=False)
+    core: RatioDistanceSweep = field(repr=False, compare=False)
     _data: dict = field(repr=False, compare=False)
 
     @property
@@ -987,13 +1015,14 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
 class MetricStats:
     """Statistics of one metric over the sampled drives: ``mean``, ``std``, ``corner`` (the
     worst case, as analyze), ``rss`` (root-sum-square estimate) and ``percentiles`` (key ->
-    value: "50", "90", "95", "99", "99.73", "max"), all :class:`Angle`."""
+    value: "50", "90", "95", "99", "99.73", "max"), all :class:`Angle` (None where the
+    metric has no value)."""
 
-    mean: Angle
-    std: Angle
+    mean: Angle | None
+    std: Angle | None
     percentiles: dict
-    corner: Angle
-    rss: Angle
+    corner: Angle | None
+    rss: Angle | None
 
 
 @dataclass(frozen=True)
@@ -1013,7 +1042,7 @@ class Tolerance:
     yields: dict
     sensitivity: dict
     allocation: dict | None
-    _run: object = field(repr=False, compare=False)
+    _run: Callable[[str], dict] = field(repr=False, compare=False)  # unit -> the document
     _docs: dict = field(repr=False, compare=False)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
@@ -1113,7 +1142,7 @@ class Comparison:
     differences: dict
     budget: dict
     yields: dict | None
-    _run: object = field(repr=False, compare=False)
+    _run: Callable[[str], dict] = field(repr=False, compare=False)  # unit -> the document
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear compare --format json --unit UNIT``."""

@@ -35,7 +35,27 @@ class DataError(WormgearError):
 
 
 class UsageError(WormgearError):
-    """A command-line option value that makes no sense."""
+    """An option or parameter value that makes no sense.
+
+    ``parameter``: the API parameter (keyword) the first problem is about, that problem starting
+    with it ("NAME: ..." or "NAME VALUE: ..."); the core speaks the API's words, and the command line shows its own flag
+    for that parameter there instead (``alpha: ...`` from Python, ``--alpha: ...`` from the shell).
+    """
+
+    def __init__(self, problems: str | list[str], parameter: str | None = None):
+        super().__init__(problems)
+        self.parameter = parameter
+
+    def __reduce__(self):
+        return self.__class__, (self.problems, self.parameter)
+
+    def in_flags(self, flags: dict[str, str]) -> list[str]:
+        """The problems as the command line says them: ``flags`` maps API parameters to the command's flags."""
+        flag = flags.get(self.parameter or "")
+        first = self.problems[0] if self.problems else ""
+        if flag is None or not first.startswith((f"{self.parameter}:", f"{self.parameter} ")):
+            return self.problems
+        return [flag + first[len(self.parameter or ""):], *self.problems[1:]]
 
 
 def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: float = 0.6) -> str:

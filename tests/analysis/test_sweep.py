@@ -334,10 +334,12 @@ def test_the_default_spur_stage_is_the_last_and_a_train_without_one_is_refused()
     assert spur_stage(radar).index == 3 and spur_stage(radar, 1).index == 1
     with pytest.raises(UsageError) as err:
         spur_stage(radar, 2)
-    assert str(err.value) == (f"--stage 2: stage 2 of {radar.source} is a worm stage, the ratio and centre-distance "
+    # the core names the API's parameter (the command line shows --stage there: tests/cli/test_sweep.py)
+    assert str(err.value) == (f"stage 2: stage 2 of {radar.source} is a worm stage, the ratio and centre-distance "
                               "sweep varies a spur stage; its spur stages are 1, 3")
+    assert err.value.parameter == "stage"
     with pytest.raises(UsageError) as err:
         spur_stage(radar, 4)
-    assert str(err.value) == f"--stage 4: {radar.source} has 3 stages (stages: 1 spur, 2 worm, 3 spur)"
+    assert str(err.value) == f"stage 4: {radar.source} has 3 stages (stages: 1 spur, 2 worm, 3 spur)"
     with pytest.raises(UsageError):
         spur_stage(load_spec(CONFIGS / "rotary-table-worm.toml"))

@@ -59,5 +59,5 @@ def test_a_consumer_that_stops_early_stops_the_workers():
 def test_jobs_zero_is_every_core_and_the_bounds_are_checked():
     assert resolve_jobs(0) == available_cores() >= 1
     assert resolve_jobs(3) == 3
-    with pytest.raises(UsageError, match="--jobs: expected a whole number from 0"):
+    with pytest.raises(UsageError, match="^jobs: expected a whole number from 0"):  # the API's word; CLI: --jobs
         resolve_jobs(-1)

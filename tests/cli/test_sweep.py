@@ -473,3 +473,9 @@ def test_designs_skipped_by_the_module_are_said_on_stderr(runner, mch50_path, fm
                         "(--min-pinion-teeth)\n")
     r = run(runner, mch50_path, "--i", "4:8:2", "--l-mm", "150:250:2", "-f", fmt)
     assert r.exit_code == 0 and r.stderr == ""
+def test_the_core_names_stage_and_the_command_line_says_dash_dash_stage(runner):
+    """The core's message names the API's parameter (``stage``); the command shows its own flag there."""
+    drive = "configs/radar-pedestal-2start.toml"
+    r = run(runner, drive, "--i", "2:4:3", "--l-mm", "100:200:3", "--stage", "2", "--format", "csv")
+    assert r.exit_code == 2
+    assert r.stderr.startswith(f"error: --stage 2: stage 2 of {drive} is a worm stage")

@@ -68,11 +68,13 @@ def test_a_same_order_effect_gets_the_range_of_sizes_that_fit_not_a_confident_va
 def test_the_table_says_fixed_only_for_parameters_held_fixed(same_order):
     from rich.console import Console
 
+    from wormgear_cli.cli.common import _rich_table
     from wormgear_cli.cli.diagnose import _tables
+    from wormgear_cli.output.tables import Table
 
     console = Console(record=True, width=200, file=io.StringIO())
     for part in _tables(same_order, "arcsec"):
-        console.print(part)
+        console.print(_rich_table(part) if isinstance(part, Table) else part)
     text = console.export_text()
     row = re.compile(r"│\s+(eccentricity_um|phase_deg)\s+│[^│]*│([^│]*)│")
     rows = {m.group(1): m.group(2) for m in row.finditer(text)}

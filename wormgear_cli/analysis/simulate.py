@@ -71,7 +71,7 @@ Relation to ``analyze`` (tested in tests/analysis/test_simulate.py):
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -79,6 +79,7 @@ from wormgear_cli.drive.records import Compliance, Source, sine  # noqa: F401  (
 from wormgear_cli.drive.registry import build
 
 if TYPE_CHECKING:
+    from wormgear_cli.drive.train import Train
     from wormgear_cli.physics.effects import Signals
 
 
@@ -144,7 +145,7 @@ def components(spec, signals: Signals, phases: dict | None = None,
     from wormgear_cli.drive.train import drive_geometry
     from wormgear_cli.physics.effects import EFFECTS  # the catalogue: not needed by ``analyze``
 
-    g = drive_geometry(spec, reg.train)
+    g = drive_geometry(spec, cast("Train", reg.train))  # (the registry's record holds its train untyped)
     for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
     return out

@@ -39,12 +39,16 @@ import itertools
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
 from wormgear_cli.batch import shards
 from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.errors import UsageError, did_you_mean
+
+if TYPE_CHECKING:
+    from wormgear_cli.drive.train import Train
 
 #: the columns of the (i, l) sweep, in order; the first five are the stable interface
 BASE_COLUMNS = ("i", "l_mm", "gear_transmission_error", "total_transmission_error", "total_backlash",
@@ -186,10 +190,10 @@ def undercut_min_teeth(pressure_angle: float) -> int:
 
 
 def check_module(module: float) -> None:
-    """Refuse (UsageError naming --module-mm) a snapping module outside :data:`MODULE_RANGE_MM`."""
+    """Refuse (UsageError naming ``module_mm``) a snapping module outside :data:`MODULE_RANGE_MM`."""
     lo, hi = MODULE_RANGE_MM
     if not (math.isfinite(module) and lo <= module <= hi):
-        raise UsageError(f"--module-mm {module:g}: expected a module from {lo:g} to {hi:g} [mm]")
+        raise UsageError(f"module_mm {module:g}: expected a module from {lo:g} to {hi:g} [mm]", parameter="module_mm")
 
 
 @dataclass(frozen=True)
@@ -235,13 +239,13 @@ def spur_stage(spec, stage: int | None = None):
                              f"{spec.stages[-1].paths.get('module_mm', 'stage.1.module_mm')}=...")
         return spurs[-1]
     if not 1 <= stage <= len(spec.stages):
-        raise UsageError(f"--stage {stage}: {spec.source} has {len(spec.stages)} stage"
-                         f"{'s' if len(spec.stages) != 1 else ''} (stages: {kinds})")
+        raise UsageError(f"stage {stage}: {spec.source} has {len(spec.stages)} stage"
+                         f"{'s' if len(spec.stages) != 1 else ''} (stages: {kinds})", parameter="stage")
     if spec.stages[stage - 1].kind != "spur":
         hint = (f"; its spur stage{'s are' if len(spurs) > 1 else ' is'} "
                 + ", ".join(str(s.index) for s in spurs)) if spurs else "; it has no spur stage"
-        raise UsageError(f"--stage {stage}: stage {stage} of {spec.source} is a {spec.stages[stage - 1].kind} stage, "
-                         f"the ratio and centre-distance sweep varies a spur stage{hint}")
+        raise UsageError(f"stage {stage}: stage {stage} of {spec.source} is a {spec.stages[stage - 1].kind} stage, "
+                         f"the ratio and centre-distance sweep varies a spur stage{hint}", parameter="stage")
     return spec.stages[stage - 1]
 
 
@@ -249,7 +253,7 @@ def _reference(spec, st) -> _Reference:
     from wormgear_cli.drive.registry import build
 
     reg = build(spec)
-    t, k = reg.train, st.index
+    t, k = cast("Train", reg.train), st.index  # (the registry's record holds its train untyped)
     i_k = t.ratios[k - 1]
     down = [r for r in reg.results if r.index > k]
     up = [r for r in reg.results if r.index < k]
@@ -288,7 +292,8 @@ class RatioDistanceSweep:
         if module is not None:
             check_module(module)
         if min_teeth is not None and min_teeth < 1:
-            raise UsageError(f"--min-pinion-teeth {min_teeth}: expected a whole number >= 1")
+            raise UsageError(f"min_pinion_teeth {min_teeth}: expected a whole number >= 1",
+                             parameter="min_pinion_teeth")
         self.spec = spec
         self.stage = st
         self.i_values = np.asarray(i_values, dtype=float)
@@ -296,9 +301,9 @@ class RatioDistanceSweep:
         if module is not None and self.l_values.size:
             zsum = 2.0 * float(self.l_values.max()) / module
             if zsum > MAX_TOOTH_SUM:
-                raise UsageError(f"--module-mm {module:g}: l = {float(self.l_values.max()):g} mm needs {zsum:.3g} "
+                raise UsageError(f"module_mm {module:g}: l = {float(self.l_values.max()):g} mm needs {zsum:.3g} "
                                  f"teeth (z1 + z2 = 2 l / m); at most {MAX_TOOTH_SUM} are supported, use a larger "
-                                 "module or a shorter --l-mm range")
+                                 "module or a shorter --l-mm range", parameter="module_mm")
         self.hold = hold
         self.module = module
         self.alpha = st.pressure_angle
@@ -352,6 +357,8 @@ class RatioDistanceSweep:
         Returns (z1, z2, keep) with keep = min(z1, z2) >= min_teeth.  Rounding is half-to-even.
         """
         m = self.module
+        if m is None:
+            raise ValueError("snap: the sweep has no module to snap to")
         zsum = np.rint(2.0 * np.asarray(l, dtype=float) / m)
         z2 = np.rint(zsum / (1.0 + np.asarray(i, dtype=float)))
         z1 = zsum - z2
@@ -444,6 +451,8 @@ class RatioDistanceSweep:
         if st.anti_backlash != "none":  # a split pinion: the deflection's part and the stated residual
             bl = 0.0 + bl_def + float(st.residual_lost_motion)
         ref = self.reference
+        w_te: np.ndarray | float
+        w_bl: np.ndarray | float
         if self.hold == "torque" and ref.worm_force > 0.0:
             # the loads before the swept stage follow its input torque T_out / (O_k i): those stages at
             # their scaled loads, by the same models as analyze (the deflection is not linear in the force:
@@ -630,7 +639,7 @@ def findings(sweep: RatioDistanceSweep, max_axis: int = 21) -> list[dict]:
     i_ref = float(np.clip(ref.i, i_min, i_max))
     l_ref = float(np.clip(ref.l, l_min, l_max))
     te = sweep.gear_te
-    out = []
+    out: list[dict[str, object]] = []
 
     # 1: elasticities on a subsample of the grid
     si = np.unique(np.linspace(0, iv.size - 1, min(iv.size, max_axis)).round().astype(int))

@@ -87,21 +87,22 @@ class Plan:
         if self.kind not in PLAN_KINDS:
             raise UsageError(f"--plan: expected one of {', '.join(PLAN_KINDS)}, got {self.kind!r}")
         if self.kind == "iso" and not 2 <= self.targets <= 100_000:
-            raise UsageError(f"--targets: expected an integer in [2, 100000], got {self.targets}")
+            raise UsageError(f"targets: expected an integer in [2, 100000], got {self.targets}", parameter="targets")
         if self.kind == "dense" and not 2 <= self.points <= 10_000_000:
-            raise UsageError(f"--points: expected an integer in [2, 10000000], got {self.points}")
+            raise UsageError(f"points: expected an integer in [2, 10000000], got {self.points}", parameter="points")
         if not 1 <= self.runs <= 10_000:
-            raise UsageError(f"--runs: expected an integer in [1, 10000], got {self.runs}")
+            raise UsageError(f"runs: expected an integer in [1, 10000], got {self.runs}", parameter="runs")
         if not (math.isfinite(self.revolutions) and 0.0 < self.revolutions <= 1000.0):
             raise UsageError(f"--revs: expected a number in (0, 1000], got {self.revolutions:g}")
         if self.dwell_s is not None and not (math.isfinite(self.dwell_s) and self.dwell_s >= 0.0):
-            raise UsageError(f"--dwell-s: expected a number >= 0 [s], got {self.dwell_s:g}")
+            raise UsageError(f"dwell_s: expected a number >= 0 [s], got {self.dwell_s:g}", parameter="dwell_s")
         if not (0.0 <= self.jitter < 0.5):
-            raise UsageError(f"--jitter: expected a number in [0, 0.5), got {self.jitter:g}")
+            raise UsageError(f"jitter: expected a number in [0, 0.5), got {self.jitter:g}", parameter="jitter")
         if not 1 <= self.cycles <= 1000:
-            raise UsageError(f"--cycles: expected an integer in [1, 1000], got {self.cycles}")
+            raise UsageError(f"cycles: expected an integer in [1, 1000], got {self.cycles}", parameter="cycles")
         if not (math.isfinite(self.cycle_gap_s) and 0.0 <= self.cycle_gap_s <= 1e7):
-            raise UsageError(f"--cycle-gap-s: expected a number in [0, 1e7] [s], got {self.cycle_gap_s:g}")
+            raise UsageError(f"cycle_gap_s: expected a number in [0, 1e7] [s], got {self.cycle_gap_s:g}",
+                             parameter="cycle_gap_s")
 
 
 @dataclass(frozen=True)
@@ -311,7 +312,7 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
     for name, values in (effects or {}).items():
         if name not in EFFECTS:
             raise UsageError(f"--effect: unknown effect {name!r} (known: {', '.join(EFFECTS)})")
-        absent = geometry_absent_reason(name, g)
+        absent = geometry_absent_reason(name, g) if g is not None else None
         if absent is not None:
             raise UsageError(f"--effect {name}: not an effect of this drive: {absent}")
         merged.setdefault(name, {}).update({k: float(v) for k, v in values.items()})
@@ -405,38 +406,21 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
     plan.check()
     noise.check()
     if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise UsageError(f"--seed: expected a non-negative integer, got {seed!r}")
-    two_temperature = temperature.kind == "mesh-warmup"
-    if two_temperature and "centre_distance_um_per_K" in ((effects or {}).get("thermal_backlash") or {}):
-        raise UsageError("--effect thermal_backlash: with a mesh-warmup temperature the centre-distance growth "
-                         "follows from the spec's [materials] and the housing's share of the warm-up; give a bare "
-                         "--effect thermal_backlash")
-    resolved = resolve_effects(spec, effects, include_spec_effects)
-    internal = {name: params_from_keys(name, values) for name, values in resolved.items()}
-    # a mesh-warmup makes thermal_backlash from the two temperatures (see _two_temperature_backlash)
-    physical_backlash = two_temperature and "thermal_backlash" in internal
-    if physical_backlash:
-        internal.pop("thermal_backlash")
+        raise UsageError(f"seed: expected a non-negative integer, got {seed!r}", parameter="seed")
+    resolved, internal, physical_backlash = _synth_effects(spec, effects, include_spec_effects, temperature)
 
     rng_targets, rng_phases, rng_white, rng_run = (
         np.random.default_rng(s) for s in np.random.SeedSequence(int(seed)).spawn(4))
     sources = periodic_sources(spec)
     draw = rng_phases.uniform(0.0, 2.0 * math.pi, len(sources))
-    used = {}
-    for src, random_phase in zip(sources, draw):
-        ph = random_phase if random_phases else src.phase
-        used[src.name] = float((phases or {}).get(src.name, ph))
+    used = {src.name: float((phases or {}).get(src.name, random_phase if random_phases else src.phase))
+            for src, random_phase in zip(sources, draw)}
 
     targets = plan_angles(plan, rng_targets)
     n_t = len(targets)
     runs = plan.runs * plan.cycles
-    one_run = np.concatenate([targets, targets[::-1]])
-    direction = np.tile(np.concatenate([np.ones(n_t), -np.ones(n_t)]), runs)
-    angle = np.tile(one_run, runs)
-    run = np.repeat(np.arange(1, runs + 1), 2 * n_t)
+    angle, direction, run, time = _schedule(plan, targets)
     n = angle.size
-    cycle = (run - 1) // plan.runs  # 0-based cycle of each row; cycles are cycle_gap_s apart
-    time = np.round(np.arange(n) * plan.dwell + cycle * plan.cycle_gap_s, DECIMALS["time_s"])
     duration = float(time[-1]) if n else 0.0
     temp = np.round(temperature.evaluate(time, run, duration), DECIMALS["temperature_C"])
     torque = np.round(load.evaluate(time, run, duration), DECIMALS["load_Nm"])
@@ -448,14 +432,7 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
         term, thermal_truth = _two_temperature_backlash(spec, signals, temperature)
         model = model + term / ARCSEC
 
-    white = rng_white.normal(0.0, noise.white_arcsec, n) if noise.white_arcsec > 0 else np.zeros(n)
-    run_values = rng_run.normal(0.0, noise.run_arcsec, runs) if noise.run_arcsec > 0 else np.zeros(runs)
-    if noise.run_kind == "offset":
-        correlated = run_values[run - 1]
-    else:
-        per = 2 * n_t
-        frac = (np.arange(n) % per) / max(per - 1, 1)
-        correlated = run_values[run - 1] * frac
+    white, correlated, run_values = _noise_terms(noise, rng_white, rng_run, run, runs, n_t)
     error = np.round(model + white + correlated, DECIMALS["error_arcsec"]) + 0.0  # + 0.0: no "-0.0"
 
     columns = {
@@ -473,8 +450,7 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
         "spec": str(spec.source),
         "seed": int(seed),
         "rows": int(n),
-        "plan": {**asdict(plan), "dwell_s": plan.dwell, "target_angles_deg": [float(x) for x in targets]}
-        if plan.kind == "iso" else {**asdict(plan), "dwell_s": plan.dwell},
+        "plan": _plan_truth(plan, targets),
         "phases": {src.name: {"key": src.phase_path, "phase_deg": math.degrees(used[src.name]),
                               "order": src.order} for src in sources},
         "random_phases": bool(random_phases),
@@ -487,20 +463,77 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
         "load": load.to_dict(),
         "offset_arcsec": float(offset_arcsec),
     }
-    if plan.cycles == 1:  # the single-cycle truth stays as it was before cycles existed
-        truth["plan"].pop("cycles")
-        truth["plan"].pop("cycle_gap_s")
     if thermal_truth is not None:
         truth["effects"]["thermal_backlash"] = {"centre_distance_um_per_K": thermal_truth["predicted_um_per_K"],
                                                "reference_temperature_C": temperature.values[0]}
         truth["thermal"] = thermal_truth
-    if plan.kind == "dense":
-        truth["plan"].pop("targets")
-        truth["plan"].pop("jitter")
-    else:
-        truth["plan"].pop("points")
     comments = _comments(spec, plan, n_t, temperature, load)
     return Synthesis(columns, truth, comments)
+
+
+def _synth_effects(spec, effects: dict | None, include_spec_effects: bool,
+                   temperature: Programme) -> tuple[dict, dict, bool]:
+    """(the effects in catalogue keys, the same in the model's parameters, whether ``thermal_backlash``
+    comes from the two temperatures): a mesh-warmup makes thermal_backlash from the two temperatures (see
+    :func:`_two_temperature_backlash`), so it is left out of the parameters then."""
+    two_temperature = temperature.kind == "mesh-warmup"
+    if two_temperature and "centre_distance_um_per_K" in ((effects or {}).get("thermal_backlash") or {}):
+        raise UsageError("--effect thermal_backlash: with a mesh-warmup temperature the centre-distance growth "
+                         "follows from the spec's [materials] and the housing's share of the warm-up; give a bare "
+                         "--effect thermal_backlash")
+    resolved = resolve_effects(spec, effects, include_spec_effects)
+    internal = {name: params_from_keys(name, values) for name, values in resolved.items()}
+    physical_backlash = two_temperature and "thermal_backlash" in internal
+    if physical_backlash:
+        internal.pop("thermal_backlash")
+    return resolved, internal, physical_backlash
+
+
+def _schedule(plan: Plan, targets: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rows in measuring order: angle [deg], direction (+1/-1), run (1..runs x cycles) and time [s]
+    (``dwell`` apart, cycles ``cycle_gap_s`` apart); each run goes out over the targets and back."""
+    n_t = len(targets)
+    runs = plan.runs * plan.cycles
+    one_run = np.concatenate([targets, targets[::-1]])
+    direction = np.tile(np.concatenate([np.ones(n_t), -np.ones(n_t)]), runs)
+    angle = np.tile(one_run, runs)
+    run = np.repeat(np.arange(1, runs + 1), 2 * n_t)
+    cycle = (run - 1) // plan.runs  # 0-based cycle of each row; cycles are cycle_gap_s apart
+    time = np.round(np.arange(angle.size) * plan.dwell + cycle * plan.cycle_gap_s, DECIMALS["time_s"])
+    return angle, direction, run, time
+
+
+def _noise_terms(noise: Noise, rng_white, rng_run, run: np.ndarray, runs: int,
+                 n_t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(white noise of each row, the run-to-run part of each row, each run's value) [arcsec]: the run's
+    value as an offset, or as a drift growing from 0 to it over the run's 2 n_t rows."""
+    n = run.size
+    white = rng_white.normal(0.0, noise.white_arcsec, n) if noise.white_arcsec > 0 else np.zeros(n)
+    run_values = rng_run.normal(0.0, noise.run_arcsec, runs) if noise.run_arcsec > 0 else np.zeros(runs)
+    if noise.run_kind == "offset":
+        correlated = run_values[run - 1]
+    else:
+        per = 2 * n_t
+        frac = (np.arange(n) % per) / max(per - 1, 1)
+        correlated = run_values[run - 1] * frac
+    return white, correlated, run_values
+
+
+def _plan_truth(plan: Plan, targets: np.ndarray) -> dict:
+    """The truth's ``plan``: the plan's fields that apply to its kind, the dwell, and an iso plan's target
+    angles [deg]; the single-cycle truth stays as it was before cycles existed."""
+    out = {**asdict(plan), "dwell_s": plan.dwell}
+    if plan.kind == "iso":
+        out["target_angles_deg"] = [float(x) for x in targets]
+    if plan.cycles == 1:
+        out.pop("cycles")
+        out.pop("cycle_gap_s")
+    if plan.kind == "dense":
+        out.pop("targets")
+        out.pop("jitter")
+    else:
+        out.pop("points")
+    return out
 
 
 def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
@@ -533,7 +566,9 @@ def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
 
     t0, _t1, _tau, share, lag = temperature.values
     mesh_dt = signals.temperature - t0
-    housing_dt = temperature.housing(signals.time) - t0
+    housing = temperature.housing(signals.time)
+    assert housing is not None  # (a mesh-warmup programme: the only one with a housing)
+    housing_dt = housing - t0
     delta_a = centre_distance_change_mm(spec, mesh_dt, housing_dt)  # [mm]
     g = geometry(spec)
     fn = EFFECTS["thermal_backlash"].function

@@ -43,7 +43,8 @@ def available_cores() -> int:
 def resolve_jobs(jobs: int) -> int:
     """``--jobs`` as a worker count: 0 = every available core; UsageError outside 0..MAX_JOBS."""
     if isinstance(jobs, bool) or not 0 <= int(jobs) <= MAX_JOBS:
-        raise UsageError(f"--jobs: expected a whole number from 0 (every core) to {MAX_JOBS}, got {jobs}")
+        raise UsageError(f"jobs: expected a whole number from 0 (every core) to {MAX_JOBS}, got {jobs}",
+                         parameter="jobs")
     return available_cores() if int(jobs) == 0 else int(jobs)
 
 

@@ -68,7 +68,7 @@ def main() -> None:
         code = _stopped(2)
     except BaseException as exc:
         if type(exc).__name__ == "RunStopped":
-            code = _stopped(exc.signum)
+            code = _stopped(exc.signum)  # type: ignore[attr-defined]  # a files.RunStopped, matched by name
         elif isinstance(exc, MemoryError):
             del exc  # release what the failed step held before saying so
             code = 2
@@ -80,9 +80,9 @@ def main() -> None:
     _settle(code)
     import atexit
 
-    files = sys.modules.get("wormgear_cli.files")
-    if files is not None and hasattr(files, "ignore_stop_signals"):
-        atexit.register(files.ignore_stop_signals)  # the interpreter's last steps: nothing to stop
+    loaded = sys.modules.get("wormgear_cli.files")
+    if loaded is not None and hasattr(loaded, "ignore_stop_signals"):
+        atexit.register(loaded.ignore_stop_signals)  # the interpreter's last steps: nothing to stop
     sys.exit(code)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import typer
 from typer.core import TyperGroup
 
+from wormgear_cli.errors import UsageError as CoreUsageError
 from wormgear_cli.errors import WormgearError
 from wormgear_cli.files import (
     OUT_OF_MEMORY,
@@ -97,7 +98,7 @@ class WormgearGroup(TyperGroup):
                         tx.commit(stop.exit_code)
                     raise  # exit 2 (bad input): no output file, as for an error raised
         except WormgearError as exc:
-            for line in exc.problems:
+            for line in exc.in_flags(_flags(ctx)) if isinstance(exc, CoreUsageError) else exc.problems:
                 _say(f"error: {line}")
             raise typer.Exit(exc.exit_code) from None
         except NoArgsIsHelpError:
@@ -131,6 +132,16 @@ class WormgearGroup(TyperGroup):
             if code is None:
                 raise
             raise SystemExit(code) from None
+
+
+def _flags(ctx) -> dict[str, str]:
+    """The running command's flags by parameter name (``max_effects`` -> ``--max-effects``): what the
+    core's messages name in the API's words (:meth:`wormgear_cli.errors.UsageError.in_flags`)."""
+    name = ctx.invoked_subcommand
+    command = ctx.command.get_command(ctx, name) if name else None
+    if command is None:
+        return {}
+    return {p.name: max(p.opts, key=len) for p in command.params if p.name and p.opts and p.opts[0].startswith("-")}
 
 
 def _stopped_exit(signum: int) -> typer.Exit:
@@ -168,19 +179,22 @@ def _output_error_exit(exc: OSError):
     return None
 
 
-SETTINGS = dict(
-    name="wormgear",
-    cls=WormgearGroup,
-    help="Transmission error and backlash of precision drives: worm, spur and belt stages in series.\n\n"
-    "Example: wormgear analyze configs/mch50.toml --unit arcsec",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    rich_markup_mode=None,
-    context_settings={"help_option_names": ["-h", "--help"]},
-)
+def _typer() -> typer.Typer:
+    """The application's settings on a new (empty) typer app."""
+    return typer.Typer(
+        name="wormgear",
+        cls=WormgearGroup,
+        help="Transmission error and backlash of precision drives: worm, spur and belt stages in series.\n\n"
+             "Example: wormgear analyze configs/mch50.toml --unit arcsec",
+        no_args_is_help=True,
+        add_completion=False,
+        pretty_exceptions_enable=False,
+        rich_markup_mode=None,
+        context_settings={"help_option_names": ["-h", "--help"]},
+    )
 
-app = typer.Typer(**SETTINGS)
+
+app = _typer()
 
 
 def _version(value: bool) -> None:
@@ -204,10 +218,10 @@ def single_command_app(name: str):
     there is no such command.  typer then builds one command instead of all of
     them; that command behaves exactly as in the full app.  Used by ``main``."""
     infos = [c for c in app.registered_commands
-             if (c.name or c.callback.__name__.replace("_", "-")) == name]
+             if (c.name or getattr(c.callback, "__name__", "").replace("_", "-")) == name]
     if not infos:
         return None
-    single = typer.Typer(**SETTINGS)
+    single = _typer()
     single.registered_commands = infos
 
     @single.callback()

@@ -65,16 +65,22 @@ def analyze(
         render(_tables(report, unit) + _budget_tables(report, unit), output, [drive])
 
 
+def _table(title: str, headers, left=(0,)):
+    """A :class:`~wormgear_cli.output.tables.Table` titled ``title``: the columns at the ``left``
+    positions aligned left (the first: the quantity), the numbers right."""
+    from wormgear_cli.output.tables import Column, Table
+
+    return Table(title, [Column(h, "left" if i in left else "right") for i, h in enumerate(headers)])
+
+
 def _budget_tables(r: dict, unit: str) -> list:
     from rich.markup import escape
-    from rich.table import Table
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     spurs = [st for st in r["stages"] if st["kind"] == "spur"]
     kin = f" ({spurs[-1]['kinematics']} kinematics)" if spurs else ""
-    bt = Table(title=escape(f"full error budget, TE at the output [{unit}]{kin}"), title_justify="left")
-    for col in ("source", "kind", "order", "amplitude", "origin", "share"):
-        bt.add_column(col, justify="left" if col in ("source", "kind", "origin") else "right")
+    bt = _table(f"full error budget, TE at the output [{unit}]{kin}",
+                ("source", "kind", "order", "amplitude", "origin", "share"), left=(0, 1, 4))
     for ln in r["budget"]:
         bt.add_row(ln["source"], ln["kind"], f"{ln['order']:g}", a(ln["amplitude"]), ln["origin"],
                    f"{ln['share_pct']:.1f} %")
@@ -82,9 +88,8 @@ def _budget_tables(r: dict, unit: str) -> list:
     note = escape(f"total_with_budget: linear sum {a(t['transmission_error_linear'])}, root-sum-square "
                   f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
                   "(docs/budget.md); the paper's total above is unchanged")
-    vt = Table(title="values used", title_justify="left")
-    for col in ("key", escape("value [mm]"), "origin"):  # in the keys' own unit (_mm), as the spec writes them
-        vt.add_column(col, justify="right" if col.startswith("value") else "left")
+    # the values in the keys' own unit (_mm), as the spec writes them
+    vt = _table("values used", ("key", "value [mm]", "origin"), left=(0, 2))
     for v in r["values_used"]:
         vt.add_row(v["key"], f"{round(v['value_um'] / 1000.0, 9):g}", v["origin"])
     return [bt, note, vt]
@@ -105,16 +110,12 @@ def _stage_title(r: dict, st: dict) -> str:
 
 def _spur_table(r: dict, st: dict, unit: str, title: str) -> list:
     from rich.markup import escape
-    from rich.table import Table
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
     at_output = st["ratio_after"] != 1.0
-    gt = Table(title=escape(title), title_justify="left")
-    cols = ("quantity", "eccentricity", "deformation", "value") + (("at output",) if at_output else ()) + (
-        "share of total",)
-    for col in cols:
-        gt.add_column(col, justify="left" if col == "quantity" else "right")
+    gt = _table(title, ("quantity", "eccentricity", "deformation", "value") + (("at output",) if at_output else ())
+                + ("share of total",))
     for q, parts in (("transmission_error", tp), ("backlash", bp)):
         first = a(parts["eccentricity"]) if "eccentricity" in parts else f"residual {a(parts['residual'])}"
         row = [q.replace("_", " "), first, a(parts["deformation"]), a(st[q])]
@@ -133,13 +134,10 @@ def _spur_table(r: dict, st: dict, unit: str, title: str) -> list:
 
 def _worm_table(r: dict, st: dict, unit: str, title: str) -> list:
     from rich.markup import escape
-    from rich.table import Table
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, wp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
-    wt = Table(title=escape(title), title_justify="left")
-    for col in ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"):
-        wt.add_column(col, justify="left" if col == "quantity" else "right")
+    wt = _table(title, ("quantity", "central", "+/- envelope", "bound", "at output", "share of total"))
     wt.add_row("transmission error", a(tp["deformation"]), a(tp["envelope_halfwidth"]), a(st["transmission_error"]),
                a(c["transmission_error"]), f"{c['transmission_error_pct']:.1f} %")
     if "residual" in wp:
@@ -158,13 +156,10 @@ def _worm_table(r: dict, st: dict, unit: str, title: str) -> list:
 
 def _belt_table(r: dict, st: dict, unit: str, title: str) -> list:
     from rich.markup import escape
-    from rich.table import Table
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
-    bt = Table(title=escape(title), title_justify="left")
-    for col in ("quantity", "stretch", "other", "value", "at output", "share of total"):
-        bt.add_column(col, justify="left" if col == "quantity" else "right")
+    bt = _table(title, ("quantity", "stretch", "other", "value", "at output", "share of total"))
     bt.add_row("transmission error", a(tp["stretch"]), a(tp["periodic"]), a(st["transmission_error"]),
                a(c["transmission_error"]), f"{c['transmission_error_pct']:.1f} %")
     bt.add_row("backlash", a(bp["stretch"]), a(bp["clearance"]), a(st["backlash"]), a(c["backlash"]),
@@ -179,24 +174,19 @@ _STAGE_TABLES = {"spur": _spur_table, "worm": _worm_table, "belt": _belt_table}
 
 
 def _tables(r: dict, unit: str) -> list:
-    from rich.markup import escape
-    from rich.table import Table
-
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     out: list = []
     back = r["stages"][::-1]  # from the output back to the motor
     for k, st in enumerate(back):
         title = f"{_stage_title(r, st)} [{unit}]"
         out += _STAGE_TABLES[st["kind"]](r, st, unit, f"{r['drive']}: {title}" if k == 0 else title)
-    tt = Table(title=escape(f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]"), title_justify="left")
-    tt.add_column("quantity")
+    labels = []
     for st in back:
         if _legacy(r):
-            label = "gear stage" if st["kind"] == "spur" else "worm stage / i_c"
+            labels.append("gear stage" if st["kind"] == "spur" else "worm stage / i_c")
         else:
-            label = st["name"] if st["ratio_after"] == 1.0 else f"{st['name']} / {st['ratio_after']:g}"
-        tt.add_column(escape(label), justify="right")
-    tt.add_column("total", justify="right")
+            labels.append(st["name"] if st["ratio_after"] == 1.0 else f"{st['name']} / {st['ratio_after']:g}")
+    tt = _table(f"total at the output (ratio {r['ratios']['total']:g}) [{unit}]", ("quantity", *labels, "total"))
     t = r["total"]
     for q in ("transmission_error", "backlash"):
         tt.add_row(q.replace("_", " "), *(a(st["contribution"][q]) for st in back), a(t[q]))

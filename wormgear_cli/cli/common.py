@@ -121,13 +121,14 @@ def output_format(format, output: Path | None) -> str:
 
     fmt = getattr(format, "value", format)
     ctx = get_current_context(silent=True)
-    if ctx is None or is_stdout(output):
+    file = output_file(output)
+    if ctx is None or file is None:
         return fmt
     param, explicit = _format_param(ctx)
     if param is None:
         return fmt
     choices = [getattr(c, "value", c) for c in getattr(param.type, "choices", ())]
-    suffix = Path(output).suffix.lower()
+    suffix = Path(file).suffix.lower()
     named = (_suffix_formats() if "table" not in choices and "text" not in choices else SUFFIX_FORMATS).get(suffix)
     command = ctx.command_path
     if named is not None and named != fmt and explicit:
@@ -173,9 +174,9 @@ def parse_count(text: str) -> int:
 @lru_cache(maxsize=1)
 def _count_types():
     """The click types of counts (built on first use: typer's click is imported with typer)."""
-    from typer._click.types import IntParamType, IntRange
+    from typer._click.types import IntParamType, IntRange, ParamType
 
-    class _Parse:
+    class _Parse(ParamType):  # (before the integer type in the method order: parses, then hands on)
         def convert(self, value, param, ctx):
             if isinstance(value, str):
                 try:
@@ -236,6 +237,11 @@ def is_stdout(output: Path | None) -> bool:
     return descriptor_of(output) == 1
 
 
+def output_file(output: Path | None) -> Path | None:
+    """The file ``-o`` names, or None when it means stdout (:func:`is_stdout`)."""
+    return None if output is None or is_stdout(output) else output
+
+
 def announce_written(path: str | Path) -> None:
     """Say on stderr that the command wrote ``path``: ``wrote PATH``.  Every command that
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
@@ -282,29 +288,31 @@ def _scaled(v, scale: float):
 def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
     """Send a result to stdout (``output`` None or ``-``), or atomically to ``output``
     (refusing to overwrite any of ``inputs``) and announce it."""
-    if is_stdout(output):
+    file = output_file(output)
+    if file is None:
         write_stdout(data)
         return
     from wormgear_cli.files import atomic_write
 
-    atomic_write(output, data, tuple(inputs))
-    announce_written(output)
+    atomic_write(file, data, tuple(inputs))
+    announce_written(file)
 
 
 def emit_stream(chunks: Iterable, output: Path | None, inputs: Iterable = ()) -> None:
     """:func:`emit` of a result given in pieces (str or bytes), each written as it comes: to stdout,
     or to a staged file renamed over ``output`` at the end (:func:`wormgear_cli.files.atomic_stream`);
     a big result is never held whole."""
-    if is_stdout(output):
+    file = output_file(output)
+    if file is None:
         for data in chunks:
             write_stdout(data)
         return
     from wormgear_cli.files import atomic_stream
 
-    with atomic_stream(output, tuple(inputs)) as write:
+    with atomic_stream(file, tuple(inputs)) as write:
         for data in chunks:
             write(data)
-    announce_written(output)
+    announce_written(file)
 
 
 # --- --jobs and --shard ------------------------------------------------------------------
@@ -344,8 +352,10 @@ class PartOutput:
         from wormgear_cli.batch import manifest
 
         special = output is not None and Path(output).exists() and not Path(output).is_file()
-        self.active = part is not None and not is_stdout(output) and not special  # /dev/null: no manifest
+        file = output_file(output)
+        self.active = part is not None and file is not None and not special  # /dev/null: no manifest
         self.output, self.drive = output, drive
+        self.file = file if self.active else None  # the part's file, beside which its manifest goes
         self.hash = manifest.Hashing()
         if self.active:
             part_info = {"k": part.k, "n": part.n, "first": int(first), "stop": int(stop), "total": int(total)}
@@ -358,11 +368,11 @@ class PartOutput:
                     f"use --format {' or '.join(mergeable)}")
 
     def done(self) -> bool:
-        if not self.active:
+        if self.file is None:  # (not active)
             return False
         from wormgear_cli.batch.manifest import resume_note
 
-        note = resume_note(self.output, self.key)
+        note = resume_note(self.file, self.key)
         if note is not None:
             typer.echo(f"part {self.key['part']['k']}/{self.key['part']['n']}: {note}", err=True)
         return note is not None
@@ -373,13 +383,13 @@ class PartOutput:
         self.finish(inputs)
 
     def finish(self, inputs: Iterable = ()) -> None:
-        if not self.active:
+        if self.file is None:  # (not active)
             return
         from wormgear_cli.batch import manifest
         from wormgear_cli.files import atomic_write
 
-        text = manifest.document(self.key, self.drive, self.hash.file, Path(self.output).name)
-        atomic_write(manifest.manifest_path(self.output), text, tuple(inputs))
+        text = manifest.document(self.key, self.drive, self.hash.file, Path(self.file).name)
+        atomic_write(manifest.manifest_path(self.file), text, tuple(inputs))
 
 
 # --- terminals -------------------------------------------------------------------------------
@@ -473,6 +483,7 @@ class Progress:
 
 def _rich_table(t):
     """A :class:`wormgear_cli.output.tables.Table` as a rich Table (text is never read as markup)."""
+    from rich import box
     from rich.markup import escape as markup
     from rich.table import Table
     from rich.text import Text
@@ -483,9 +494,10 @@ def _rich_table(t):
     def escape(text):  # rich markup escaped, control characters written out (before the layout)
         return markup(printable(text, "\n"))
 
-    out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header)
+    out = Table(title=escape(t.title), title_justify="left", show_header=t.show_header,
+                box=getattr(box, t.box.upper()), padding=(0, t.padding))
     for c in t.columns:
-        out.add_column(escape(c.header), justify=c.justify)
+        out.add_column(escape(c.header), justify=c.justify, min_width=c.min_width)
     for row in t.rows:
         out.add_row(*(Text(printable(c.text, "\n"), style=c.style or "") if isinstance(c, Cell) else escape(str(c))
                       for c in row))
@@ -519,7 +531,8 @@ def _fits(table, console, width: int) -> bool:
 
     from rich.console import Console
 
-    probe = Console(file=io.StringIO(), width=width, no_color=True, color_system=None, highlight=False,
+    drawing = io.StringIO()
+    probe = Console(file=drawing, width=width, no_color=True, color_system=None, highlight=False,
                     force_terminal=False, soft_wrap=False, legacy_windows=False)
     title, caption = table.title, table.caption
     table.title = table.caption = None
@@ -527,7 +540,7 @@ def _fits(table, console, width: int) -> bool:
         probe.print(table)
     finally:
         table.title, table.caption = title, caption
-    drawn = probe.file.getvalue()
+    drawn = drawing.getvalue()
     if any(len(line.rstrip()) > width for line in drawn.splitlines()):
         return False
     return not (_words(table) - Counter(_RULES.sub(" ", drawn).split()))

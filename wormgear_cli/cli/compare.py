@@ -81,15 +81,15 @@ def _letters(n: int) -> list[str]:
 
 
 def _tables(doc: dict) -> list:
-    """The table view: which drive is which, then totals, budget lines and yields with differences."""
-    from rich import box
+    """The table view: which drive is which, then totals, budget lines and yields with differences
+    (:class:`~wormgear_cli.output.tables.Table`)."""
     from rich.markup import escape
-    from rich.table import Table
+
+    from wormgear_cli.output.tables import Column, Table
 
     unit = doc["unit"]
     names = _letters(len(doc["drives"]))
-    kw = dict(box=box.SIMPLE_HEAD, padding=(0, 1), title_justify="left")
-    out = [escape(f"{n} = {d['file']} ({d['drive']})") for n, d in zip(names, doc["drives"])]
+    out: list = [escape(f"{n} = {d['file']} ({d['drive']})") for n, d in zip(names, doc["drives"])]
 
     def angle(x):
         return "-" if x is None else fmt_angle(x, unit)
@@ -98,14 +98,10 @@ def _tables(doc: dict) -> list:
         return "-" if x is None else ("+" if x > 0 else "") + fmt_angle(x, unit)
 
     def table(title: str, first: str, rows, value, difference) -> Table:
-        t = Table(title=escape(title), **kw)
-        t.add_column(first)
-        for n in names:
-            t.add_column(n, justify="right")
-        for n in names[1:]:
-            t.add_column(f"{n} - {names[0]}", justify="right")
+        t = Table(title, [Column(first), *(Column(n, "right") for n in names),
+                          *(Column(f"{n} - {names[0]}", "right") for n in names[1:])], box="simple_head")
         for label, q in rows:
-            t.add_row(escape(label), *(value(v) for v in q["values"]), *(difference(d) for d in q["differences"][1:]))
+            t.add_row(label, *(value(v) for v in q["values"]), *(difference(d) for d in q["differences"][1:]))
         return t
 
     out.append(table(f"totals at the output [{unit}]", "quantity", ((q["label"], q) for q in doc["totals"].values()),

@@ -23,7 +23,7 @@ from wormgear_cli.output.writers import WRITERS
 #: the formats and the file name endings that stand for them (from the writer registry)
 FORMATS = "|".join(WRITERS)
 #: --format's choices: the writer registry's names
-CompensateFormat = Enum("CompensateFormat", {name: name for name in WRITERS}, type=str)
+CompensateFormat = Enum("CompensateFormat", {name: name for name in WRITERS}, type=str)  # type: ignore[misc]  # (members from the registry: mypy reads literal members only)
 _FORMAT_HELP = ("File to write: " + "; ".join(f"{w.name}: {w.summary}" for w in WRITERS.values())
                 + ". Default: from the -o file's ending ("
                 + ", ".join(f"{' or '.join(w.extensions)} {w.name}" for w in WRITERS.values()) + ").")

@@ -107,6 +107,49 @@ def diagnose(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = (drive, data)
+    output = _check_paths(drive, data, output, write_spec, plot)
+    spec = load_spec(drive)
+    check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
+
+    def run(progress=None):
+        return run_diagnose(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+                            resamples=resamples, jobs=jobs_count(jobs), progress=progress, data_name=str(data),
+                            write_spec=None if write_spec is None else str(write_spec))
+
+    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
+        console = terminal_console(stderr=True)
+        with console.status("diagnosing") as status:
+            result = run(progress=lambda text: status.update(text))
+    else:
+        result = run()
+    doc = result.document
+    figure = None
+    if plot is not None:
+        from wormgear_cli.plots.diagnose import draw
+
+        figure = draw(result.diagnosis, doc, unit)
+    if write_spec is not None and result.spec_toml is not None:
+        from wormgear_cli.files import atomic_write
+
+        atomic_write(write_spec, result.spec_toml, inputs)
+        announce_written(write_spec)
+    if plot is not None and figure is not None:
+        from wormgear_cli.plots.diagnose import save
+
+        save(figure, plot)
+        announce_written(plot)
+    if fmt == "json":
+        emit(json_text(doc), output, inputs)
+    else:
+        render(_tables(doc, unit), output, inputs)
+
+
+def _check_paths(drive: Path, data: Path, output: Path | None, write_spec: Path | None,
+                 plot: Path | None) -> Path | None:
+    """Refuse outputs that would overwrite an input or each other, and a plot or spec file of the wrong
+    kind, before any work; returns ``output`` (None for stdout)."""
+    from wormgear_cli.errors import UsageError
     from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
 
     if output is not None and str(output) == "-":
@@ -114,7 +157,7 @@ def diagnose(
     targets = [(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")]
     for target, what in targets:
         check_output_path(target, what)
-        refuse_input(target, inputs, what)
+        refuse_input(target, (drive, data), what)
     refuse_same_outputs(targets)
     if plot is not None:
         import importlib.util
@@ -126,45 +169,13 @@ def diagnose(
             raise UsageError(INSTALL_HINT)
     if write_spec is not None and Path(write_spec).suffix.lower() != ".toml":
         raise UsageError(f"{write_spec}: --write-spec writes a drive spec; expected a file name ending in .toml")
-
-    spec = load_spec(drive)
-    check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
-    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
-    options = dict(alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects, resamples=resamples,
-                   jobs=jobs_count(jobs),
-                   data_name=str(data), write_spec=None if write_spec is None else str(write_spec))
-    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
-        console = terminal_console(stderr=True)
-        with console.status("diagnosing") as status:
-            result = run_diagnose(spec, meas, progress=lambda text: status.update(text), **options)
-    else:
-        result = run_diagnose(spec, meas, **options)
-    doc = result.document
-    figure = None
-    if plot is not None:
-        from wormgear_cli.plots.diagnose import draw
-
-        figure = draw(result.diagnosis, doc, unit)
-    if write_spec is not None:
-        from wormgear_cli.files import atomic_write
-
-        atomic_write(write_spec, result.spec_toml, inputs)
-        announce_written(write_spec)
-    if figure is not None:
-        from wormgear_cli.plots.diagnose import save
-
-        save(figure, plot)
-        announce_written(plot)
-    if fmt == "json":
-        emit(json_text(doc), output, inputs)
-    else:
-        render(_tables(doc, unit), output, inputs)
+    return output
 
 
 def _tables(doc: dict, unit: str) -> list:
-    """The report as rich tables (every angle converted from arcsec to ``unit``; effect parameters stay in
-    their catalogue units)."""
-    from rich.table import Table
+    """The report as tables (:class:`~wormgear_cli.output.tables.Table`) and lines (every angle converted
+    from arcsec to ``unit``; effect parameters stay in their catalogue units)."""
+    from wormgear_cli.output.tables import Table
 
     v = _View(unit)
     out = _head(doc, v) + [_gap_table(doc, v)] + _nuisance_lines(doc, v) + _effect_parts(doc, v)
@@ -189,14 +200,12 @@ class _View:
         return "-" if x is None else fmt_angle(x * self.factor, self.unit)
 
     @staticmethod
-    def table(title, cols, keep=1):
-        from rich.markup import escape
-        from rich.table import Table
+    def table(title: str, cols: list[str], left=(0,)):
+        """A :class:`~wormgear_cli.output.tables.Table`: the columns at the ``left`` positions aligned left
+        (the labels), the numbers right."""
+        from wormgear_cli.output.tables import Column, Table
 
-        t = Table(title=escape(title), title_justify="left")
-        for i, c in enumerate(cols):
-            t.add_column(escape(c), justify="left" if i < keep else "right", no_wrap=i < keep)
-        return t
+        return Table(title, [Column(c, "left" if i in left else "right") for i, c in enumerate(cols)])
 
 
 def _head(doc: dict, v: _View) -> list:
@@ -252,7 +261,7 @@ def _effect_parts(doc: dict, v: _View) -> list:
         return []
     et = v.table("effects found", ["effect / parameter", "value", "95 % interval"])
     for e in doc["effects_found"]:
-        et.add_row(escape(e["name"] + ("" if e["separable"] else " (size not separable)")), "", "")
+        et.add_row(e["name"] + ("" if e["separable"] else " (size not separable)"), "", "")
         for key, value in e["parameters"].items():
             iv = e["interval_95"].get(key)
             if iv:
@@ -261,7 +270,7 @@ def _effect_parts(doc: dict, v: _View) -> list:
                 span = "fixed"
             else:
                 span = "not determined"
-            et.add_row(escape(f"  {key}"), f"{value:.4g}", span)
+            et.add_row(f"  {key}", f"{value:.4g}", span)
     out = [et]
     for e in doc["effects_found"]:
         stab = (f"best in {100 * e['stability']:.0f} % of resamples of whole runs" if e["stability"] is not None
@@ -282,12 +291,10 @@ def _effect_parts(doc: dict, v: _View) -> list:
 def _candidate_parts(doc: dict, v: _View) -> list:
     from rich.markup import escape
 
-    ct = v.table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], keep=2)
-    ct.columns[3].justify = "left"
+    ct = v.table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], left=(0, 1, 3))
     for c in doc["candidates"]:
         p = c.get("p_adjusted")
-        ct.add_row(escape(c["name"]), escape(c["status"]), "-" if p is None else f"{p:.2g}",
-                   escape(c.get("reason", "")))
+        ct.add_row(c["name"], c["status"], "-" if p is None else f"{p:.2g}", c.get("reason", ""))
     out = [ct]
     for c in doc["candidates"]:
         if c.get("remedy"):
@@ -313,16 +320,15 @@ def _unexplained_row(u: dict, v: _View) -> tuple[str, str]:
 
 
 def _unexplained_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
 
     if not doc["unexplained"]:
         return []
-    ut = v.table(f"unexplained residual (after) [{v.unit}]", ["what", "mode", "size", "p (adjusted)", "note"])
-    ut.columns[4].justify = "left"
+    ut = v.table(f"unexplained residual (after) [{v.unit}]", ["what", "mode", "size", "p (adjusted)", "note"],
+                 left=(0, 4))
     for u in doc["unexplained"]:
         what, size = _unexplained_row(u, v)
         p = u.get("p_adjusted")
-        ut.add_row(escape(what), u["mode"], size, "-" if p is None else f"{p:.2g}", escape(u["explanation"]))
+        ut.add_row(what, u["mode"], size, "-" if p is None else f"{p:.2g}", u["explanation"])
     return [ut]
 
 
@@ -335,7 +341,7 @@ def _fit_parts(doc: dict, v: _View) -> list:
         pt = v.table("phases of the spec's periodic sources [deg]" + ("" if fit["phases_fitted"] else " (held)"),
                      ["source", "order", "amplitude", "specified", "fitted"])
         for p in fit["phases"]:
-            pt.add_row(escape(p["source"]), f"{p['order']:g}", a(p["amplitude_arcsec"]), f"{p['specified_deg']:.2f}",
+            pt.add_row(p["source"], f"{p['order']:g}", a(p["amplitude_arcsec"]), f"{p['specified_deg']:.2f}",
                        f"{p['fitted_deg']:.2f}")
         out.append(pt)
         if fit["note"]:
@@ -370,14 +376,14 @@ def _order_parts(doc: dict, v: _View) -> list:
     a = v.a
     ot = v.table(f"residual at the physical orders [{v.unit}]", ["order", "shaft or mesh", "common before",
                                                                  "common after", "diff. before", "diff. after"],
-                 keep=2)
+                 left=(0, 1))
     unresolved = []
     for b, f in zip(doc["orders"]["before"], doc["orders"]["after"]):
         label = "constant" if b["order"] == 0 else b["label"]
         if not b["identifiable"]:
             unresolved.append(f"{b['order']:g}")
             continue
-        ot.add_row(f"{b['order']:g}", escape(label), a(b["common_arcsec"]), a(f["common_arcsec"]),
+        ot.add_row(f"{b['order']:g}", label, a(b["common_arcsec"]), a(f["common_arcsec"]),
                    a(b.get("differential_arcsec")), a(f.get("differential_arcsec")))
     out = [ot]
     if unresolved:
@@ -412,12 +418,12 @@ def _iso_table(doc: dict, v: _View):
 
 
 def _keep_numbers_whole(t) -> None:
-    """Let a narrow terminal fold words and headers, never cut a number: every column folds
-    instead of ending in an ellipsis, and the number columns (right-aligned) are at least as
-    wide as their longest cell, so only the text columns give way."""
-    for col in t.columns:
-        col.overflow = "fold"
-        if col.justify == "right":
-            cells = [c for c in col._cells if isinstance(c, str)]
-            if cells:
-                col.min_width = max(len(c) for c in cells)
+    """Let a narrow terminal fold words and headers, never cut a number: the number columns
+    (right-aligned) are at least as wide as their longest cell, so only the text columns give
+    way (every column folds instead of ending in an ellipsis: :func:`~wormgear_cli.cli.common.render`)."""
+    from dataclasses import replace
+
+    for j, col in enumerate(t.columns):
+        cells = [row[j] if j < len(row) else "" for row in t.rows]
+        if col.justify == "right" and cells:
+            t.columns[j] = replace(col, min_width=max(len(c) for c in cells if isinstance(c, str)))

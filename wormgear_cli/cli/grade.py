@@ -105,14 +105,13 @@ _ROWS = (
 
 
 def _table(doc: dict):
-    from rich.markup import escape
-    from rich.table import Table
+    """The tolerances as a :class:`~wormgear_cli.output.tables.Table`."""
+    from wormgear_cli.output.tables import Column, Table
 
-    t = Table(title=escape(f"grade {doc['grade']}: m = {doc['module_mm']:g} mm, d = {doc['diameter_mm']:g} mm, "
-                           f"b = {doc['face_width_mm']:g} mm, z = {doc['teeth']} [um]"), title_justify="left")
-    for col in ("tolerance", "meaning", "value", "source (ISO)"):
-        t.add_column(col, justify="right" if col == "value" else "left")
+    t = Table(f"grade {doc['grade']}: m = {doc['module_mm']:g} mm, d = {doc['diameter_mm']:g} mm, "
+              f"b = {doc['face_width_mm']:g} mm, z = {doc['teeth']} [um]",
+              [Column("tolerance"), Column("meaning"), Column("value", "right"), Column("source (ISO)")])
     for key, sym, meaning, src in _ROWS:
         v = doc[key]
-        t.add_row(escape(sym), meaning, "n/a" if v is None else f"{v:g}", src)
+        t.add_row(sym, meaning, "n/a" if v is None else f"{v:g}", src)
     return t

@@ -88,7 +88,7 @@ def _write(chunks, output, inputs) -> None:
 
 def _tolerance(parts, drive, fmt, target_yield, jobs, output, inputs) -> None:
     from wormgear_cli.cli.common import emit, json_text, render
-    from wormgear_cli.cli.tolerance import _SECONDS_PER_SAMPLE, _tables
+    from wormgear_cli.cli.tolerance import _tables, allocation_seconds
     from wormgear_cli.errors import UsageError
     from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
@@ -108,9 +108,8 @@ def _tolerance(parts, drive, fmt, target_yield, jobs, output, inputs) -> None:
         return
     summary = work.tolerance_summary(s, parts)
     target = target_yield if target_yield is not None else spec.requirements.min_yield
-    plan = engine.allocation_runs(s, target, s.options.samples)
-    cost = plan[0] * plan[1] * _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)] if plan else 0.0
-    with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
+    runs = engine.allocation_runs(s, target, s.options.samples)
+    with Progress(runs[1] if runs else 0, allocation_seconds(spec, runs), "allocation") as bar:
         doc = study.finish(s, summary, target_yield, s.options.samples, None, bar.advance)
     if fmt == "json":
         emit(json_text(doc), output, inputs)

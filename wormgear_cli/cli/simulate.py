@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 from typing import Annotated
@@ -214,6 +215,45 @@ def synth(
 
     Example: wormgear synth configs/mch50.toml -o data.csv --truth truth.json --seed 1 --temperature warmup:20:30:1800
     """
+    _synth(drive, output, truth, plot, SynthOptions(
+        seed=seed, plan=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revs=revs,
+        dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s,
+        effect=tuple(effect) if effect is not None else None, spec_effects=spec_effects,
+        noise_arcsec=noise_arcsec, run_noise_arcsec=run_noise_arcsec, run_noise=getattr(run_noise, "value", run_noise),
+        temperature=temperature, load=load, random_phases=random_phases, offset_arcsec=offset_arcsec))
+
+
+@dataclass(frozen=True)
+class SynthOptions:
+    """The ``synth`` command's options as given (checked and parsed by :func:`_synth`): the seed, the
+    plan's (``plan`` "iso" or "dense", ``targets``, ``points``, ``runs``, ``revs``, ``dwell_s`` [s] or None,
+    ``jitter``, ``cycles``, ``cycle_gap_s`` [s]), the effects (``effect``: the ``--effect`` texts,
+    ``spec_effects``), the noise [arcsec] (``run_noise``: "offset" or "drift"), the ``temperature`` and
+    ``load`` programmes' texts, ``random_phases`` and ``offset_arcsec``."""
+
+    seed: int
+    plan: str
+    targets: int
+    points: int
+    runs: int
+    revs: float
+    dwell_s: float | None
+    jitter: float
+    cycles: int
+    cycle_gap_s: float
+    effect: tuple[str, ...] | None
+    spec_effects: bool
+    noise_arcsec: float
+    run_noise_arcsec: float
+    run_noise: str
+    temperature: str
+    load: str
+    random_phases: bool
+    offset_arcsec: float
+
+
+def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | None, o: SynthOptions) -> None:
+    """``synth``: check the options and the paths, draw the data, write the CSV (and the truth, the plot)."""
     import math
 
     from wormgear_cli.analysis.synth import (
@@ -228,14 +268,14 @@ def synth(
     from wormgear_cli.errors import UsageError
     from wormgear_cli.spec.loader import load_spec
 
-    for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
-                        ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s),
-                        ("--cycle-gap-s", cycle_gap_s)):
+    for name, value in (("--noise-arcsec", o.noise_arcsec), ("--run-noise-arcsec", o.run_noise_arcsec),
+                        ("--offset-arcsec", o.offset_arcsec), ("--dwell-s", o.dwell_s),
+                        ("--cycle-gap-s", o.cycle_gap_s)):
         if value is not None and not math.isfinite(value):
             raise UsageError(f"{name}: expected a finite number, got {value}")
-    temp_prog = parse_temperature(temperature)
-    load_prog = parse_load(load)
-    effects = parse_effects(effect)
+    temp_prog = parse_temperature(o.temperature)
+    load_prog = parse_load(o.load)
+    effects = parse_effects(o.effect)
     if plot is not None:
         from wormgear_cli.plots import check_plot_path
 
@@ -248,20 +288,20 @@ def synth(
     for p in outs:
         refuse_input(p, [drive], "name")
     spec = load_spec(drive)
-    the_plan = Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
-                    dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s)
+    the_plan = Plan(kind=o.plan, targets=o.targets, points=o.points, runs=o.runs, revolutions=o.revs,
+                    dwell_s=o.dwell_s, jitter=o.jitter, cycles=o.cycles, cycle_gap_s=o.cycle_gap_s)
     _check_synth_memory(the_plan)
     result = synthesize(
         spec,
         plan=the_plan,
         effects=effects,
-        noise=Noise(noise_arcsec, run_noise_arcsec, getattr(run_noise, "value", run_noise)),
-        seed=seed,
+        noise=Noise(o.noise_arcsec, o.run_noise_arcsec, o.run_noise),
+        seed=o.seed,
         temperature=temp_prog,
         load=load_prog,
-        random_phases=random_phases,
-        include_spec_effects=spec_effects,
-        offset_arcsec=offset_arcsec,
+        random_phases=o.random_phases,
+        include_spec_effects=o.spec_effects,
+        offset_arcsec=o.offset_arcsec,
     )
     warn_if_absurd({"error": result.columns["error_arcsec"]}, drive, "arcsec")
     text = format_csv(result)

@@ -30,6 +30,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    output_file,
     output_format,
     render,
     say,
@@ -213,7 +214,8 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
         if fmt == "csv" and plot is None:
             chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance, jobs)
             rows = -1  # the header line
-            if is_stdout(output):
+            file = output_file(output)
+            if file is None:
                 for data in chunks:  # streamed block by block: memory stays constant
                     rows += data.count(b"\n")
                     emit(data, None)
@@ -221,12 +223,12 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
                 return
             from wormgear_cli.files import atomic_stream
 
-            with atomic_stream(output, (drive,)) as write:  # streamed to a staged file, renamed at the end
+            with atomic_stream(file, (drive,)) as write:  # streamed to a staged file, renamed at the end
                 write_part = out.hash.wrap(write)
                 for data in chunks:
                     rows += data.count(b"\n")
                     write_part(data)
-            announce_written(output)
+            announce_written(file)
             out.finish([drive])
             _note_skipped(sw, stop - start - rows)
             return

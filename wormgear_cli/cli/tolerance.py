@@ -23,6 +23,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    output_file,
     output_format,
     render,
     say,
@@ -119,26 +120,11 @@ def tolerance(
     metric_set = getattr(metrics, "value", metrics)
     part = shard_part(shard)
     k_n = (part.k, part.n) if part is not None else None
-    if summarize is not None and k_n is not None:
-        raise UsageError("--summarize cannot be combined with --shard (merge the parts: wormgear merge)")
-    if summarize is not None and fmt in ("csv", "npy"):
-        raise UsageError("--summarize reports on samples: use --format table or json")
-    if fmt == "npy" and is_stdout(output):
-        raise UsageError("--format npy writes binary columns: give -o FILE.npy")
-    if plot is not None:
-        from wormgear_cli.files import refuse_input, refuse_same_outputs
-        from wormgear_cli.plots import check_plot_path
-
-        check_plot_path(plot)
-        refuse_input(plot, [drive] + ([summarize] if summarize is not None else []), "--plot")
-        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    if target_yield is not None and not 0.0 < target_yield < 1.0:
-        raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
+    _check_usage(drive, fmt, output, plot, summarize, target_yield, sharded=k_n is not None)
     spec = load_spec(drive)
     n_rows = None
-    npy_input = summarize is not None and report.is_npy(summarize)
     if summarize is not None:
-        metric_set = (report.read_npy_header if npy_input else report.read_header)(summarize).metric_set
+        metric_set = (report.read_npy_header if report.is_npy(summarize) else report.read_header)(summarize).metric_set
     options = engine.Options(samples=samples, seed=seed, metrics=metric_set, plan=getattr(plan, "value", plan),
                              targets=targets, points=points, unit=unit, shard=k_n, jobs=jobs_count(jobs))
     if summarize is not None:
@@ -153,21 +139,14 @@ def tolerance(
                      options.samples) if fmt != "table" else PartOutput("tolerance", drive, output, None, {}, 0, 0, 0)
     if out.done():
         return
+    summary = _summary(s, out, inputs, fmt, summarize)
     if summarize is not None:
-        summary = engine.summarize(s, lambda: (report.read_npy if npy_input else report.read_samples)(summarize, s))
         n_rows = summary.samples
-    elif fmt in ("csv", "npy"):
-        summary = _samples_run(s, out, inputs, fmt)
-    else:
-        seconds = (s.stop - s.start) * _SECONDS_PER_SAMPLE[metric_set]
-        with Progress(s.stop - s.start, seconds, "tolerance") as bar:
-            summary = engine.run(s, progress=bar.advance)
     if target_yield is not None and engine.metrics_for_limits(spec) is None:
         raise UsageError(f"--target-yield needs a limit in [requirements] ({engine.LIMIT_KEYS}) to count the "
                          "yield against")
-    plan = engine.allocation_runs(s, target, n_rows if n_rows is not None else samples)
-    cost = (plan[0] * plan[1] * _SECONDS_PER_SAMPLE[engine.metrics_for_limits(spec)]) if plan else 0.0
-    with Progress(plan[1] if plan else 0, cost, "allocation") as bar:
+    runs = engine.allocation_runs(s, target, n_rows if n_rows is not None else samples)
+    with Progress(runs[1] if runs else 0, allocation_seconds(spec, runs), "allocation") as bar:
         doc = study.finish(s, summary, target_yield, n_rows if n_rows is not None else samples,
                            part.label if part is not None else None, bar.advance)
     warn_if_absurd({LABELS.get(m, m): [x for x in (r["mean"], r["percentiles"]["max"]) if x is not None]
@@ -181,6 +160,51 @@ def tolerance(
         out.emit(json_text(doc), inputs)
     elif fmt == "table":
         render(_tables(doc, target), output, inputs)
+
+
+def _summary(s, out: PartOutput, inputs: list, fmt: str, summarize: Path | None):
+    """The run's summary: read from the samples of ``summarize``, or drawn (streamed out as they are drawn
+    for the csv and npy formats)."""
+    from wormgear_cli.tolerance import engine, report
+
+    if summarize is not None:
+        read = report.read_npy if report.is_npy(summarize) else report.read_samples
+        return engine.summarize(s, lambda: read(summarize, s))
+    if fmt in ("csv", "npy"):
+        return _samples_run(s, out, inputs, fmt)
+    seconds = (s.stop - s.start) * _SECONDS_PER_SAMPLE[s.options.metrics]
+    with Progress(s.stop - s.start, seconds, "tolerance") as bar:
+        return engine.run(s, progress=bar.advance)
+
+
+def _check_usage(drive: Path, fmt: str, output: Path | None, plot: Path | None, summarize: Path | None,
+                 target_yield: float | None, sharded: bool) -> None:
+    """The options that cannot go together, and the plot's path, checked before any work."""
+    from wormgear_cli.errors import UsageError
+
+    if summarize is not None and sharded:
+        raise UsageError("--summarize cannot be combined with --shard (merge the parts: wormgear merge)")
+    if summarize is not None and fmt in ("csv", "npy"):
+        raise UsageError("--summarize reports on samples: use --format table or json")
+    if fmt == "npy" and is_stdout(output):
+        raise UsageError("--format npy writes binary columns: give -o FILE.npy")
+    if plot is not None:
+        from wormgear_cli.files import refuse_input, refuse_same_outputs
+        from wormgear_cli.plots import check_plot_path
+
+        check_plot_path(plot)
+        refuse_input(plot, [drive] + ([summarize] if summarize is not None else []), "--plot")
+        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
+    if target_yield is not None and not 0.0 < target_yield < 1.0:
+        raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
+
+
+def allocation_seconds(spec, runs: tuple[int, int] | None) -> float:
+    """Expected seconds of the allocation's ``runs`` (samples per run, runs), for the progress bar."""
+    from wormgear_cli.tolerance import engine
+
+    metric_set = engine.metrics_for_limits(spec)
+    return runs[0] * runs[1] * _SECONDS_PER_SAMPLE[metric_set] if runs and metric_set is not None else 0.0
 
 
 #: sample counts above this say their expected time on stderr before they start
@@ -213,13 +237,13 @@ def _samples_run(s, out: PartOutput, inputs, fmt: str):
     sample count.  A part written with -o gets its manifest."""
     from wormgear_cli.tolerance import engine, report
 
-    output = out.output
+    output = output_file(out.output)
     seconds = (s.stop - s.start) * (_SECONDS_PER_SAMPLE[s.options.metrics] + 4e-6)
     # every CSV part carries the header; concatenate with it once (tail -n +2)
     header, rows = (report.csv_header(s), report.csv_rows) if fmt == "csv" else (report.npy_header(s),
                                                                                 report.npy_rows)
     with Progress(s.stop - s.start, seconds, "tolerance") as bar:
-        if is_stdout(output):
+        if output is None:
             write_stdout(header)  # checked: a full disk is exit 2, a closed pipe a quiet stop
             return engine.run(s, on_block=write_stdout, progress=bar.advance, render=rows)
         from wormgear_cli.files import atomic_stream
@@ -234,38 +258,36 @@ def _samples_run(s, out: PartOutput, inputs, fmt: str):
 
 
 def _tables(doc: dict, target) -> list:
-    from rich import box
+    """The report: a heading line, the metric tables, the yields, the variance shares and the allocation
+    (:class:`~wormgear_cli.output.tables.Table`), then notes."""
     from rich.markup import escape
-    from rich.table import Table
 
     from wormgear_cli.cli.common import fmt_angle
+    from wormgear_cli.output.tables import Column, Table
     from wormgear_cli.tolerance.report import short_key, variance_rows
 
     unit = doc["unit"]
     a = lambda x: "n/a" if x is None else fmt_angle(x, unit)  # noqa: E731
-    out = []
-    kw = dict(box=box.SIMPLE_HEAD, padding=(0, 1), title_justify="left")
+
+    def table(title: str, headers: tuple[str, ...], left: int = 1, padding: int = 1) -> Table:
+        return Table(title, [Column(h, "left" if i < left else "right") for i, h in enumerate(headers)],
+                     box="simple_head", padding=padding)
+
+    out: list = []
     # the heading as its own line: a table title would wrap at the (narrower) table's width
     out.append(escape(f"{doc['drive']}: {doc['samples']} sampled drives, seed {doc['seed']} [{unit}]"))
-    t1 = Table(**kw)
-    for c in ("metric", "mean", "std", "p50", "p90", "p95", "p99"):
-        t1.add_column(c, justify="left" if c == "metric" else "right")
-    t2 = Table(title=escape(f"worst case / RSS / Monte Carlo [{unit}]"), **kw)
-    for c in ("metric", "corner", "RSS", "p99.73", "max"):
-        t2.add_column(c, justify="left" if c == "metric" else "right")
+    t1 = table("", ("metric", "mean", "std", "p50", "p90", "p95", "p99"))
+    t2 = table(f"worst case / RSS / Monte Carlo [{unit}]", ("metric", "corner", "RSS", "p99.73", "max"))
     for m, r in doc["metrics"].items():
         p = r["percentiles"]
         t1.add_row(LABELS[m], a(r["mean"]), a(r["std"]), a(p["50"]), a(p["90"]), a(p["95"]), a(p["99"]))
         t2.add_row(LABELS[m], a(r["corner"]), a(r["rss"]), a(p["99.73"]), a(p["max"]))
     out += [t1, t2]
     if doc["yield"]:
-        t3 = Table(title="yield (fraction of drives within the limit, 95 % interval)", **kw)
-        for c in ("requirement", "yield", "interval"):
-            t3.add_column(c, justify="left" if c == "requirement" else "right")
-        if target is not None:
-            t3.add_column("vs target", justify="right")
+        t3 = table("yield (fraction of drives within the limit, 95 % interval)",
+                   ("requirement", "yield", "interval", *(("vs target",) if target is not None else ())))
         for key, y in doc["yield"].items():
-            row = [escape(key.replace("requirements.", "") if key != "all" else "all limits"), _pct(y["value"]),
+            row = [key.replace("requirements.", "") if key != "all" else "all limits", _pct(y["value"]),
                    f"{_pct(y['low'])} - {_pct(y['high'])}"]
             if target is not None:
                 from wormgear_cli.tolerance.statistics import Yield
@@ -275,24 +297,17 @@ def _tables(doc: dict, target) -> list:
         out.append(t3)
     metrics, shares = variance_rows(doc["sensitivity"])
     if shares:
-        t4 = Table(title="variance share (first-order index)",
-                   **{**kw, "padding": (0, 0)})
-        t4.add_column("key ", no_wrap=True)
-        for m in metrics:
-            t4.add_column(SHORT[m], justify="right")
+        t4 = table("variance share (first-order index)", ("key ", *(SHORT[m] for m in metrics)), padding=0)
         for k, values in shares:
-            label = "remainder (rest and interactions)" if k == "remainder" else escape(short_key(k))
-            t4.add_row(label, *(f"{v:.2f}" for v in values))
+            t4.add_row("remainder (rest and interactions)" if k == "remainder" else short_key(k),
+                       *(f"{v:.2f}" for v in values))
         out.append(t4)
     alloc = doc.get("allocation")
     if alloc:
-        t5 = Table(title=escape(f"tighten one tolerance (yield now {_pct(alloc['yield']['value'])}, "
-                                f"target {_pct(alloc['target'])})"), **kw)
-        for c in ("key", "step", "yield", "gain"):
-            t5.add_column(c, justify="left" if c in ("key", "step") else "right")
+        t5 = table(f"tighten one tolerance (yield now {_pct(alloc['yield']['value'])}, target {_pct(alloc['target'])})",
+                   ("key", "step", "yield", "gain"), left=2)
         for st in alloc["steps"][:8]:
-            t5.add_row(escape(short_key(st["key"])), st["step"], _pct(st["yield"]["value"]),
-                       f"{100 * st['gain']:+.2f} %")
+            t5.add_row(short_key(st["key"]), st["step"], _pct(st["yield"]["value"]), f"{100 * st['gain']:+.2f} %")
         out.append(t5)
         head, _, rest = alloc["answer"].partition(": ")  # the answer on two lines within 80 columns
         out.append(escape(f"{head}:\n  {rest}" if rest else head))

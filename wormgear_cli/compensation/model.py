@@ -314,6 +314,7 @@ def plan_model(theta, y, direction, orders: Sequence[float], labels=None, priori
                             priority=None if priority is None else tuple(priority), passes=run)
     analysis = analyse_orders(theta, y, d, list(orders), options)
     fitted = tuple(it.order for it in analysis.items if it.fitted)
+    assert analysis.coverage is not None  # (analyse_orders always measures the coverage)
     plan = ModelPlan(fitted, analysis.unwrapped, analysis.coverage, analysis.trend_degree, False,
                      analysis.both_directions)
     model = fit_plan(plan, theta, y, d, run)

@@ -156,9 +156,10 @@ class PecCurve:
         return peak_to_peak(self.fit, self.worm_order, self.harmonics, self.reference)
 
 
-def harmonics_of(worm_order: float, orders: Sequence[float], rel_tol: float = 1e-6) -> tuple[list, list]:
+def harmonics_of(worm_order: float, orders: Sequence[float], rel_tol: float = 1e-6) -> tuple[list[float], list[float]]:
     """(whole multiples of ``worm_order`` among ``orders``, the others)."""
-    carried, other = [], []
+    carried: list[float] = []
+    other: list[float] = []
     for k in orders:
         h = k / worm_order
         (carried if round(h) >= 1 and abs(h - round(h)) <= rel_tol * max(h, 1.0) else other).append(float(k))

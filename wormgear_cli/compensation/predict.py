@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.compensation.noise import Noise, noise_components
+
 #: simulated repeat tests behind a predicted figure (fewer on long files: REPLICATE_ROWS / rows)
 REPLICATES = 200
 #: rows x replicates simulated at most
@@ -76,7 +78,7 @@ class TablePrediction:
     folds: int
     before: object
     after: dict
-    noise: object
+    noise: Noise
     remainder_rms: float
     residual_orders: tuple
     replicates: int
@@ -217,7 +219,6 @@ def predict_table(make_table: Callable, theta, y, direction, run, orders=(), par
         only what the model misses is taken from the cross-validation.  None:
         both from the cross-validation, scaled by (R - 1) / R.
     """
-    from wormgear_cli.compensation.noise import noise_components
 
     theta = np.asarray(theta, dtype=float)
     y = np.asarray(y, dtype=float)

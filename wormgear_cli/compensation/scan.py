@@ -77,7 +77,8 @@ def _base_q(base: np.ndarray, sw: np.ndarray) -> np.ndarray:
     return u[:, keep]
 
 
-def order_amplitudes(theta, y, direction, candidates: Sequence[float], base=None, weights=None) -> OrderScan:
+def order_amplitudes(theta, y, direction, candidates: Sequence[float] | np.ndarray, base=None,
+                     weights=None) -> OrderScan:
     """Each candidate order fitted alone on top of the base columns.
 
     Parameters

@@ -190,8 +190,8 @@ def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     for s in sources:
         labels.setdefault(s.order, s.name)
     orders = sorted({*labels, *(c.order for c in cands.values() if c is not None and c.order is not None)})
-    groups, folded = aliasing(theta, orders)
-    folded = set(folded)
+    groups, folded_orders = aliasing(theta, orders)
+    folded = set(folded_orders)
     out = {}
     for name, c in cands.items():
         if c is None or c.order is None:
@@ -267,6 +267,13 @@ def effect_order(name: str, geometry) -> float | None:
 
     eff = EFFECTS[name]
     return float(eff.order(geometry)) if eff.order is not None else None
+
+
+def catalogue_orders(geometry) -> list[float]:
+    """The orders [cycles/rev] of the periodic catalogue effects of this drive's train (in catalogue order)."""
+    from wormgear_cli.physics.effects import train_effects
+
+    return [o for n in train_effects(geometry) if (o := effect_order(n, geometry)) is not None]
 
 
 def aliased_effects(theta, name: str, names, geometry) -> list[tuple[str, float]]:

@@ -22,9 +22,9 @@ def orthonormal(x: np.ndarray, rtol: float = 1e-7, own: bool = False):
         xs = np.divide(x, norms, out=x if own and x.flags.writeable else None)
     else:
         xs = x[:, ok] / norms[ok]
-    x = None
+    del x  # (the caller's temporary is released before the SVD)
     u, sv, _ = np.linalg.svd(xs, full_matrices=False)
-    xs = None
+    del xs
     keep = sv > rtol * sv[0] if sv.size else np.zeros(0, bool)
     # (a copy in the column order the selection gives, whose layout the products downstream follow)
     basis = u[:, keep] * math.sqrt(n)

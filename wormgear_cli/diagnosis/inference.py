@@ -161,7 +161,7 @@ def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups
         if same_fitted:
             # traded against the fitted phases of the sources on this order: no meaningful interval
             intervals = {}
-            w = Wald(w.estimate, w.cov, sc.wald.F, sc.wald.q, sc.wald.df, sc.wald.p)
+            w = Wald(w.estimate, w.cov, sc.test.F, sc.test.q, sc.test.df, sc.test.p)
         f = Found(name, cand.kind, params, intervals, w.p, min(1.0, w.p * len(accepted)), w.df, share, frac,
                   step_no, stability_note=stab_note, separable=not same_fitted,
                   fixed_keys=[p.key for p in eff.params if p.name in cand.fixed])
@@ -202,7 +202,9 @@ def same_order_range(f: Found, ctx: FitContext, state: ModelFit, lin, sl, cand: 
 
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     eff = EFFECTS[cand.name]
-    same = [j for j, src in enumerate(sources) if abs(src.order - cand.order) < 1e-9]
+    order = cand.order
+    assert order is not None  # (a same-order effect is periodic)
+    same = [j for j, src in enumerate(sources) if abs(src.order - order) < 1e-9]
     other = [j for j in range(len(sources)) if j not in same]
     n = y.shape[0]
     base2 = base + sum((sources[j].contrib(sig, state.psi[j]) for j in other), np.zeros(n))
@@ -222,7 +224,7 @@ def same_order_range(f: Found, ctx: FitContext, state: ModelFit, lin, sl, cand: 
                 srcs = same_src
             else:
                 start = np.r_[np.asarray(state.psi)[same], ph_fit]
-                srcs = [*same_src, PhaseSource(f"effect:{cand.name}", "", float(cand.order), a * unit, ph_fit,
+                srcs = [*same_src, PhaseSource(f"effect:{cand.name}", "", float(order), a * unit, ph_fit,
                                                effect_contrib(eff, {**cand.fixed, eff.amplitude: a}, geometry))]
             fm = fit_model(ctx.replaced(base=base2, sources=tuple(srcs), spec_psi=tuple(start)), lin2, True,
                            extra_starts=[start], variance=state.var)

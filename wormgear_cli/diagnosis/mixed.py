@@ -202,8 +202,9 @@ class Wald:
     p: float
 
 
-def _full_neg2_reml(cross: Cross, theta) -> tuple[float, np.ndarray]:
-    """-2 l_R at natural variance parameters (s_white^2, s_pass^2, s_run^2); also cov(beta)."""
+def _full_neg2_reml(cross: Cross, theta) -> tuple[float, np.ndarray | None]:
+    """-2 l_R at natural variance parameters (s_white^2, s_pass^2, s_run^2); also cov(beta) (None where
+    the parameters are outside the domain or the system is not positive definite)."""
     s2, sp, sr = theta
     if s2 <= 0 or sp < 0 or sr < 0:
         return math.inf, None

@@ -11,6 +11,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from wormgear_cli.diagnosis.design import orthonormal
 from wormgear_cli.diagnosis.mixed import Cross, VarFit, reml
 from wormgear_cli.diagnosis.runs import Groups, pass_sums
 from wormgear_cli.units import ARCSEC
+
+if TYPE_CHECKING:
+    from wormgear_cli.physics.effects import Signals
 
 
 @dataclass(frozen=True)
@@ -43,32 +47,36 @@ class PhaseSource:
     pointwise: bool = False
 
 
-def _source_contrib(src):
-    def contrib(sig, psi):
+class _SourceContrib:
+    """A simulation source's contribution (sig, psi) -> [arcsec]; :meth:`at_pairs` the same at distinct
+    pairs whose angles repeat."""
+
+    def __init__(self, src):
+        self.src = src
+
+    def __call__(self, sig: Signals, psi):
+        src = self.src
         out = src.curve(sig.theta, psi)
         if src.lost_motion is not None:
             out = out - sig.direction * src.lost_motion(sig.theta, psi) / 2.0
         return out / ARCSEC
 
-    def at_pairs(d: Distinct, psi):
+    def at_pairs(self, d: Distinct, angles: tuple[np.ndarray, np.ndarray], psi):
         # contrib(d.sig, psi) with the curves (functions of the angle only) evaluated once per distinct angle
-        angle, index = d.angles
+        src = self.src
+        angle, index = angles
         out = np.take(src.curve(angle, psi), index)
         if src.lost_motion is not None:
             out = out - d.sig.direction * np.take(src.lost_motion(angle, psi), index) / 2.0
         return out / ARCSEC
-
-    contrib.at_pairs = at_pairs
-    return contrib
 
 
 def pair_values(source: PhaseSource, d: Distinct, psi) -> np.ndarray:
     """``source.contrib(d.sig, psi)`` at the distinct pairs ``d`` (the same numbers: every operation is
     elementwise); a simulation source's curves are evaluated once per distinct angle when the pairs
     repeat their angles (forward and reverse passes at the same targets)."""
-    at_pairs = getattr(source.contrib, "at_pairs", None)
-    if at_pairs is not None and d.angles is not None:
-        return at_pairs(d, psi)
+    if isinstance(source.contrib, _SourceContrib) and d.angles is not None:
+        return source.contrib.at_pairs(d, d.angles, psi)
     return source.contrib(d.sig, psi)
 
 
@@ -91,7 +99,7 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     out = []
     for src in periodic_sources(spec):
         out.append(PhaseSource(src.name, src.phase_path, float(src.order), float(src.amplitude) / ARCSEC,
-                               float(src.phase), _source_contrib(src), pointwise=True))
+                               float(src.phase), _SourceContrib(src), pointwise=True))
     for name, params in spec.effects.items():
         eff = EFFECTS[name]
         if eff.phase is None or eff.order is None:
@@ -145,7 +153,7 @@ class FitContext:
     ``spec_psi`` (m,) their specified (or starting) phases [rad]."""
 
     y: np.ndarray
-    sig: object
+    sig: Signals
     groups: Groups
     base: np.ndarray
     sources: tuple
@@ -185,9 +193,9 @@ class Distinct:
     signals of its first row), ``inverse`` (N,) the pair of each row; ``angles``: (distinct angles
     (U,), the angle of each pair (P,)) when the pairs repeat their angles (U <= 3/4 P), else None."""
 
-    sig: object
+    sig: Signals
     inverse: np.ndarray
-    angles: tuple | None = None
+    angles: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def distinct_pairs(sig, max_share: float = 0.5) -> Distinct | None:
@@ -555,7 +563,7 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         step = max(1, n // 2000)
         idx = np.arange(0, n, step)
         sub = ctx.subsample(idx)
-        best = None
+        best: PhaseFit | None = None
         starts = [*_harmonic_starts(sub), *extra_starts]
         inits = [*starts[:1], *extra_starts]
         for start in starts:
@@ -566,18 +574,19 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
             if key in seen:
                 continue
             seen.add(key)
-            pf = levenberg_marquardt(sub, init, lin[idx], 0.0, 0.0, True, 25)
-            pf.parts.clear()
-            if best is None or pf.cost < best.cost - 1e-9 * abs(pf.cost):
-                best = pf
+            trial = levenberg_marquardt(sub, init, lin[idx], 0.0, 0.0, True, 25)
+            trial.parts.clear()
+            if best is None or trial.cost < best.cost - 1e-9 * abs(trial.cost):
+                best = trial
+        assert best is not None  # (_harmonic_starts gives at least one start)
         psi = best.psi
     if variance is not None:
-        pf = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
-        jac = _jacobian(sources, sig, pf.psi, values=ev, spread=spread) if m else np.zeros((n, 0))
-        return ModelFit(pf.psi, pf.beta, y - pf.residual, pf.residual, jac, lin, variance, pf.cost)
+        held = levenberg_marquardt(ctx, psi, lin, variance.gp, variance.gr, m > 0)
+        jac = _jacobian(sources, sig, held.psi, values=ev, spread=spread) if m else np.zeros((n, 0))
+        return ModelFit(held.psi, held.beta, y - held.residual, held.residual, jac, lin, variance, held.cost)
     gp = gr = 0.0
-    var = None
-    pf = None
+    var: VarFit | None = None
+    pf: PhaseFit | None = None
     for _ in range(3):
         # each round starts where the last ended: its contributions there are taken over, not recomputed
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts if pf is not None else None)
@@ -590,7 +599,9 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         if done:
             break
     else:
+        assert pf is not None  # (the loop ran)
         pf = levenberg_marquardt(ctx, psi, lin, gp, gr, m > 0, parts=pf.parts)
         psi = pf.psi
         jac = _jacobian(sources, sig, psi, values=ev, spread=spread) if m else np.zeros((n, 0))
+    assert pf is not None and var is not None  # (the loop ran)
     return ModelFit(psi, pf.beta, y - pf.residual, pf.residual, jac, lin, var, pf.cost)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -13,6 +14,7 @@ from wormgear_cli.diagnosis.candidates import (
     aliased_effects,
     candidate,
     candidate_params,
+    effect_order,
 )
 from wormgear_cli.diagnosis.inference import augmented_params, wrap_deg
 from wormgear_cli.diagnosis.residuals import (
@@ -39,7 +41,7 @@ def _status(diag: Diagnosis, twins: dict) -> list[dict]:
     twin_of = {t["name"]: (owner, t) for owner, items in twins.items() for t in items}
     g = drive_geometry(diag.spec)
     for name in EFFECTS:
-        entry = {"name": name}
+        entry: dict[str, Any] = {"name": name}
         absent = geometry_absent_reason(name, g)
         if absent is not None:
             entry.update(status="not_in_train", reason=f"not a candidate: {absent}")
@@ -97,7 +99,7 @@ def _status(diag: Diagnosis, twins: dict) -> list[dict]:
                     entry["remedy"] = stop.hint
             elif stop.reason is StopReason.UNSTABLE and stop.candidate == name:
                 entry.update(status="unstable",
-                             reason=f"best in only {100 * stop.stability:.0f} % of resamples of whole runs")
+                             reason=f"best in only {100 * (stop.stability or 0.0):.0f} % of resamples of whole runs")
             elif stop.reason is StopReason.WORSENS and stop.candidate == name:
                 entry.update(status="rejected",
                              reason=f"significant, but fitting it makes the RMS gap larger "
@@ -173,6 +175,7 @@ def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
             if f.separable and f.kind is CandidateKind.PERIODIC:
                 sig = sig if sig is not None else diag.meas.signals()
                 own, twin = candidate(f.name, sig, g), candidate(name, sig, g)
+                assert own is not None  # (a separable periodic effect's signature is linear)
                 eff = EFFECTS[f.name]
                 amp, ph = f.params[eff.amplitude], f.params[eff.phase]
                 signature = own.columns @ np.array([amp * math.cos(ph), amp * math.sin(ph)])
@@ -195,10 +198,13 @@ FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell t
 
 
 def _effect_order(name: str, diag: Diagnosis) -> float:
+    """The order of periodic effect ``name`` on the diagnosed drive."""
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS
 
-    return float(EFFECTS[name].order(drive_geometry(diag.spec)))
+    order = effect_order(name, drive_geometry(diag.spec))
+    if order is None:
+        raise ValueError(f"{name} is not a periodic effect")
+    return order
 
 
 def _keys(name, params) -> dict:

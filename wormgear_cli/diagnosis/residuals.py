@@ -58,7 +58,8 @@ def gap_summary(meas, resid: np.ndarray, cells: tuple[np.ndarray, int] | None = 
     the directions) and differential mode (half forward - reverse) per target and run.
     ``cells``: :func:`target_run_cells` of ``meas`` when already made."""
     inv, size = cells if cells is not None else target_run_cells(meas)
-    out = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))), "max_arcsec": float(np.max(np.abs(resid)))}
+    out: dict[str, float | int | None] = {"rms_arcsec": float(np.sqrt(np.mean(resid**2))),
+                                          "max_arcsec": float(np.max(np.abs(resid)))}
     sums = {}
     for dv in (1, -1):
         sel = meas.direction == dv
@@ -105,7 +106,7 @@ def order_tables(meas, resids, geometry) -> list[list[dict]]:
 
     priority = sorted((o for o, _ in phys), key=lambda o: (harmonic(o), o))
     keep, aliased = jointly_fittable_orders(meas.angle, [o for o, _ in phys], priority)
-    fits = [None] * len(resids)
+    fits: list = [None] * len(resids)  # (one ModeFit per residual where orders are kept, else None)
     if keep:
         with np.errstate(invalid="ignore", divide="ignore"):
             fits = fit_modes_each(meas.angle, resids, meas.direction, keep)
@@ -158,7 +159,8 @@ def versus(meas, resid, info: DataInfo, bins: int = 5) -> dict:
             sel = idx == b
             if not np.any(sel):
                 continue
-            row = {"from": float(edges[b]), "to": float(edges[b + 1]), "rows": int(np.count_nonzero(sel))}
+            row: dict[str, float | int | None] = {"from": float(edges[b]), "to": float(edges[b + 1]),
+                                                  "rows": int(np.count_nonzero(sel))}
             for dname, dv in (("forward", 1), ("reverse", -1)):
                 s2 = sel & (meas.direction == dv)
                 row[f"mean_{dname}_arcsec"] = float(np.mean(resid[s2])) if np.any(s2) else None

@@ -8,7 +8,7 @@ direction and each pass its own run.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -36,8 +36,16 @@ class Groups:
     nested: bool
     random: bool
     describe: str
+    # derived in __post_init__ (not arguments, not compared): rows sorted by pass, each pass's first sorted
+    # row, rows already in pass order, the passes as blocks of consecutive rows (first row, pass) or None,
+    # and the (R, P) run-of-pass indicator
+    order: np.ndarray = field(init=False, repr=False, compare=False)
+    starts: np.ndarray = field(init=False, repr=False, compare=False)
+    in_order: bool = field(init=False, repr=False, compare=False)
+    blocks: tuple[np.ndarray, np.ndarray] | None = field(init=False, repr=False, compare=False)
+    run_indicator: np.ndarray = field(init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         order = np.argsort(self.pass_id, kind="stable")
         starts = np.searchsorted(self.pass_id[order], np.arange(self.pass_size.shape[0]))
         object.__setattr__(self, "order", order)
@@ -46,7 +54,7 @@ class Groups:
         object.__setattr__(self, "in_order", bool(np.all(order == np.arange(order.shape[0]))))
         # each pass one block of consecutive rows, the blocks in another order (forward and reverse passes
         # alternating): pass sums are the block sums, put in pass order (no gathered copy either)
-        blocks = None
+        blocks: tuple[np.ndarray, np.ndarray] | None = None
         if not self.in_order and self.pass_id.shape[0]:
             first = np.flatnonzero(np.r_[True, self.pass_id[1:] != self.pass_id[:-1]])
             if first.shape[0] == self.pass_size.shape[0]:

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, unaliased_orders
+from wormgear_cli.diagnosis.candidates import REPLICATION_REMEDY, catalogue_orders, unaliased_orders
 from wormgear_cli.diagnosis.design import orthonormal, tolerance
 from wormgear_cli.diagnosis.mixed import CellTester, Cross, Wald, containment_df, fit_at, reml, wald
 from wormgear_cli.diagnosis.phases import ModelFit, distinct_pairs
@@ -21,6 +22,12 @@ from wormgear_cli.diagnosis.thresholds import (
     MIN_SCAN_SHARE,
     MIN_TEMPERATURE_RANGE,
 )
+
+if TYPE_CHECKING:
+    from wormgear_cli.measurement.coverage import Coverage
+    from wormgear_cli.measurement.drift import SlowModel
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.physics.geometry import DriveGeometry
 
 
 #: the catalogue effect whose signature a pattern of the residual scan is
@@ -118,9 +125,9 @@ class ScanContext:
     geometry, the level ``alpha``, what varies (``info``), the spec's phase sources, the cells, and a
     ``cache`` dict kept between the scans of one measurement (what depends on the angles only)."""
 
-    sig: object
+    sig: Signals
     groups: Groups
-    geometry: object
+    geometry: DriveGeometry
     alpha: float
     info: DataInfo
     sources: list
@@ -139,8 +146,8 @@ class _Plan:
     tests: list
     labels: dict
     scanned: dict  # order -> adjusted p of the scan of every order (orders it added)
-    slow: object  # SlowModel over a partial arc (or None)
-    coverage: object
+    slow: SlowModel | None  # over a partial arc
+    coverage: Coverage
     nyquist: float = math.nan
     partial_dirs: dict = field(default_factory=dict)
 
@@ -209,16 +216,13 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
     """(the orders to test, {order added by the scan of every order: its adjusted p}, the Nyquist limit)."""
     from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
     from wormgear_cli.measurement.iso230 import group_targets
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     sig = ctx.sig
     if "targets" not in cache:
         cache["targets"] = int(group_targets(sig.theta)[1].shape[0])
     top = min(30, cache["targets"] // 2)
     orders = sorted({*map(float, range(1, top + 1)), *labels})
-    owned = sorted({float(EFFECTS[n].order(ctx.geometry)) for n in train_effects(ctx.geometry)
-                    if EFFECTS[n].order is not None}
-                   | {float(s.order) for s in ctx.sources})
+    owned = sorted(set(catalogue_orders(ctx.geometry)) | {float(s.order) for s in ctx.sources})
     if slow is not None:
         # over a partial arc: orders too slow for it are the slow part's; orders the arc cannot tell from an
         # order a catalogue effect or a spec source owns are that order's content
@@ -353,7 +357,7 @@ def _chunk_tests(plan: _Plan, ctx: ScanContext, chunk: list, big, cached, cell_t
     sr = pass_sums(plan.r, ctx.groups)
     out = []
     j = 0
-    common_means = {}
+    common_means: dict[float, np.ndarray] = {}  # order -> its common-mode cell means
     for kind, what, mode, recipe in chunk:
         q = _width(recipe)
         sl = slice(j, j + q)
@@ -377,6 +381,7 @@ def _chunk_tests(plan: _Plan, ctx: ScanContext, chunk: list, big, cached, cell_t
         if kind != "order" or k2 < q:
             res_rot = (big[:, sl] - plan.basis @ cb[:, sl] / n_rows) @ rot if kb else big[:, sl] @ rot
         if kind == "order" and k2 < q:
+            assert res_rot is not None
             v = res_rot[:, 0]
             plan.partial_dirs[(what, mode)] = v / max(float(np.linalg.norm(v)), 1e-300)
         # the cell-means test now (its C x q means are not kept for every test)
@@ -441,7 +446,6 @@ def _order_and_trend_items(plan: _Plan, ctx: ScanContext, state: ModelFit, resul
 
 def _describe_order(item: dict, what: float, plan: _Plan, ctx: ScanContext, cross, idx, full_rot, w, n: int) -> None:
     """Amplitude, label and explanation of a significant harmonic of the residual."""
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     mode = item["mode"]
     if full_rot is not None:
@@ -454,8 +458,7 @@ def _describe_order(item: dict, what: float, plan: _Plan, ctx: ScanContext, cros
     if idx.shape[0] < 2:
         item["partial"] = "only the part the fitted phases cannot take up is tested"
     labels = plan.labels
-    catalogue_orders = [float(EFFECTS[n].order(ctx.geometry)) for n in train_effects(ctx.geometry)
-                        if EFFECTS[n].order is not None]
+    catalogue = catalogue_orders(ctx.geometry)
     found_by_scan = (f"; found by the scan of every order up to the Nyquist limit of the spacing "
                      f"({plan.nyquist:.4g})" if what in plan.scanned else "")
     if what in labels:
@@ -464,7 +467,7 @@ def _describe_order(item: dict, what: float, plan: _Plan, ctx: ScanContext, cros
         if same:
             item["explanation"] = (f"order {what:g} ({labels[what]}) in {mode} mode that the spec's "
                                    f"{', '.join(same)} cannot produce with their specified sizes and fitted phases")
-        elif any(abs(what - o) < 1e-9 for o in catalogue_orders):
+        elif any(abs(what - o) < 1e-9 for o in catalogue):
             item["explanation"] = (f"order {what:g} ({labels[what]}) in {mode} mode, which the catalogue effect at "
                                    "this order does not explain (a different mode, or not significant on its own)")
         else:
@@ -531,7 +534,7 @@ def _make_columns(big: np.ndarray, chunk: list, fill, d: np.ndarray) -> None:
     columns; the differential columns of an order made in the same chunk are its common ones times the
     direction ``d``)."""
     j = 0
-    made = {}
+    made: dict[tuple[float, bool], int] = {}  # (order, differential) -> its first column in big
     for c in chunk:
         recipe = c[3]
         w = 2 if recipe[0] == "order" else 1
@@ -556,9 +559,8 @@ def nuisance_columns(items: list[dict], sig, geometry, state: ModelFit, info: Da
     held, so that strong content at such an order (a worm-mesh harmonic of a multi-start worm, say)
     cannot leak into a catalogue effect whose columns it partly projects onto at unevenly spaced
     targets (issue 10)."""
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
-    owned = [float(EFFECTS[n].order(geometry)) for n in train_effects(geometry) if EFFECTS[n].order is not None]
+    owned = catalogue_orders(geometry)
     basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     out = []
     for item in items:

@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from enum import Enum
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,12 +15,18 @@ from wormgear_cli.diagnosis.candidates import UNPHYSICAL_HINT, candidate, order_
 from wormgear_cli.diagnosis.inference import Accepted, final_inference, likely_effect, same_order_range
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.residuals import noise_floor_rms
-from wormgear_cli.diagnosis.runs import DataInfo, Groups, data_info, make_cells, make_groups
+from wormgear_cli.diagnosis.runs import Cells, DataInfo, Groups, data_info, make_cells, make_groups
 from wormgear_cli.diagnosis.scan import ScanContext, annotate, nuisance_columns, scan_residual
-from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test
+from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test, score_step
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR, NEARLY
 from wormgear_cli.errors import DataError, UsageError
 from wormgear_cli.units import ARCSEC
+
+if TYPE_CHECKING:
+    from wormgear_cli.measurement.reader import Measurement
+    from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.physics.geometry import DriveGeometry
+    from wormgear_cli.spec.loader import Spec
 
 
 class StopReason(Enum):
@@ -102,8 +109,8 @@ class Diagnosis:
     ``amplitude_arcsec``; ``rms_with_nuisance``: the RMS gap with them in the
     model [arcsec] (None without nuisance terms)."""
 
-    spec: object
-    meas: object
+    spec: Spec
+    meas: Measurement
     groups: Groups
     info: DataInfo
     sources: list
@@ -182,17 +189,17 @@ def diagnose(spec, meas, alpha: float = 0.01, fit_phases: bool = True, max_effec
 class _Setup:
     """What the spec and the data give before any fit."""
 
-    spec: object
-    meas: object
-    sig: object
+    spec: Spec
+    meas: Measurement
+    sig: Signals
     y: np.ndarray
-    g: object
+    g: DriveGeometry
     groups: Groups
     few_runs: bool
     info: DataInfo
     fittable: list
     sources: list
-    cells: object
+    cells: Cells
     simulated_spec: np.ndarray
     ctx: FitContext
 
@@ -206,9 +213,9 @@ def _setup(spec, meas, opt: DiagnoseOptions) -> _Setup:
     from wormgear_cli.analysis.simulate import simulate
 
     if not (0.0 < opt.alpha < 0.5):
-        raise UsageError(f"--alpha: expected a number in (0, 0.5), got {opt.alpha:g}")
+        raise UsageError(f"alpha: expected a number in (0, 0.5), got {opt.alpha:g}", parameter="alpha")
     if opt.max_effects < 0:
-        raise UsageError(f"--max-effects: expected an integer >= 0, got {opt.max_effects}")
+        raise UsageError(f"max_effects: expected an integer >= 0, got {opt.max_effects}", parameter="max_effects")
     if np.any(np.isnan(meas.error)):
         raise DataError(f"{meas.source}: no error_arcsec column; diagnose needs measured errors")
     sig = meas.signals()
@@ -322,8 +329,8 @@ def _select(run: _Run) -> None:
             continue
         run.scores.update(step.scores)
         record = {"step": len(run.steps) + 1, "tested": len(step.tested),
-                  "scores": [{"name": nm, "F": step.scores[nm].wald.F, "df": step.scores[nm].wald.df,
-                              "p": step.scores[nm].wald.p, "p_adjusted": step.scores[nm].p_adj}
+                  "scores": [{"name": nm, "F": step.scores[nm].test.F, "df": step.scores[nm].test.df,
+                              "p": step.scores[nm].test.p, "p_adjusted": step.scores[nm].p_adj}
                              for nm in step.tested]}
         run.steps.append(record)
         run.stop = _decide(run, step)
@@ -342,8 +349,8 @@ def _score(run: _Run) -> Step:
     def nonlinear(cand, current=current, current_lin=current_lin):
         return same_order_test(s.ctx, current, current_lin, cand, s.cells)
 
-    return Step(run.state, run.remaining, s.groups, s.info, run.lin_names, s.sources, run.alias_notes,
-                run.opt.alpha, s.cells, nonlinear if run.opt.fit_phases else None, few_runs=s.few_runs)
+    return score_step(run.state, run.remaining, s.groups, s.info, run.lin_names, s.sources, run.alias_notes,
+                      run.opt.alpha, s.cells, nonlinear if run.opt.fit_phases else None, few_runs=s.few_runs)
 
 
 def _refit_from(run: _Run, psi) -> None:
@@ -380,6 +387,7 @@ def _decide(run: _Run, step: Step) -> Stop | None:
     if twins:
         return Stop(StopReason.AMBIGUOUS, candidates=(best, *twins),
                     correlation=max(step.similar[(best, o)] for o in twins))
+    assert sc.params is not None  # (a tested candidate's parameters are set)
     problem = physical_problem(best, sc.params)
     if problem:
         return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=UNPHYSICAL_HINT.get(best, ""))
@@ -460,6 +468,7 @@ def _conclude(run: _Run) -> Diagnosis:
     """Inference on the named effects, the likely further effect, the final scan, the model without the
     nuisance terms, the noise floor and the augmented spec."""
     s, opt = run.s, run.opt
+    assert run.stop is not None  # (the selection ran to a stop)
     after = run.state
     found = final_inference(after, run.accepted, run.lin_names, s.groups, s.fittable, opt.fit_phases, run.fixed)
     for f in found:
@@ -497,10 +506,11 @@ def _conclude(run: _Run) -> Diagnosis:
 def _likely(run: _Run, found) -> dict | None:
     stop, s, opt = run.stop, run.s, run.opt
     last_slices, last_scores = run.last
-    if not (stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.MAX_EFFECTS)
-            and stop.best in run.remaining and stop.best in last_slices):
-        return None
+    assert stop is not None  # (the selection ran to a stop)
     best = stop.best
+    if not (stop.reason in (StopReason.NOT_SIGNIFICANT, StopReason.MAX_EFFECTS)
+            and best is not None and best in run.remaining and best in last_slices):
+        return None
     sc = last_scores[best]
     if not (sc.p_adj < min(NEAR_FACTOR * opt.alpha, 0.5) or stop.reason is StopReason.MAX_EFFECTS):
         return None

@@ -17,6 +17,10 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # numpy is imported where the fast formatter first runs
+    import numpy as np
 
 #: significant digits of numbers in the sweep's (i, l) CSV ('%.12g'; ~1e-12 relative)
 CSV_DIGITS = 12
@@ -140,8 +144,8 @@ def _tables():
     return _DIGITS4, _POW10
 
 
-_DIGITS4 = None
-_POW10 = None
+_DIGITS4: np.ndarray | None = None  # built on first use (numpy is imported lazily)
+_POW10: np.ndarray | None = None
 
 
 def format_g(x, digits: int = CSV_DIGITS):
@@ -208,7 +212,7 @@ def format_g(x, digits: int = CSV_DIGITS):
     for ev in np.unique(e[pos]):
         sel = pos & (e == ev)
         full = bool(sel.all())
-        idx = None if full else np.flatnonzero(sel)
+        idx = np.empty(0, np.intp) if full else np.flatnonzero(sel)  # (rows of this exponent, when not all)
         ds, rs, ks = (dig, raw, k) if full else (dig[idx], raw[idx], k[idx])
         sub = out if full else np.zeros((idx.size, width), np.uint8)
         if ev >= 0:

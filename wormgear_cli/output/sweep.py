@@ -61,7 +61,7 @@ def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress 
     (computed here, formatted by two worker threads, at most three blocks in flight; with
     ``jobs`` > 1 computed and formatted by that many worker processes)."""
     from collections import deque
-    from concurrent.futures import ThreadPoolExecutor
+    from concurrent.futures import Future, ThreadPoolExecutor
 
     yield csv_header(sw.columns)
     if jobs > 1:
@@ -72,7 +72,7 @@ def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress 
             yield text
         return
     with ThreadPoolExecutor(max_workers=2) as pool:
-        pending = deque()
+        pending: deque[Future[bytes]] = deque()
         for block in sw.chunks(start, stop, progress=progress):
             pending.append(pool.submit(csv_rows, sw.columns, block, unit))
             if len(pending) >= 3:
@@ -346,7 +346,7 @@ def param_tables(spec, axes, rows: list, unit: str) -> list:
     columns = param_columns(axes, spec)
     te_col = stage_te_column(spec)
     idx = [columns.index(c) for c in (te_col, "total_transmission_error", "total_backlash")]
-    picks = subsample(len(rows), TABLE_PARAM_ROWS) if rows else []
+    picks: np.ndarray | list[int] = subsample(len(rows), TABLE_PARAM_ROWS) if rows else []
     t = Table(f"{spec.drive.name}: sweep of {', '.join(keys)} [{unit}]",
               [Column(k, "right") for k in keys] + [Column(c, "right")
                                                    for c in (te_col.removesuffix("_transmission_error") + " TE",

@@ -40,17 +40,18 @@ def _row(values: list) -> dict:
             "differences": [None if v is None or base is None else v - base for v in values]}
 
 
-def _yields(specs: Sequence, options: Options, progress: Callable[[int], None] | None) -> dict:
-    """The ``yield`` section: per sampled requirement and ``all``, each drive against its own limits."""
+def _yields(specs: Sequence, samples: int, options: Options, progress: Callable[[int], None] | None) -> dict:
+    """The ``yield`` section: per sampled requirement and ``all``, each drive against its own limits
+    (``samples`` built drives each)."""
     from wormgear_cli.tolerance import engine
 
-    per_drive = []
+    per_drive: list[dict] = []
     for spec in specs:
         metrics = engine.metrics_for_limits(spec)
         if metrics is None:
             per_drive.append({})
             continue
-        s = engine.setup(spec, engine.Options(samples=options.samples, seed=options.seed, metrics=metrics,
+        s = engine.setup(spec, engine.Options(samples=samples, seed=options.seed, metrics=metrics,
                                               unit=options.unit))
         per_drive.append(engine.limit_yields(s, progress))
     keys = list(dict.fromkeys(k for y in per_drive for k in y if k != "all")) + ["all"]
@@ -97,7 +98,7 @@ def compare(specs: Sequence, files: Sequence[str], options: Options,
         "drives": [{"file": str(f), "drive": r["drive"]} for f, r in zip(files, reports)],
         "totals": totals,
         "budget": {src: _row([by.get(src) for by in lines]) for src in sources},
-        "yield": None if options.samples is None else _yields(specs, options, progress),
+        "yield": None if options.samples is None else _yields(specs, options.samples, options, progress),
     }
 
 

@@ -28,10 +28,20 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from wormgear_cli.errors import DataError, UsageError
+
+if TYPE_CHECKING:
+    from wormgear_cli.compensation.model import CorrectionModel, ModelPlan, TargetTest
+    from wormgear_cli.compensation.pec import PecCurve, PecPrediction
+    from wormgear_cli.compensation.predict import TablePrediction
+    from wormgear_cli.compensation.scan import Selection
+    from wormgear_cli.compensation.table import CorrectionTable, TableGrid
+    from wormgear_cli.measurement.orders import OrdersAnalysis
+    from wormgear_cli.output.writers import Writer
 
 #: harmonics of each shaft and mesh order with --drive (as ``measure``)
 DEFAULT_HARMONICS = 3
@@ -123,14 +133,14 @@ class CompensateResult:
     """
 
     source: str
-    writer: object
+    writer: Writer
     text: str
     instructions: tuple
     choice: OrderChoice
     warnings: tuple
     notes: tuple
     exceeded: bool
-    details: object
+    details: TableDetails | PecDetails
     options: CompensateOptions = field(repr=False)
 
 
@@ -143,16 +153,16 @@ class TableDetails:
     (:class:`~wormgear_cli.compensation.predict.TablePrediction`), ``selection`` (the strongest
     orders search, or None)."""
 
-    plan: object
-    model: object
-    analysis: object
-    target_test: object
-    grid: object
-    table: object
+    plan: ModelPlan
+    model: CorrectionModel
+    analysis: OrdersAnalysis
+    target_test: TargetTest
+    grid: TableGrid
+    table: CorrectionTable
     dropped: tuple
     loss: float
-    prediction: object
-    selection: object = None
+    prediction: TablePrediction
+    selection: Selection | None = None
 
 
 @dataclass(frozen=True)
@@ -160,8 +170,8 @@ class PecDetails:
     """The PEC path: ``curve`` (:class:`~wormgear_cli.compensation.pec.PecCurve`),
     ``prediction`` (:class:`~wormgear_cli.compensation.pec.PecPrediction`), ``steps_per_worm``."""
 
-    curve: object
-    prediction: object
+    curve: PecCurve
+    prediction: PecPrediction
     steps_per_worm: int | None
 
 
@@ -214,16 +224,19 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
     writer = options.writer()
     choice = choose_orders(options)
     m = measurement
+    details: TableDetails | PecDetails
     if writer.accepts == PEC_CURVE:
         details, warnings, notes, choice = _pec_path(m, options, choice)
         steps = options.steps_per_worm
         largest = float(np.max(np.abs(details.curve.pe)))
         caption = f"PEC of {Path(m.source).name} by wormgear compensate: worm order {details.curve.worm_order:.6g}"
+        written: object = details.curve
     else:
         details, warnings, notes, choice = _table_path(m, options, writer, choice)
         steps = None
         largest = details.table.largest
         caption = ""
+        written = details.table
     exceeded = options.max_correction is not None and largest > options.max_correction
     if exceeded:
         from wormgear_cli.units import to_unit
@@ -233,7 +246,7 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
                         f"{to_unit(options.max_correction, u):.4g} {u}")
     wopts = WriteOptions(unit=options.unit, file_type=options.file_type, steps_per_worm=steps, caption=caption,
                          path=options.output)
-    text = writer.write(details.curve if writer.accepts == PEC_CURVE else details.table, wopts)
+    text = writer.write(written, wopts)
     return CompensateResult(m.source, writer, text, tuple(writer.instructions(wopts)), choice, tuple(warnings),
                             tuple(notes), bool(exceeded), details, options)
 
@@ -247,7 +260,7 @@ SEARCH_MAX_ORDER = 360
 SEARCH_POINTS = 2048
 
 
-def _select_table_orders(theta, y, d, run, candidates=None):
+def _select_table_orders(theta, y, d, run, candidates=None) -> Selection:
     """The orders of a rotary-axis measurement that stand out of the noise: a forward selection on
     the per-target means (:func:`~wormgear_cli.compensation.scan.strongest_orders`) among
     ``candidates`` (default: whole orders 1 to the Nyquist order of the mean target spacing, at
@@ -293,7 +306,8 @@ def _binned(at, dc, means, counts, cov):
     return angle, dc[first], np.bincount(inv, weights=counts * means) / w, w
 
 
-def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
+def _table_path(m, options: CompensateOptions, writer: Writer,
+                choice: OrderChoice) -> tuple[TableDetails, list[str], list[str], OrderChoice]:
     from wormgear_cli.compensation.model import fit_plan, parameters, plan_model
     from wormgear_cli.compensation.predict import predict_table
     from wormgear_cli.compensation.table import TableGrid, build_table, interpolation_loss, uncarried
@@ -311,7 +325,7 @@ def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
         choice = OrderChoice(tuple(selection.orders), None, None, source, choice.worm_order, choice.drive_name)
     elif options.orders is None:  # the drive's orders: those that stand out of the noise (a table must not overfit)
         selection = _select_table_orders(theta, y, d, run, choice.orders)
-        label = dict(zip(choice.orders, choice.labels))
+        label = dict(zip(choice.orders, choice.labels or ()))
         kept = tuple(k for k in choice.orders if k in selection.orders)
         choice = OrderChoice(kept, tuple(label[k] for k in kept), None,
                              choice.source.replace("the drive's shafts and meshes", "the drive's shafts and meshes "
@@ -449,7 +463,8 @@ def _worm_order(th, y, run, options: CompensateOptions, choice: OrderChoice, sou
     return found, "the strongest period found in the record"
 
 
-def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
+def _pec_path(m, options: CompensateOptions,
+              choice: OrderChoice) -> tuple[PecDetails, list[str], list[str], OrderChoice]:
     from wormgear_cli.compensation import pec
 
     warnings, notes = [], []
@@ -586,14 +601,15 @@ def _pec_doc(pd: PecDetails, unit: str) -> dict:
 def report(result: CompensateResult, unit: str | None = None) -> dict:
     """The JSON document of ``compensate --report`` (angles in ``unit``, default the options')."""
     unit = unit or result.options.unit
-    doc = {"source": result.source, "drive": result.choice.drive_name, "format": result.writer.name,
-           "kind": result.writer.accepts, "unit": unit,
-           "orders": {"source": result.choice.source,
-                      "requested": list(result.choice.orders) if result.choice.orders else []}}
+    orders: dict[str, object] = {"source": result.choice.source,
+                                 "requested": list(result.choice.orders) if result.choice.orders else []}
+    doc: dict[str, object] = {"source": result.source, "drive": result.choice.drive_name,
+                              "format": result.writer.name, "kind": result.writer.accepts, "unit": unit,
+                              "orders": orders}
     if isinstance(result.details, TableDetails):
         doc.update(_table_doc(result.details, unit))
         if result.details.selection is not None:
-            doc["orders"]["search"] = {"chosen": list(result.details.selection.orders),
+            orders["search"] = {"chosen": list(result.details.selection.orders),
                                        "p_values": list(result.details.selection.p_values),
                                        "stopped": result.details.selection.reason}
     else:
