@@ -26,9 +26,13 @@ from wormgear_cli.cli.common import (
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
+    DecDegOption,
     ErrorUnitOption,
+    GuideRateOption,
     InputFormatOption,
     MapOption,
+    PixelScaleOption,
+    SessionOption,
     check_rows_memory,
     read_options,
 )
@@ -70,6 +74,10 @@ def measure(
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
     input_format: InputFormatOption = "auto",
+    session: SessionOption = None,
+    pixel_scale: PixelScaleOption = None,
+    dec_deg: DecDegOption = None,
+    guide_rate: GuideRateOption = None,
     format: FormatOption = "table",
     unit: UnitOption = "arcsec",
     output: OutputOption = None,
@@ -112,19 +120,17 @@ def measure(
 
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    options = read_options(column_map, error_unit, angle_unit, input_format)
+    options = read_options(column_map, error_unit, angle_unit, input_format, session, pixel_scale, dec_deg, guide_rate)
     check_rows_memory(data, MEASURE_BYTES_PER_ROW, "measure")
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
-    few = len(result.figures.targets) <= MAX_TABLE_TARGETS
-    doc = report(result, unit, per_target=fmt != "table" or few)
+    ntargets = 0 if result.figures is None else len(result.figures.targets)
+    doc = report(result, unit, per_target=fmt != "table" or ntargets <= MAX_TABLE_TARGETS)
     for w in doc["warnings"]:
         say(f"warning: {w}")
 
     if plot is not None:
-        from wormgear_cli.plots.measure import deviation_chart
-
-        deviation_chart(result.figures, result.measurement, unit, plot, title=Path(data).name)
+        _plot(result, unit, plot, Path(data).name)
         announce_written(plot)
     if fmt == "json":
         emit(_json(doc), output, inputs)
@@ -132,10 +138,27 @@ def measure(
         say(f"note: {doc['verdict']}")
         for note in doc["notes"]:
             say(f"note: {note}")
+        if result.figures is None:
+            from wormgear_cli.cli.measure_guide import frames_csv
+
+            emit(frames_csv(result, unit), output, inputs)
+            return
         cols = [c if c in PLAIN_COLUMNS else f"{c}_{unit}" for c in TARGET_COLUMNS]
         emit(csv_text(cols, ([t[c] for c in TARGET_COLUMNS] for t in doc["per_target"])), output, inputs)
     else:
-        render(_tables(doc, len(result.figures.targets)), output, inputs)
+        render(_tables(doc, ntargets), output, inputs)
+
+
+def _plot(result, unit: str, plot: Path, title: str) -> None:
+    """The deviation chart (ISO 230-2), or a guide log's periodic-error chart."""
+    if result.figures is None:
+        from wormgear_cli.plots.guidelog import periodic_error_chart
+
+        periodic_error_chart(result.measurement, result.guide, unit, plot, title=title)
+        return
+    from wormgear_cli.plots.measure import deviation_chart
+
+    deviation_chart(result.figures, result.measurement, unit, plot, title=title)
 
 
 def _check_roles(data: Path, drive: Path | None) -> None:
@@ -182,12 +205,20 @@ def _tables(doc: dict, ntargets: int) -> list:
     from rich.text import Text
 
     view = _View(doc["unit"])
-    out = [Text(doc["verdict"]), _iso_table(doc, view)]
-    out += _order_tables(doc, view)
+    out = [Text(doc["verdict"])]
+    if doc["iso230_2"] is not None:
+        out.append(_iso_table(doc, view))
+    else:  # a guide log: its periodic error first
+        from wormgear_cli.cli.measure_guide import periodic_error_tables
+
+        out += periodic_error_tables(doc, view)
+    if doc["orders"]["items"]:
+        out += _order_tables(doc, view)
     dom = _dominant_table(doc, view)
     if dom is not None:
         out.append(dom)
-    out += _target_tables(doc, ntargets, view)
+    if doc["iso230_2"] is not None:
+        out += _target_tables(doc, ntargets, view)
     for w in doc["warnings"]:
         out.append(Text(f"warning: {w}"))
     for note in doc["notes"]:

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from wormgear_cli.errors import DataError
+from wormgear_cli.measurement.guidelog_options import GuideLogOptions
 from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import RAD_PER_UNIT
 
@@ -77,6 +78,9 @@ class ReadOptions:
     require_error : bool
         Whether the error (or the actual position) is required; False for planned angles
         (``simulate --at``).
+    guidelog : GuideLogOptions
+        Sessions to read and values a PHD2 guide log may lack (``--session``, ``--pixel-scale``,
+        ``--dec-deg``, ``--guide-rate``); given for a file of another format: a UsageError.
     """
 
     column_map: tuple = ()
@@ -85,6 +89,7 @@ class ReadOptions:
     max_bytes: int = MAX_FILE_BYTES
     input_format: str | None = None
     require_error: bool = True
+    guidelog: GuideLogOptions = GuideLogOptions()
 
     def __post_init__(self):
         from wormgear_cli.errors import UsageError
@@ -126,7 +131,11 @@ class Measurement:
     ``#`` comments (skipped, said in ``notes``); ``stated_units``: which of
     "angle" and "error" have a unit the file states (a unit in the header, an
     instrument's unit row, an error formed from stated positions) or an option
-    gives: never argued against; ``input_format``: the name of the format read.
+    gives: never argued against; ``input_format``: the name of the format read;
+    ``run_drift``: each run's errors have an offset and a drift in time of their
+    own (a guide log's sessions: the reconstruction starts from an unknown
+    offset, the drift changes over the night), so the analyses fit an offset
+    and a drift per run.
     """
 
     source: str
@@ -148,6 +157,7 @@ class Measurement:
     preamble: tuple = ()
     stated_units: frozenset = frozenset()
     input_format: str = "csv"
+    run_drift: bool = False
     _body: str = field(default="", repr=False, compare=False)
     _delimiter: str = field(default=",", repr=False, compare=False)
     #: indices of the body's data rows that are rows of the measurement (None: all; standstill rows left out)

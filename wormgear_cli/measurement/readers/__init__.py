@@ -45,12 +45,10 @@ class InputFormat(NamedTuple):
         return getattr(importlib.import_module(self.module), getattr(self, which))
 
 
-#: the input formats, most specific first (the first whose detect accepts the file reads it).  A PHD2
-#: guide log reader (wormgear_cli/measurement/guidelog.py) registers with the line
-#:     InputFormat("guidelog", "a PHD2 guide log", "wormgear_cli.measurement.guidelog",
-#:                 "looks_like_guidelog", "read_guidelog"),
-#: placed before "csv".
+#: the input formats, most specific first (the first whose detect accepts the file reads it)
 FORMATS = (
+    InputFormat("phd2", "a PHD2 guide log", "wormgear_cli.measurement.guidelog", "looks_like_guidelog",
+                "read_phd2"),
     InputFormat("twincat-scope", "a TwinCAT Scope CSV export", "wormgear_cli.measurement.readers.twincat",
                 "looks_like_twincat_scope", "read_twincat_scope"),
     InputFormat("csv", "a delimited table with a header line", "wormgear_cli.measurement.readers.delimited",
@@ -117,6 +115,11 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
         options = dataclasses.replace(options, require_error=require_error)
     text = _normalised(text)
     fmt = find_format(options.input_format) if options.input_format else detect_format(text)
+    if options.guidelog.given and fmt.name != "phd2":
+        from wormgear_cli.errors import UsageError
+
+        raise UsageError(f"{', '.join(options.guidelog.given)}: only for a PHD2 guide log; {name} is read as "
+                         f"{fmt.title} (--input-format phd2 if it is a guide log)")
     return fmt.function("read")(text, name, options)
 
 
