@@ -7,7 +7,10 @@ dead-reckoning rows as PHD2 writes them.  Timed, best of ``--repeat``:
 * ``read_guidelog``: the whole reader (sections, headers, frames, dithers, pulses, the sign check,
   angles, notes) on the text already in memory;
 * a plain parse of the same frame rows with the csv module (every line that starts with a digit,
-  Time, RARawDistance and RADuration converted): the least any reader must do.
+  Time, RARawDistance and RADuration converted): the least any reader must do;
+* ``read_measurement`` of the log as a file (the bounded read, format detection, the reader: what
+  ``measure`` and ``diagnose`` do before any figure), and ``wormgear measure`` as a command (CPU
+  time of a subprocess: start-up, reading, the strongest orders, the periodic error, the report).
 
 Wall time and CPU time of this process are printed (the CPU time is steadier when the machine is
 shared).
@@ -21,7 +24,10 @@ from __future__ import annotations
 
 import argparse
 import csv
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,6 +38,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from _timing import best_of  # noqa: E402
 
 from wormgear_cli.measurement.guidelog import read_guidelog  # noqa: E402
+from wormgear_cli.measurement.readers import read_measurement  # noqa: E402
 
 LOGS = [ROOT / "tests" / "data" / "telescope" / name
         for name in ("cge-pro-180.guidelog.txt", "eq6-ppec-19-sessions.guidelog.txt")]
@@ -86,6 +93,22 @@ def main() -> None:
     print(f"read_guidelog:          {t_reader:6.3f} s  {c_reader:6.3f} s   (target < 2 s)")
     print(f"plain csv-module parse: {t_csv:6.3f} s  {c_csv:6.3f} s")
     print(f"ratio reader / csv:     {t_reader / t_csv:6.2f}    {c_reader / c_csv:6.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "night.txt"
+        path.write_text(text)
+        t_file = best_of(lambda: read_measurement(path), args.repeat)
+        c_file = best_cpu(lambda: read_measurement(path), args.repeat)
+        print(f"read_measurement(file): {t_file:6.3f} s  {c_file:6.3f} s   (target < 2 s)")
+        cmd = [sys.executable, "-m", "wormgear_cli", "measure", str(path), "--format", "json", "-o", os.devnull]
+        walls, cpus = [], []
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            before = os.times()
+            subprocess.run(cmd, check=True, cwd=ROOT)
+            after = os.times()
+            walls.append(time.perf_counter() - t0)
+            cpus.append(after.children_user + after.children_system - before.children_user - before.children_system)
+        print(f"wormgear measure (cmd): {min(walls):6.3f} s  {min(cpus):6.3f} s")
 
 
 if __name__ == "__main__":

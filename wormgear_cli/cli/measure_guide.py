@@ -11,7 +11,7 @@ def periodic_error_tables(doc: dict, view) -> list:
 
     pe = doc.get("periodic_error")
     if not pe or pe.get("worm_order") is None:
-        return [Text(f"periodic error: {pe['note']}")] if pe else []
+        return [Text(pe["note"])] if pe else []
     a, unit = view.a, view.unit
     ft = view.table(f"periodic error [{unit}]")
     ft.add_column("figure", overflow="fold")

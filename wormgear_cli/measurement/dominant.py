@@ -599,7 +599,9 @@ def _peaks(scan: _Scan, resid: np.ndarray, independent: int, opt: ScanOptions) -
         if not np.any(np.isfinite(ratio)):
             break
         i = int(np.argmax(ratio))
-        k = float(scan.grid[i]) if scan.full_turn else _refine(scan, resid, float(scan.grid[i]))
+        k = float(scan.grid[i]) if scan.full_turn else _refine(scan, resid, float(scan.grid[i]),
+                                                                 bounds=_apart(float(scan.grid[i]), scan.peaks,
+                                                                               _half_width(scan)))
         exact = _powers(scan, resid, np.array([k]))[0]
         r = float(exact / level[i]) if math.isfinite(exact) else float(ratio[i])
         p_adj = min(1.0, independent * math.exp(-r))
@@ -618,16 +620,16 @@ def _half_width(scan: _Scan) -> float:
     return 0.5 if scan.full_turn else math.pi / scan.span
 
 
-def _refine(scan: _Scan, resid: np.ndarray, k: float, power=None) -> float:
-    """The order of largest exact power within one grid step of ``k`` (golden-section search); ``power``
-    (orders -> powers) defaults to :func:`_powers`."""
+def _refine(scan: _Scan, resid: np.ndarray, k: float, power=None, bounds=(-math.inf, math.inf)) -> float:
+    """The order of largest exact power within one grid step of ``k`` and inside ``bounds`` (golden-section
+    search); ``power`` (orders -> powers) defaults to :func:`_powers`."""
     step = float(scan.grid[1] - scan.grid[0]) if scan.grid.shape[0] > 1 else 0.0
-    if step <= 0:
+    a, b = max(k - step, bounds[0]), min(k + step, bounds[1])
+    if step <= 0 or not a < b:
         return k
     if power is None:
         def power(orders):
             return _powers(scan, resid, orders)
-    a, b = k - step, k + step
     g = (math.sqrt(5.0) - 1.0) / 2.0
     x1, x2 = b - g * (b - a), a + g * (b - a)
     f1, f2 = power(np.array([x1, x2]))
@@ -666,6 +668,7 @@ def _improve(scan: _Scan, found: list, hi: float, resolution: float) -> list:
     sub = _Scan(rows(scan.theta), rows(scan.y), rows(scan.base), scan.grid, scan.span, scan.full_turn, rows(scan.d),
                 sw=rows(scan.sw))
     ks = [float(f[0]) for f in found]
+    half = _half_width(scan)
     for _ in range(REFINE_ROUNDS):
         for j, k in enumerate(ks):
             others = ks[:j] + ks[j + 1:]
@@ -673,9 +676,17 @@ def _improve(scan: _Scan, found: list, hi: float, resolution: float) -> list:
             resid = sub.refresh()
             series = [h for h in range(1, REFINE_HARMONICS + 1)
                       if h == 1 or (h * k <= hi and all(abs(h * k - o) > resolution for o in others))]
+            # never closer than half a resolution to another peak (two columns that close trade amplitude)
             ks[j] = _refine(sub, resid, k, lambda orders, resid=resid, series=series:
-                            _series_powers(sub, resid, orders, series))
+                            _series_powers(sub, resid, orders, series), _apart(k, others, half))
     return [(k, r, p) for k, (_, r, p) in zip(ks, found)]
+
+
+def _apart(k: float, others, half: float) -> tuple[float, float]:
+    """The interval around ``k`` that keeps at least ``half`` [cycles/rev] from every order of ``others``
+    (two peaks closer than half a resolution trade amplitude instead of being told apart)."""
+    return (max([o + half for o in others if o < k], default=-math.inf),
+            min([o - half for o in others if o > k], default=math.inf))
 
 
 def _series_powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray, series: list) -> np.ndarray:

@@ -372,8 +372,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
     findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
                                                     _excess_finding(analysis, result.outside, unit)) if f]
     if figures is None:  # a guide log: ISO 230-2 does not apply, said once
-        notes = [ISO_NOT_APPLICABLE] + ([result.guide.note] if result.guide and result.guide.note else [])
-        notes += _order_notes(analysis) if analysis.items else []
+        notes = [ISO_NOT_APPLICABLE] + (_order_notes(analysis) if analysis.items else [])
     else:
         notes = list(figures.notes) + _resolution_notes(result, unit) + _order_notes(analysis)
     cov = analysis.coverage
