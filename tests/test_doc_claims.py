@@ -128,6 +128,10 @@ CLAIMS = [
           lambda: (_stage(report(MCH50), "worm")["deflection_um"],)),
     Claim("configs/eq6-belt-worm.toml", r"the order-180 lines of the budget, about ([\d.]+) arcsec zero to peak",
           lambda: (_order_lines("configs/eq6-belt-worm.toml", 180.0),)),
+    Claim("configs/heq5-spur-worm.toml", r"the order-135 lines of the budget are about ([\d.]+) arcsec zero to peak",
+          lambda: (_order_lines("configs/heq5-spur-worm.toml", 135.0),)),
+    Claim("configs/g11-gearhead-worm.toml", r"the order-360 lines of the budget \(the worm period, 239 s:\s*#?\s*"
+          r"about ([\d.]+) arcsec zero to peak\)", lambda: (_order_lines("configs/g11-gearhead-worm.toml", 360.0),)),
     # docs/budget.md: the pitch lines of the rotary table's gears in class 5
     Claim("docs/budget.md", r"gives 0.025/180 rad = ([\d.]+)″ peak to peak, ([\d.]+)″ amplitude, at order 1; its "
           r"pinion \(d = 40 mm\) in class 5 \(F_pT = 17 µm\) ([\d.]+)″ peak to peak at order 9",
@@ -141,6 +145,8 @@ NOT_TOOL_FIGURES = {
     "rotary-table-precision.toml": {"20 arcsec table", "10-20 arcsec indexing", "against 20 arcsec"},
     "rotary-table-worm.toml": {"10-20 arcsec indexing", "8 arcsec at"},
     "eq6-belt-worm.toml": {"15-30 arcsec being"},
+    "heq5-spur-worm.toml": {"30-40 arcsec peak"},
+    "g11-gearhead-worm.toml": {"0.5625 arcsec for"},
 }
 
 
@@ -172,7 +178,10 @@ def test_grade_comments_give_the_grades_tolerances(path):
     raw = tomllib.loads(path.read_text(encoding="utf-8"))  # the file as written (not the model's records)
     section = None
     checked = 0
+    stage = -1  # the [[stage]] table a [stage.MEMBER] belongs to (the stage form)
     for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("[[stage]]"):
+            stage += 1
         head = re.match(r"^\[([\w.]+)\]", line)
         if head:
             section = head.group(1)
@@ -182,7 +191,7 @@ def test_grade_comments_give_the_grades_tolerances(path):
             continue
         grade = int(m.group(1))
         assert int(m.group(2)) == grade, f"{path.name} [{section}]: the comment names class {m.group(2)}"
-        pair = raw["gear_pair"]
+        pair = raw["stage"][stage] if section.startswith("stage.") else raw["gear_pair"]
         teeth = pair[section.split(".")[-1]]["teeth"]
         module, width = pair["module_mm"], pair["face_width_mm"]
         tol = flank_tolerances(grade, module, module * teeth, width, teeth)
@@ -214,8 +223,13 @@ def test_the_grades_a_page_names_are_the_configs(page):
     named = _named_grades((ROOT / page).read_text(encoding="utf-8"))
     assert {name for name, _ in named} >= {"rotary-table-precision.toml"}, f"{page}: no grade claim found"
     for name, grade in named:
-        pair = tomllib.loads((CONFIGS / name).read_text(encoding="utf-8"))["gear_pair"]
-        grades = {pair["output_gear"].get("accuracy_grade"), pair["pinion"].get("accuracy_grade")}
+        raw = tomllib.loads((CONFIGS / name).read_text(encoding="utf-8"))
+        if "stage" in raw:  # the output spur stage's gears (a page names the drive's main gears)
+            pair = [s for s in raw["stage"] if s["kind"] == "spur"][-1]
+            grades = {pair["gear"].get("accuracy_grade"), pair["pinion"].get("accuracy_grade")}
+        else:
+            pair = raw["gear_pair"]
+            grades = {pair["output_gear"].get("accuracy_grade"), pair["pinion"].get("accuracy_grade")}
         assert grades == {grade}, f"{page}: {name} is said to have class-{grade} gears; the file has {grades}"
 
 

@@ -30,7 +30,7 @@ LOGS = DATA / "telescope"
 CGE = LOGS / "cge-pro-180.guidelog.txt"
 G11 = LOGS / "losmandy-g11-360.guidelog.txt"
 EQ6 = LOGS / "eq6-ppec-19-sessions.guidelog.txt"
-MOTOR_SPEC = LOGS / "mounts" / "motor-spur-135.toml"
+HEQ5 = CONFIGS / "heq5-spur-worm.toml"  # 135-tooth wheel, 9:47 motor gears: the motor gear at order 705
 SIDEREAL = 86164.0905
 
 
@@ -183,7 +183,7 @@ OTHER_MOUNTS = {
     "144 teeth": (((144.0, 4.0, 0.5), (288.0, 0.8, 1.0)), 1100, 144.0, None),
     "359 teeth": (((359.0, 3.0, 0.2), (718.0, 1.0, 2.0)), 700, 359.0, None),
     "Astro-Physics 225 (382.95 s)": (((225.0, 2.5, 1.2), (450.0, 0.6, 0.4)), 900, 225.0, None),
-    "motor gear above the worm": (((135.0, 1.5, 0.3), (528.75, 3.0, 1.7)), 1100, 528.75, MOTOR_SPEC),
+    "HEQ5, motor gear above the worm": (((135.0, 1.5, 0.3), (705.0, 3.0, 1.7)), 1100, 705.0, HEQ5),
     "a part slower than the worm": (((60.0, 4.0, 0.9), (180.0, 2.0, 0.1)), 3600, 60.0, None),
 }
 
@@ -221,11 +221,11 @@ def test_other_mounts_strongest_period_is_the_published_one(runner, tmp_path, na
 
 
 def test_a_period_of_no_part_is_said_to_belong_to_none(runner, tmp_path):
-    terms = ((135.0, 2.0, 0.3), (528.75, 1.0, 1.7), (333.3, 1.5, 0.4))
+    terms = ((135.0, 2.0, 0.3), (705.0, 1.0, 1.7), (333.3, 1.5, 0.4))
     text, _ = synth.make_log([synth.Session(synth.START, frames=1100)], mount=synth.Mount(terms=terms), seed=4)
     path = tmp_path / "night.txt"
     path.write_text(text)
-    doc = measure_json(runner, path, "--drive", MOTOR_SPEC)
+    doc = measure_json(runner, path, "--drive", HEQ5)
     by = {round(p["order"]): p["label"] for p in doc["dominant"]["peaks"]}
     near = {k: v for k, v in by.items() if abs(k - 333) <= 5}
     assert list(near.values()) == ["none of the drive's shafts and meshes"]
@@ -361,3 +361,60 @@ def test_diagnose_the_eq6_night_with_its_spec(runner):
     assert doc["noise"]["floor_arcsec"] < 1.5
     assert all((u.get("order") or 1000) > 100 for u in doc["unexplained"])  # no low orders of a table
     assert "order 180" in doc["verdict"] and "the data 2.0" in doc["verdict"]
+
+
+# --- the shipped mounts on the logs of their kind ---------------------------------------------------------------------
+
+def test_eq6_session_with_the_shipped_eq6_the_motor_gear_named(runner):
+    """The raw EQ6 log with configs/eq6-belt-worm.toml (180-tooth wheel, 47:12 belt): the worm from the
+    tooth count, and the motor pulley's order 705 (180 x 47 / 12) fitted and named; README: 705 = 0.09"."""
+    doc = measure_json(runner, EQ6, "--session", "3", "--drive", CONFIGS / "eq6-belt-worm.toml")
+    pe = doc["periodic_error"]
+    assert pe["worm_order"] == 180.0 and pe["worm_from"] == "the drive's worm (180-tooth wheel)"
+    assert pe["harmonics"][0]["amplitude"] == pytest.approx(2.34, abs=0.1)
+    motor = by_order(doc)[705.0]
+    assert motor["label"] == "motor shaft (driving pulley)" and motor["status"] == "fitted"
+    assert motor["common"]["amplitude"] == pytest.approx(0.09, abs=0.03)
+    alongside = {it["order"]: it for it in pe["fitted_alongside"]}
+    assert alongside[705.0]["label"] == "motor shaft (driving pulley)"
+    assert alongside[705.0]["amplitude"] == pytest.approx(0.09, abs=0.03)
+    assert "worm mesh" in doc["dominant"]["peaks"][0]["label"]
+
+
+def test_g11_log_with_the_shipped_g11(runner):
+    doc = measure_json(runner, G11, "--drive", CONFIGS / "g11-gearhead-worm.toml")
+    pe = doc["periodic_error"]
+    assert pe["worm_order"] == 360.0 and pe["worm_period_s"] == pytest.approx(239.3, abs=0.05)
+    assert pe["worm_from"] == "the drive's worm (360-tooth wheel)"
+    assert [h["amplitude"] for h in pe["harmonics"][:2]] == pytest.approx([4.07, 1.63], abs=0.1)
+    top = doc["dominant"]["peaks"][0]
+    assert "worm mesh" in top["label"] and top["period_s"] == pytest.approx(239.3, rel=0.01)
+
+
+# --- the PE peak to peak, corrected for drift and declination ---------------------------------------------------------
+
+def true_pp(terms, worm: float) -> float:
+    """Peak to peak over one worm period of the mount's terms that are whole harmonics of ``worm``."""
+    phi = np.linspace(0.0, 2.0 * math.pi / worm, 20001)
+    return float(np.ptp(sum(a * np.sin(k * phi + p) for k, a, p in terms
+                            if abs(k / worm - round(k / worm)) < 1e-9)))
+
+
+@pytest.mark.parametrize("dec", [0.0, 45.0, 70.0])
+def test_pe_peak_to_peak_is_the_mounts_at_any_declination_with_drift(runner, tmp_path, dec):
+    """One mount (180 + 360 + 540, a drift of 14"/h), guided at three declinations over three sessions:
+    the star moves cos(Dec) times the axis error and the log's pulses are at the rate for that
+    declination; the reported PE peak to peak is the mount's own, the drift gone."""
+    terms = ((180.0, 5.0, 0.3), (360.0, 1.2, 1.1), (540.0, 0.6, 2.0))
+    start = synth.START
+    sessions = [synth.Session(start, frames=500), synth.Session(start + timedelta(minutes=25), frames=500),
+                synth.Session(start + timedelta(minutes=50), frames=500)]
+    text, _ = synth.make_log(sessions, rig=synth.Rig(dec=dec), mount=synth.Mount(terms=terms, drift=0.004), seed=9)
+    path = tmp_path / "night.txt"
+    path.write_text(text)
+    doc = measure_json(runner, path, "--drive", CONFIGS / "eq6-belt-worm.toml")
+    pe = doc["periodic_error"]
+    assert pe["peak_to_peak"] == pytest.approx(true_pp(terms, 180.0), rel=0.05)
+    assert pe["harmonics"][0]["amplitude"] == pytest.approx(5.0, rel=0.05)
+    pe_rms = math.sqrt(sum(a * a / 2.0 for _, a, _ in terms))  # the mount's PE alone, RMS
+    assert pe["rms"]["drift_removed"] == pytest.approx(pe_rms, rel=0.05) and pe["rms"]["raw"] > pe_rms * 1.03

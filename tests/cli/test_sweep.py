@@ -96,7 +96,7 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--param", "worm_pair.lead_error_mm=0:0.01:2"),
      "--param worm_pair.lead_error_mm: given twice; give each key once"),
     (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--i", "2:3:2"),
-     "--param cannot be combined with --i, --l-mm, --module-mm, --hold or --min-pinion-teeth; run two sweeps"),
+     "--param cannot be combined with --i, --l-mm, --stage, --module-mm, --hold or --min-pinion-teeth; run two sweeps (--param names its stage in the key: stage.N.KEY)"),
 ])
 def test_bad_input_exits_2_with_one_message(runner, mch50_path, args, message):
     r = run(runner, mch50_path, *args, "--format", "csv")

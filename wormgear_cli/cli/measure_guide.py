@@ -16,8 +16,8 @@ def periodic_error_tables(doc: dict, view) -> list:
     ft = view.table(f"periodic error [{unit}]")
     ft.add_column("figure", overflow="fold")
     view.num(ft, "value")
-    ft.add_row("worm period [s]", f"{pe['worm_period_s']:.5g}")
-    ft.add_row("worm order [cycles per RA turn]", f"{pe['worm_order']:.6g}")
+    ft.add_row(escape("worm period [s]"), f"{pe['worm_period_s']:.5g}")
+    ft.add_row(escape("worm order [cycles per RA turn]"), f"{pe['worm_order']:.6g}")
     ft.add_row("worm cycles covered", f"{pe['cycles']:.3g}")
     ft.add_row("PE peak to peak", a(pe["peak_to_peak"]))
     rms = pe["rms"]
@@ -25,9 +25,9 @@ def periodic_error_tables(doc: dict, view) -> list:
     ft.add_row("RMS, drift removed", a(rms["drift_removed"]))
     ft.add_row("RMS, worm harmonics removed too", a(rms["worm_removed"]))
     ft.add_row("RMS, residual of the whole fit", a(rms["residual"]))
-    ft.caption = escape(f"worm order from {pe['worm_from']}; PE: peak to peak of the worm harmonics over one "
-                        "worm period, each session's drift removed")
-    ft.caption_justify = "left"
+    # said under the table at the page's width (a caption would wrap at the narrow table's)
+    said = Text(f"worm order from {pe['worm_from']}; PE: peak to peak of the worm harmonics over one worm "
+                "period, each session's drift removed")
     ht = view.table(f"worm harmonics and orders fitted alongside [{unit}, phase deg]")
     for col in ("order", "period s", "amplitude", "+/-", "phase"):
         view.num(ht, col)
@@ -38,7 +38,7 @@ def periodic_error_tables(doc: dict, view) -> list:
         ht.add_row(*_cells(it, a), escape(it["label"] or "a strong period found"))
     ht.caption = escape(f"amplitudes zero to peak; standard errors: {pe['standard_errors']}")
     ht.caption_justify = "left"
-    out = [ft, ht]
+    out = [ft, said, ht]
     if len(pe["sessions"]) > 1:
         st = view.table(f"sessions (runs) [{unit}; time min, angle deg]")
         for col in ("session", "frames", "start", "minutes", "RA axis", "drift p-p", "RMS"):

@@ -281,7 +281,7 @@ class _Run:
 
 
 def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import train_effects
 
     s = _setup(spec, meas, opt)
     opt.say("fitting phases and offset")
@@ -290,7 +290,7 @@ def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
     run = _Run(s, opt, before, before, before, base, base, [(name, slice(0, base.shape[1]))], base=base.shape[1],
                fixed=base.shape[1])
     _hold_nuisance(run)
-    run.remaining = {name: candidate(name, s.sig, s.g) for name in EFFECTS if name not in spec.effects}
+    run.remaining = {name: candidate(name, s.sig, s.g) for name in train_effects(s.g) if name not in spec.effects}
     run.alias_notes = order_aliases(s.sig.theta, run.remaining, s.sources, s.g)
     _select(run)
     return _conclude(run)

@@ -56,7 +56,12 @@ class Source(NamedTuple):
     stage keys its size comes from; ``size(value)`` -> amplitude [rad at the output] from
     ``value(stage_key)`` (numbers or arrays: the same function gives the spec's amplitude and,
     vectorised, a sampled drive's); ``tier``: 0 the model's sources (always listed), 1 the full
-    budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size)."""
+    budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size);
+    ``lost_size(value)`` -> (c, a, s, clipped): the source's lost motion of a sampled drive (arrays)
+    is max(c + a sin(order theta + phase), 0) s [rad at the output] (``clipped`` False: c >= |a|,
+    never negative, taken as it is) (None: no lost motion);
+    ``curve_at(value, theta, phase)`` -> [rad]: the curve of a sampled drive for a source that is
+    not a sinusoid (None: ``size(value) sin(order theta + phase)``)."""
 
     name: str
     phase_path: str
@@ -76,6 +81,8 @@ class Source(NamedTuple):
     size_keys: tuple = ()
     size: Callable | None = None
     tier: int = 0
+    lost_size: Callable | None = None
+    curve_at: Callable | None = None
 
 
 class Static(NamedTuple):
@@ -93,13 +100,16 @@ class Static(NamedTuple):
 
 class Clearance(NamedTuple):
     """A constant lost motion at the output [rad] not tied to a periodic source (a belt's tooth
-    clearance, the residual of an anti-backlash arrangement)."""
+    clearance, the residual of an anti-backlash arrangement); ``size(value)`` -> [rad] the amount of
+    a sampled drive from ``value(stage_key)`` (None: not toleranced)."""
 
     name: str
     amount: float
     stage: str
     stage_index: int
     stage_kind: str
+    size_keys: tuple = ()
+    size: Callable | None = None
 
 
 class Compliance(NamedTuple):

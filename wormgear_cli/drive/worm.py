@@ -76,6 +76,18 @@ def paper(stage, deflection, value=None) -> WormParts:
     return WormParts(wte, wbl, h_te, h_j, j_def, j_prof, j_thk)
 
 
+def totals(stage, deflection, value=None) -> tuple:
+    """(TE, backlash) at the wheel shaft [rad] of the stage at tooth deflection ``deflection`` [mm], from
+    ``value(key)`` (default the stage's own values; arrays of sampled drives allowed): the paper's
+    Delta phi_wc and Delta phi_wh, or with a duplex worm the deflection's part of Delta phi_wh plus the
+    stated residual lost motion (what ``analyze`` reports and ``tolerance`` samples)."""
+    p = paper(stage, deflection, value)
+    if stage.anti_backlash == "none":
+        return p.transmission_error, p.backlash
+    arc = pitch_arc_to_angle(p.backlash_deformation, stage.module, stage.wheel.teeth)
+    return p.transmission_error, 0.0 + arc + float(stage.residual_lost_motion)
+
+
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
     """The stage's TE and backlash at the wheel shaft, with their parts (``spec``: the drive-level
     settings; ``t``: the train)."""
@@ -91,7 +103,7 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
                     "thickness": arc(p.backlash_thickness), "envelope": arc(p.backlash_halfwidth)}
     else:
         bl_parts = {"deformation": arc(p.backlash_deformation), "residual": float(stage.residual_lost_motion)}
-        backlash = sum(bl_parts.values())
+        backlash = float(totals(stage, deflection)[1])
     info = {"deflection_um": float(deflection * 1e3), "line_load_N_per_mm": stiffness.line_load(spec, stage),
             "normal_force_N": float(stage.normal_force), "anti_backlash": stage.anti_backlash,
             "starts": stage.worm.starts}
@@ -118,13 +130,19 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     ident = {"stage_index": stage.index, "stage_kind": "worm"}
     own = values(stage)
 
-    def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None):
+    def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None, lost_size=None):
         amp = float(size(own))
         return sine_source(name, stage.paths[key_phase], order, amp, phase, stage.name, "shaft",
                            tuple(stage.paths[k] for k in keys), lost, part=part, origin=origin(stage, keys),
-                           size_keys=keys, size=size, tier=tier, **ident)
+                           size_keys=keys, size=size, tier=tier, lost_size=lost_size, **ident)
 
-    lost = _lost_motion(stage, after, to_out, own) if stage.anti_backlash == "none" else None
+    clears = stage.anti_backlash == "none"
+    lost = _lost_motion(stage, after, to_out, own) if clears else None
+
+    def lost_size(v):  # the paper's Delta j at no load +/- its half-width h_j (:func:`_lost_motion`)
+        p = paper(stage, 0.0, v)
+        return p.backlash_profile + p.backlash_thickness, p.backlash_halfwidth, to_out, True
+
     out = [
         src("worm_lead_error", "lead_error_phase_deg", n_w, lambda v: v("lead_error_mm") * (0.5 * to_out),
             ("lead_error_mm",), "worm", stage.lead_error_phase),
@@ -133,7 +151,7 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
             ("worm.runout_mm", "worm.bearing_clearance_mm"), "worm", stage.worm.runout_phase),
         src("wheel_radial_composite", "wheel.radial_composite_phase_deg", after,
             lambda v: v("wheel.radial_composite_error_mm") * (0.5 * to_out), ("wheel.radial_composite_error_mm",),
-            "wheel", stage.wheel.radial_composite_phase, lost=lost),
+            "wheel", stage.wheel.radial_composite_phase, lost=lost, lost_size=lost_size if clears else None),
         src("wheel_eccentricity", "wheel.runout_phase_deg", after,
             lambda v: _runout(v("wheel.runout_mm"), v("wheel.bearing_clearance_mm"), a2) * (0.5 * to_out),
             ("wheel.runout_mm", "wheel.bearing_clearance_mm"), "wheel", stage.wheel.runout_phase),

@@ -215,7 +215,6 @@ def _orders_asked(spec, orders, harmonics, default=DEFAULT_ORDERS):
 
 def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
     """The joint fit at the orders asked for, and the strongest orders of the data."""
-    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
     from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
 
     time = m.time if "time_s" in m.present else None
@@ -224,14 +223,25 @@ def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
                             priority=None if priority is None else tuple(priority), passes=m.run, time=time,
                             unique=unique, drift_per_run=per_run)
     analysis = analyse_orders(m.angle, m.error, m.direction, order_list, options)
+    return analysis, strongest_orders(m, physical)
+
+
+def strongest_orders(m, physical=()):
+    """The strongest orders of the measurement ``m``
+    (:func:`~wormgear_cli.measurement.dominant.dominant_orders`: each guide-log session its own offset and
+    drift; ``physical``: the drive's (order, label) pairs that name them).  ``measure``'s ``dominant``, and
+    the worm period ``compensate`` takes without a drive."""
+    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+
+    time = m.time if "time_s" in m.present else None
+    per_run = m.run_drift
     window = 0.0
     if per_run:  # the sessions' relative phases are known as well as the logged hour angle: half a resolution
         from wormgear_cli.workflows.guidelog import longest_run
 
         window = math.pi / max(longest_run(m.angle, m.run), 1e-12)
-    dominant = dominant_orders(m.angle, m.error, m.direction, time, m.run,
-                               ScanOptions(labels=tuple(physical), drift_per_run=per_run, label_window=window))
-    return analysis, dominant
+    return dominant_orders(m.angle, m.error, m.direction, time, m.run,
+                           ScanOptions(labels=tuple(physical), drift_per_run=per_run, label_window=window))
 
 
 def _left_outside(m, analysis) -> tuple:
