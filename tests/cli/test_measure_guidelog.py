@@ -94,6 +94,9 @@ def test_real_logs_without_orders_find_the_worm(runner, path, session, worm, per
     pe = doc["periodic_error"]
     assert pe["worm_order"] == pytest.approx(top["order"]) and "strongest period" in pe["worm_from"]
     assert pe["harmonics"][0]["amplitude"] == pytest.approx(amplitude, abs=0.1)
+    r = api.measure(path, sessions=None if session is None else int(session))
+    assert r.to_dict() == doc and r.dominant[0].order == top["order"] and r.orders == ()
+    assert r.periodic_error.peak_to_peak.arcsec == pytest.approx(pe["peak_to_peak"])
 
 
 def test_cge_180_and_181_said_to_be_one_group(runner):
@@ -418,3 +421,15 @@ def test_pe_peak_to_peak_is_the_mounts_at_any_declination_with_drift(runner, tmp
     assert pe["harmonics"][0]["amplitude"] == pytest.approx(5.0, rel=0.05)
     pe_rms = math.sqrt(sum(a * a / 2.0 for _, a, _ in terms))  # the mount's PE alone, RMS
     assert pe["rms"]["drift_removed"] == pytest.approx(pe_rms, rel=0.05) and pe["rms"]["raw"] > pe_rms * 1.03
+
+
+def test_the_shipped_eq6_log_is_session_3_of_the_night(runner):
+    """configs/eq6-guidelog.txt (docs/telescope.md) is the night's header and session 3: the same
+    figures as the whole log read with --session 3 (README: 180 = 2.34")."""
+    spec = CONFIGS / "eq6-belt-worm.toml"
+    shipped = measure_json(runner, CONFIGS / "eq6-guidelog.txt", "--drive", spec)
+    night = measure_json(runner, EQ6, "--session", "3", "--drive", spec)
+    assert shipped["periodic_error"]["peak_to_peak"] == pytest.approx(night["periodic_error"]["peak_to_peak"], rel=1e-9)
+    assert [it["common"]["amplitude"] for it in shipped["orders"]["items"]] == \
+        [it["common"]["amplitude"] for it in night["orders"]["items"]]
+    assert by_order(shipped)[180.0]["common"]["amplitude"] == pytest.approx(2.34, abs=0.1)
