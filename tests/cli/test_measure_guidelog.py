@@ -356,6 +356,7 @@ def test_diagnose_a_night_of_three_sessions_with_the_mount_spec(runner, tmp_path
     assert "each run's offset and drift (a cubic in time) fitted" in doc["noise"]["before"]["structure"]
 
 
+@pytest.mark.slow  # ~30 s of CPU: 19 sessions' offsets and drifts through every phase refit of the selection
 def test_diagnose_the_eq6_night_with_its_spec(runner):
     result = runner.invoke(app, ["diagnose", str(CONFIGS / "eq6-belt-worm.toml"), str(EQ6), "--format", "json"])
     assert result.exit_code == 0, result.stderr
