@@ -7,7 +7,13 @@ dead-reckoning rows as PHD2 writes them.  Timed, best of ``--repeat``:
 * ``read_guidelog``: the whole reader (sections, headers, frames, dithers, pulses, the sign check,
   angles, notes) on the text already in memory;
 * a plain parse of the same frame rows with the csv module (every line that starts with a digit,
-  Time, RARawDistance and RADuration converted): the least any reader must do.
+  Time, RARawDistance and RADuration converted): the least any reader must do;
+* ``read_measurement`` of the log as a file (the bounded read, format detection, the reader: what
+  ``measure`` and ``diagnose`` do before any figure);
+* with ``--command``: ``wormgear measure`` as a command on the EQ6 night of the test data (19
+  sessions, 250 kB; CPU time of a subprocess: start-up, reading, the strongest orders, the periodic
+  error, the report).  Not on the 10 MB log: its hundreds of sessions, each with its own offset and
+  drift, make the scan minutes long.
 
 Wall time and CPU time of this process are printed (the CPU time is steadier when the machine is
 shared).
@@ -21,7 +27,10 @@ from __future__ import annotations
 
 import argparse
 import csv
+import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,6 +41,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from _timing import best_of  # noqa: E402
 
 from wormgear_cli.measurement.guidelog import read_guidelog  # noqa: E402
+from wormgear_cli.measurement.readers import read_measurement  # noqa: E402
 
 LOGS = [ROOT / "tests" / "data" / "telescope" / name
         for name in ("cge-pro-180.guidelog.txt", "eq6-ppec-19-sessions.guidelog.txt")]
@@ -72,6 +82,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mb", type=float, default=10.0)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--command", action="store_true", help="also time wormgear measure on the EQ6 night")
     args = ap.parse_args()
     text = big_log(args.mb)
     m = read_guidelog(text, "bench")
@@ -86,6 +97,24 @@ def main() -> None:
     print(f"read_guidelog:          {t_reader:6.3f} s  {c_reader:6.3f} s   (target < 2 s)")
     print(f"plain csv-module parse: {t_csv:6.3f} s  {c_csv:6.3f} s")
     print(f"ratio reader / csv:     {t_reader / t_csv:6.2f}    {c_reader / c_csv:6.2f}")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "night.txt"
+        path.write_text(text)
+        t_file = best_of(lambda: read_measurement(path), args.repeat)
+        c_file = best_cpu(lambda: read_measurement(path), args.repeat)
+        print(f"read_measurement(file): {t_file:6.3f} s  {c_file:6.3f} s   (target < 2 s)")
+        if not args.command:
+            return
+        cmd = [sys.executable, "-m", "wormgear_cli", "measure", str(LOGS[1]), "--format", "json", "-o", os.devnull]
+        walls, cpus = [], []
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            before = os.times()
+            subprocess.run(cmd, check=True, cwd=ROOT, stderr=subprocess.DEVNULL)
+            after = os.times()
+            walls.append(time.perf_counter() - t0)
+            cpus.append(after.children_user + after.children_system - before.children_user - before.children_system)
+        print(f"wormgear measure, EQ6 night (command): {min(walls):6.3f} s  {min(cpus):6.3f} s")
 
 
 if __name__ == "__main__":

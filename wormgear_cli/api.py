@@ -47,7 +47,8 @@ __all__ = [
     "Angle", "AngleArray",
     "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose", "sweep", "tolerance", "compare",
     "compensate",
-    "Analysis", "Stage", "Simulation", "SimulationAt", "Measurement", "MeasureResult", "Order",
+    "Analysis", "Stage", "Simulation", "SimulationAt", "Measurement", "MeasureResult", "Order", "Peak",
+    "PeriodicError",
     "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats", "Comparison", "Compensation",
 ]
 
@@ -476,7 +477,8 @@ class Measurement:
         return len(self.core)
 
 
-def _read_options(column_map, error_unit, angle_unit, input_format=None):
+def _read_options(column_map, error_unit, angle_unit, input_format=None, guide: dict | None = None):
+    from wormgear_cli.measurement.guidelog_options import GuideLogOptions
     from wormgear_cli.measurement.reader import ReadOptions
 
     pairs = tuple((str(k), str(v)) for k, v in (column_map or {}).items())
@@ -484,13 +486,18 @@ def _read_options(column_map, error_unit, angle_unit, input_format=None):
         from wormgear_cli.measurement.readers import find_format
 
         find_format(input_format)
+    guide = guide or {}
+    sessions = guide.get("sessions")
     return ReadOptions(column_map=pairs, error_unit=error_unit, angle_unit=angle_unit,
-                       input_format=None if input_format in (None, "auto") else input_format)
+                       input_format=None if input_format in (None, "auto") else input_format,
+                       guidelog=GuideLogOptions(() if sessions is None else sessions, guide.get("pixel_scale"),
+                                                guide.get("dec_deg"), guide.get("guide_rate")))
 
 
 def read_measurement(path: PathLike, *, column_map: dict | None = None, error_unit: str | None = None,
                      angle_unit: str | None = None, require_error: bool = True,
-                     input_format: str | None = None) -> Measurement:
+                     input_format: str | None = None, sessions=None, pixel_scale: float | None = None,
+                     dec_deg: float | None = None, guide_rate: float | None = None) -> Measurement:
     """Read and validate a measurement file as it is (as ``measure`` and ``diagnose`` read it).
 
     Parameters
@@ -509,11 +516,17 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
         Whether the error column must be present.
     input_format : str or None
         A format name of ``wormgear measure --input-format`` (None or "auto": detected).
+    sessions : int or sequence of int or None
+        A PHD2 guide log's sessions to read (1 for the first; None: all), as ``--session``.
+    pixel_scale, dec_deg, guide_rate : float or None
+        What a PHD2 guide log may lack, as ``--pixel-scale`` [arcsec/px], ``--dec-deg`` [deg] and
+        ``--guide-rate`` [arcsec/s at the equator]; each wins over the log's own value.
 
     Raises
     ------
     DataError, UsageError
-        One line per problem, naming file, line and column.
+        One line per problem, naming file, line and column (a guide log: the option that supplies
+        what is missing).
 
     Examples
     --------
@@ -523,7 +536,8 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
     """
     from wormgear_cli.measurement import readers as core
 
-    options = _read_options(column_map, error_unit, angle_unit, input_format)
+    options = _read_options(column_map, error_unit, angle_unit, input_format,
+                            dict(sessions=sessions, pixel_scale=pixel_scale, dec_deg=dec_deg, guide_rate=guide_rate))
     m = core.read_measurement(_fs(path), require_error=require_error, options=options)
     return Measurement(m.source, AngleArray(m.angle), AngleArray(m.error), m.direction, m.run, m.load,
                        m.temperature, m.time, dict(m.columns), tuple(m.notes), tuple(m.warnings), m, path, options)
@@ -549,6 +563,47 @@ class Order:
 
 
 @dataclass(frozen=True)
+class Peak:
+    """One of the strongest orders of the data (:func:`measure`'s ``dominant``): ``order`` [cycles per
+    output turn], ``period_s`` (None without a time base), ``amplitude`` and ``amplitude_stderr``
+    (zero to peak), ``group`` (lo, hi): the orders the data cannot tell from it, ``label``: the drive's
+    shaft or mesh it belongs to (with a drive: "none of the drive's shafts and meshes" when no part
+    explains it; None without a drive), ``significant``."""
+
+    order: float
+    period_s: float | None
+    amplitude: Angle | None
+    amplitude_stderr: Angle | None
+    group: tuple
+    label: str | None
+    significant: bool
+
+
+@dataclass(frozen=True)
+class PeriodicError:
+    """The periodic error of a guide log (:func:`measure`): ``worm_order`` [cycles per RA turn],
+    ``worm_period_s``, ``worm_from`` (the drive's worm or the strongest period), ``peak_to_peak`` (over
+    one worm period, each session's drift removed), ``harmonics`` and ``fitted_alongside`` (tuples of
+    :class:`Order`-like dicts: order, period_s, amplitude, amplitude_stderr [Angle], phase_deg, label),
+    ``rms_raw``, ``rms_drift_removed``, ``rms_worm_removed``, ``rms_residual``, ``cycles`` (worm
+    cycles covered), ``curve_time_s`` and ``curve`` (the smoothed error over one worm period)."""
+
+    worm_order: float
+    worm_period_s: float
+    worm_from: str
+    peak_to_peak: Angle | None
+    harmonics: tuple
+    fitted_alongside: tuple
+    rms_raw: Angle | None
+    rms_drift_removed: Angle | None
+    rms_worm_removed: Angle | None
+    rms_residual: Angle | None
+    cycles: float
+    curve_time_s: object
+    curve: AngleArray
+
+
+@dataclass(frozen=True)
 class MeasureResult:
     """Result of :func:`measure`.
 
@@ -559,14 +614,19 @@ class MeasureResult:
     ``warnings``, ``notes``: text; ``resolution``: one step of the readings
     (:class:`Angle`, None when it cannot be told); ``below_resolution``: the
     names of the figures of ``iso230_2`` that are None because every reading
-    they come from is equal (their scatter is below one step, not zero).
+    they come from is equal (their scatter is below one step, not zero);
+    ``dominant``: tuple of :class:`Peak`, the strongest orders of the data;
+    ``periodic_error``: a guide log's :class:`PeriodicError` (None for other
+    data, or when no worm period is known or found).  For a guide log
+    ``iso230_2`` is None (ISO 230-2 does not apply: every frame is its own
+    target) and ``targets`` 0.
     """
 
     source: str
     drive: str | None
     rows: int
     targets: int
-    iso230_2: dict
+    iso230_2: dict | None
     orders: tuple
     residual_rms: Angle | None
     verdict: str
@@ -574,6 +634,8 @@ class MeasureResult:
     notes: tuple
     resolution: Angle | None = None
     below_resolution: tuple = ()
+    dominant: tuple = ()
+    periodic_error: PeriodicError | None = None
     core: _MeasureRecord | None = field(repr=False, compare=False, default=None)
 
     def to_dict(self, unit: str = "arcsec") -> dict:
@@ -587,8 +649,11 @@ class MeasureResult:
 
 def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonics: int = 3,
             column_map: dict | None = None, error_unit: str | None = None,
-            angle_unit: str | None = None, input_format: str | None = None) -> MeasureResult:
-    """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
+            angle_unit: str | None = None, input_format: str | None = None, sessions=None,
+            pixel_scale: float | None = None, dec_deg: float | None = None,
+            guide_rate: float | None = None) -> MeasureResult:
+    """ISO 230-2 figures and order amplitudes of a rotary-table measurement; the periodic error of a
+    telescope mount's PHD2 guide log.
 
     Parameters
     ----------
@@ -601,7 +666,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         Orders to fit (default: the drive's, else 1, 2, 3, 4).
     harmonics : int
         With ``drive``: harmonics of each shaft/mesh order (1 to 10).
-    column_map, error_unit, angle_unit, input_format
+    column_map, error_unit, angle_unit, input_format, sessions, pixel_scale, dec_deg, guide_rate
         As for :func:`read_measurement` (ignored when ``data`` is a Measurement).
 
     Raises
@@ -613,6 +678,10 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     >>> r = measure("configs/mch50-warm.csv", drive="configs/mch50.toml")
     >>> round(r.iso230_2["E"].arcsec, 1), round(r.iso230_2["B"].arcsec, 1)
     (177.8, 154.9)
+    >>> g = measure("configs/cge-pro-guidelog.txt", drive="configs/cge-pro-ra.toml")
+    >>> pe = g.periodic_error
+    >>> round(pe.worm_period_s, 1), round(pe.harmonics[0]["amplitude"].arcsec, 2), round(pe.peak_to_peak.arcsec, 1)
+    (478.7, 8.28, 16.8)
     """
     from wormgear_cli.errors import UsageError
     from wormgear_cli.workflows.measure import measure as run
@@ -621,7 +690,9 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     if isinstance(data, Measurement):
         path, options = data.path, data.options
     else:
-        path, options = data, _read_options(column_map, error_unit, angle_unit, input_format)
+        path, options = data, _read_options(column_map, error_unit, angle_unit, input_format,
+                                            dict(sessions=sessions, pixel_scale=pixel_scale, dec_deg=dec_deg,
+                                                 guide_rate=guide_rate))
     if drive is not None and not isinstance(drive, (str, os.PathLike)):
         raise UsageError("drive: expected the path of a drive spec (TOML)")
     if isinstance(harmonics, bool) or not 1 <= int(harmonics) <= 10:
@@ -638,10 +709,33 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
         items.append(Order(it["order"], it["label"], it["status"], _angle(c["amplitude"]),
                            _angle(c["amplitude_stderr"]), c["phase_deg"], _angle(d["amplitude"]), d["phase_deg"]))
     res = doc["resolution"] or {}
-    return MeasureResult(doc["source"], doc["drive"], doc["rows"], doc["targets"],
-                         {k: _angle(v) for k, v in doc["iso230_2"].items()}, tuple(items),
+    iso = None if doc["iso230_2"] is None else {k: _angle(v) for k, v in doc["iso230_2"].items()}
+    peaks = tuple(Peak(p["order"], p["period_s"], _angle(p["amplitude"]), _angle(p["amplitude_stderr"]),
+                       tuple(p["group"]), p["label"], p["significant"])
+                  for p in (doc["dominant"] or {}).get("peaks", ()))
+    return MeasureResult(doc["source"], doc["drive"], doc["rows"], doc["targets"] or 0, iso, tuple(items),
                          _angle(doc["orders"]["residual_rms"]), doc["verdict"], tuple(doc["warnings"]),
-                         tuple(doc["notes"]), _angle(res.get("step")), tuple(res.get("below", ())), core)
+                         tuple(doc["notes"]), _angle(res.get("step")), tuple(res.get("below", ())), peaks,
+                         _periodic(doc["periodic_error"]), core)
+
+
+def _periodic(pe: dict | None) -> PeriodicError | None:
+    """The :class:`PeriodicError` of measure's document (angles in rad), None without one."""
+    if not pe or pe.get("worm_order") is None:
+        return None
+    import numpy as np
+
+    def entry(it: dict) -> dict:
+        return {"order": it["order"], "period_s": it["period_s"], "amplitude": _angle(it["amplitude"]),
+                "amplitude_stderr": _angle(it["amplitude_stderr"]), "phase_deg": it["phase_deg"],
+                "label": it["label"]}
+
+    rms = pe["rms"]
+    return PeriodicError(pe["worm_order"], pe["worm_period_s"], pe["worm_from"], _angle(pe["peak_to_peak"]),
+                         tuple(entry(it) for it in pe["harmonics"]), tuple(entry(it) for it in pe["fitted_alongside"]),
+                         _angle(rms["raw"]), _angle(rms["drift_removed"]), _angle(rms["worm_removed"]),
+                         _angle(rms["residual"]), pe["cycles"], np.asarray(pe["curve"]["time_s"]),
+                         AngleArray(np.asarray(pe["curve"]["error"], dtype=float)))
 
 
 # --- compensate ----------------------------------------------------------------------------------------------
@@ -717,7 +811,9 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
                range_deg: tuple[float, float] | None = None, file_type: int = 1, unit: str = "arcsec",
                max_correction=None, worm_period_s: float | None = None, steps_per_worm: int | None = None,
                column_map: dict | None = None, error_unit: str | None = None,
-               angle_unit: str | None = None) -> Compensation:
+               angle_unit: str | None = None, input_format: str | None = None, sessions=None,
+               pixel_scale: float | None = None, dec_deg: float | None = None,
+               guide_rate: float | None = None) -> Compensation:
     """The correction a controller or a mount loads, and what it will leave (``wormgear compensate``).
 
     Parameters
@@ -743,8 +839,8 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
         The largest correction allowed; beyond it ``exceeded`` is True and a warning says so.
     worm_period_s, steps_per_worm
         A mount's worm period [s] and RA motor steps per worm turn.
-    column_map, error_unit, angle_unit
-        As for :func:`read_measurement` (a file only).
+    column_map, error_unit, angle_unit, input_format, sessions, pixel_scale, dec_deg, guide_rate
+        As for :func:`read_measurement` (a file only; a PHD2 guide log is read as it is).
 
     Raises
     ------
@@ -778,7 +874,9 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     elif all(hasattr(data, a) for a in ("angle", "error", "present")):  # a core Measurement
         core = compensate_measurement(data, options)
     else:
-        core = run(data, options, _read_options(column_map, error_unit, angle_unit))
+        core = run(data, options, _read_options(column_map, error_unit, angle_unit, input_format,
+                                                dict(sessions=sessions, pixel_scale=pixel_scale, dec_deg=dec_deg,
+                                                     guide_rate=guide_rate)))
     result = _compensation(core)
     if output is not None:
         result.write(output)

@@ -36,17 +36,6 @@ def test_worm_phase_zero_is_next_to_the_record():
     assert (curve.reference * 180.0 / (2 * math.pi)) == pytest.approx(round(curve.reference * 180.0 / (2 * math.pi)))
 
 
-@pytest.mark.parametrize("seed", range(4))
-def test_the_strongest_period_is_the_worm(seed):
-    theta, y, run = _record(seed)
-    assert pec.period_of(pec.strongest_worm_order(theta, y, run)) == pytest.approx(478.69, abs=1.5)
-
-
-def test_too_short_a_record_has_no_period():
-    theta, y, run = _record(duration_s=80.0)  # 1.5 cycles of the shortest period searched (60 s) need 90 s
-    assert pec.strongest_worm_order(theta, y, run) is None
-
-
 def test_cycles_are_left_out_one_at_a_time():
     theta, y, run = _record(duration_s=2400.0)
     th = pec.continuous(theta, run)

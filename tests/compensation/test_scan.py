@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from tests.support import compensation_data as data
-from wormgear_cli.compensation.scan import order_amplitudes, strongest_order, strongest_orders
+from wormgear_cli.compensation.scan import order_amplitudes, strongest_orders
 
 
 def test_each_candidate_is_the_least_squares_fit_of_its_own_columns():
@@ -52,16 +52,6 @@ def test_on_noise_alone_nothing_is_chosen_in_most_data_sets():
         sel = strongest_orders(th, rng.normal(size=72), np.ones(72), range(1, 30))
         chosen += bool(sel.orders)
     assert chosen <= 3  # alpha 0.01 per step (Bonferroni): about 0.3 expected
-
-
-def test_strongest_order_finds_a_period_on_a_short_arc():
-    rng = np.random.default_rng(1)
-    th = np.linspace(1.0, 1.0 + np.radians(10.0), 1200)  # ten degrees of axis: five cycles of order 180
-    drift = np.column_stack([np.ones_like(th), th - th.mean()])
-    y = 3 * np.sin(180.0 * th + 1.0) + 40 * (th - th.mean()) + rng.normal(0, 0.5, th.size)
-    k, amp = strongest_order(th, y, np.ones_like(th), 60.0, 1000.0, base=drift)
-    assert k == pytest.approx(180.0, abs=1.0)
-    assert amp == pytest.approx(3.0, rel=0.1)
 
 
 def test_weighted_scan_is_the_weighted_least_squares_fit():
@@ -163,25 +153,6 @@ def test_both_directions_are_used_when_both_were_measured():
     assert sel.orders == (5.0,)
     one = strongest_orders(th[:40], y[:40], d[:40], [4, 5, 6], noise_var=0.01, max_orders=1)
     assert one.orders == (5.0,)  # forward only: the pattern is common mode there
-
-
-def test_strongest_order_precision_range_drift_and_weights():
-    th = np.linspace(1.0, 1.0 + np.radians(20.0), 2000)
-    clean = np.sin(180.37 * th + 0.3)
-    assert strongest_order(th, clean, np.ones_like(th), 60.0, 1000.0)[0] == pytest.approx(180.37, abs=0.01)
-    # the search stays within its range
-    assert 200.0 <= strongest_order(th, clean, np.ones_like(th), 200.0, 1000.0)[0]
-    assert 100.0 <= strongest_order(th, clean, np.ones_like(th), 100.0, 150.0)[0] <= 150.0
-    # a large drift is taken out by the base columns, not found as a slow order
-    drift = 400.0 * (th - th.mean())
-    base = np.column_stack([np.ones_like(th), th - th.mean()])
-    assert strongest_order(th, clean + drift, np.ones_like(th), 60.0, 1000.0, base=base)[0] == \
-        pytest.approx(180.37, abs=0.01)
-    # rows of weight ~0 do not count
-    spoiled = clean.copy()
-    spoiled[:1000] = 50 * np.sin(90.0 * th[:1000])
-    w = np.r_[np.full(1000, 1e-9), np.ones(1000)]
-    assert strongest_order(th, spoiled, np.ones_like(th), 60.0, 1000.0, weights=w)[0] == pytest.approx(180.37, abs=0.05)
 
 
 def test_selection_in_radians_with_a_zero_noise_and_its_record():

@@ -88,7 +88,7 @@ def test_an_explicit_input_format_is_used_and_checked(runner, tmp_path):
     path = FIELD / "twincat-scope-resolver.csv"
     result = runner.invoke(app, ["measure", str(path), "--input-format", "bogus"])
     assert result.exit_code == 2
-    assert result.stderr == "error: --input-format bogus: expected one of auto, twincat-scope, csv\n"
+    assert result.stderr == "error: --input-format bogus: expected one of auto, phd2, twincat-scope, csv\n"
     # read as a plain table, the metadata is no header: refused, and no metadata value proposed as a column
     result = runner.invoke(app, ["measure", str(path), "--input-format", "csv"])
     assert result.exit_code == 2
@@ -405,7 +405,7 @@ def test_the_api_reads_files_as_they_are():
     assert r.iso230_2["E"].arcsec == pytest.approx(68943.70, abs=0.01)
     from wormgear_cli.errors import UsageError
 
-    with pytest.raises(UsageError, match="--input-format nope: expected one of auto, twincat-scope, csv"):
+    with pytest.raises(UsageError, match="--input-format nope: expected one of auto, phd2, twincat-scope, csv"):
         wg.read_measurement(FIELD / "servo-quantised-backlash.csv", input_format="nope")
 
 

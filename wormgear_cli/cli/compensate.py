@@ -13,9 +13,13 @@ from wormgear_cli.cli.common import AngleUnit, OutputOption, UnitOption, count_t
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
+    DecDegOption,
     ErrorUnitOption,
+    GuideRateOption,
     InputFormatOption,
     MapOption,
+    PixelScaleOption,
+    SessionOption,
     read_options,
 )
 from wormgear_cli.output.writers import WRITERS
@@ -30,8 +34,8 @@ _FORMAT_HELP = ("File to write: " + "; ".join(f"{w.name}: {w.summary}" for w in 
 
 DataArgument = Annotated[Path, typer.Argument(
     help="Measurement CSV: an ISO 230-2 test or scan of a rotary axis (angle_deg, error_arcsec, direction, run), "
-    "or a mount's tracking record (angle: RA axis, error: actual - ideal, time_s).", show_default=False,
-    metavar="DATA.csv")]
+    "a mount's tracking record (angle: RA axis, error: actual - ideal, time_s), or a PHD2 guide log as it is.",
+    show_default=False, metavar="DATA.csv")]
 
 
 @app.command(cls=HelpCommand)
@@ -76,6 +80,10 @@ def compensate(
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
     input_format: InputFormatOption = "auto",
+    session: SessionOption = None,
+    pixel_scale: PixelScaleOption = None,
+    dec_deg: DecDegOption = None,
+    guide_rate: GuideRateOption = None,
 ):
     """Correction table for a controller (LinuxCNC, CSV) or PEC curve for a mount (EQMOD).
 
@@ -92,10 +100,9 @@ def compensate(
 
     Example: wormgear compensate test.csv --orders 1,2,9 -o table.comp
 
-    Example: wormgear compensate guide.csv --format eqmod --drive mount.toml --steps-per-worm 50133 -o pec.txt
+    Example: wormgear compensate PHD2_GuideLog.txt --drive mount.toml --steps-per-worm 50133 -o mount.pec
     """
     from wormgear_cli.compensation.table import parse_range
-    from wormgear_cli.files import refuse_input, refuse_same_outputs
     from wormgear_cli.output.formats import json_text
     from wormgear_cli.units import from_unit
     from wormgear_cli.workflows.compensate import CompensateOptions, report, summary
@@ -105,13 +112,7 @@ def compensate(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
-    refuse_same_outputs([(output, "-o"), (report_path, "--report")])
-    refuse_input(output, inputs, "-o")  # before any work, not when the result is written
-    if report_path is not None:
-        from wormgear_cli.files import check_output_path
-
-        check_output_path(report_path, "--report")
-        refuse_input(report_path, inputs, "--report")
+    _check_outputs(output, report_path, inputs)
     is_file = output is not None and str(output) != "-"
     options = CompensateOptions(
         format=fmt, drive=drive,
@@ -119,7 +120,8 @@ def compensate(
         range_deg=parse_range(range_deg) if range_deg is not None else None, file_type=file_type, unit=unit,
         max_correction=from_unit(max_correction, unit) if max_correction is not None else None,
         worm_period_s=worm_period, steps_per_worm=steps_per_worm, output=str(output) if is_file else None)
-    result = run(data, options, read_options(column_map, error_unit, angle_unit, input_format))
+    result = run(data, options, read_options(column_map, error_unit, angle_unit, input_format, session, pixel_scale,
+                                             dec_deg, guide_rate))
     for line in summary(result, unit):
         say(line)
     for w in result.warnings:
@@ -131,3 +133,14 @@ def compensate(
         emit(json_text(report(result, unit)), report_path, inputs)
     if result.exceeded:
         raise typer.Exit(1)
+
+
+def _check_outputs(output: Path | None, report_path: Path | None, inputs: list) -> None:
+    """The outputs named apart and none of them an input: refused before any work."""
+    from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
+
+    refuse_same_outputs([(output, "-o"), (report_path, "--report")])
+    refuse_input(output, inputs, "-o")
+    if report_path is not None:
+        check_output_path(report_path, "--report")
+        refuse_input(report_path, inputs, "--report")

@@ -29,9 +29,13 @@ from wormgear_cli.cli.common import (
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
+    DecDegOption,
     ErrorUnitOption,
+    GuideRateOption,
     InputFormatOption,
     MapOption,
+    PixelScaleOption,
+    SessionOption,
     check_rows_memory,
     read_options,
 )
@@ -67,6 +71,10 @@ def diagnose(
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
     input_format: InputFormatOption = "auto",
+    session: SessionOption = None,
+    pixel_scale: PixelScaleOption = None,
+    dec_deg: DecDegOption = None,
+    guide_rate: GuideRateOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
         "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
@@ -110,7 +118,8 @@ def diagnose(
     output = _check_paths(drive, data, output, write_spec, plot)
     spec = load_spec(drive)
     check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
-    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format))
+    meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format, session,
+                                                       pixel_scale, dec_deg, guide_rate))
 
     def run(progress=None):
         return run_diagnose(spec, meas, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
@@ -180,7 +189,7 @@ def _tables(doc: dict, unit: str) -> list:
     v = _View(unit)
     out = _head(doc, v) + [_gap_table(doc, v)] + _nuisance_lines(doc, v) + _effect_parts(doc, v)
     out += _candidate_parts(doc, v) + _unexplained_parts(doc, v) + _fit_parts(doc, v) + _noise_parts(doc, v)
-    out += _order_parts(doc, v) + _versus_parts(doc, v) + [_iso_table(doc, v)]
+    out += _order_parts(doc, v) + _versus_parts(doc, v) + ([_iso_table(doc, v)] if doc["iso230"] is not None else [])
     for t in out:
         if isinstance(t, Table):
             _keep_numbers_whole(t)

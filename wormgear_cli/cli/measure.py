@@ -28,9 +28,13 @@ from wormgear_cli.cli.common import (
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
+    DecDegOption,
     ErrorUnitOption,
+    GuideRateOption,
     InputFormatOption,
     MapOption,
+    PixelScaleOption,
+    SessionOption,
     check_rows_memory,
     read_options,
 )
@@ -72,6 +76,10 @@ def measure(
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
     input_format: InputFormatOption = "auto",
+    session: SessionOption = None,
+    pixel_scale: PixelScaleOption = None,
+    dec_deg: DecDegOption = None,
+    guide_rate: GuideRateOption = None,
     format: FormatOption = TableFormat.table,
     unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
@@ -115,11 +123,12 @@ def measure(
         check_plot_path(plot)
         refuse_input(plot, inputs, "--plot")
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
-    options = read_options(column_map, error_unit, angle_unit, input_format)
+    options = read_options(column_map, error_unit, angle_unit, input_format, session, pixel_scale, dec_deg, guide_rate)
     check_rows_memory(data, MEASURE_BYTES_PER_ROW, "measure")
     order_list = parse_orders(orders) if orders is not None else None
     result = run(data, options, drive, order_list, harmonics)
-    few = len(result.figures.targets) <= MAX_TABLE_TARGETS
+    ntargets = 0 if result.figures is None else len(result.figures.targets)  # a guide log has no targets
+    few = ntargets <= MAX_TABLE_TARGETS
     # the per-target part of json and csv is streamed a block of targets at a time (a dense scan has a
     # target a row); the table shows it only for a few targets
     doc = report(result, unit, per_target=fmt == "table" and few)
@@ -127,19 +136,35 @@ def measure(
         say(f"warning: {w}")
 
     if plot is not None:
-        from wormgear_cli.plots.measure import deviation_chart
-
-        deviation_chart(result.figures, result.measurement, unit, plot, title=Path(data).name)
+        _plot(result, unit, plot, Path(data).name)
         announce_written(plot)
     if fmt == "json":
-        emit_stream(json_chunks(doc, target_row_blocks(result.figures.targets, unit)), output, inputs)
+        blocks = target_row_blocks(result.figures.targets, unit) if result.figures is not None else iter(())
+        emit_stream(json_chunks(doc, blocks), output, inputs)
     elif fmt == "csv":
         say(f"note: {doc['verdict']}")
         for note in doc["notes"]:
             say(f"note: {note}")
+        if result.figures is None:
+            from wormgear_cli.cli.measure_guide import frames_csv
+
+            emit_stream([frames_csv(result, unit)], output, inputs)
+            return
         emit_stream(_csv_chunks(target_row_blocks(result.figures.targets, unit), unit), output, inputs)
     else:
-        render(_tables(doc, len(result.figures.targets)), output, inputs)
+        render(_tables(doc, ntargets), output, inputs)
+
+
+def _plot(result, unit: str, plot: Path, title: str) -> None:
+    """The deviation chart (ISO 230-2), or a guide log's periodic-error chart."""
+    if result.figures is None:
+        from wormgear_cli.plots.guidelog import periodic_error_chart
+
+        periodic_error_chart(result.measurement, result.guide, unit, plot, title=title)
+        return
+    from wormgear_cli.plots.measure import deviation_chart
+
+    deviation_chart(result.figures, result.measurement, unit, plot, title=title)
 
 
 def _check_roles(data: Path, drive: Path | None) -> None:
@@ -203,12 +228,20 @@ def _tables(doc: dict, ntargets: int) -> list:
     from rich.text import Text
 
     view = _View(doc["unit"])
-    out = [Text(doc["verdict"]), _iso_table(doc, view)]
-    out += _order_tables(doc, view)
+    out = [Text(doc["verdict"])]
+    if doc["iso230_2"] is not None:
+        out.append(_iso_table(doc, view))
+    else:  # a guide log: its periodic error first
+        from wormgear_cli.cli.measure_guide import periodic_error_tables
+
+        out += periodic_error_tables(doc, view)
+    if doc["orders"]["items"]:
+        out += _order_tables(doc, view)
     dom = _dominant_table(doc, view)
     if dom is not None:
         out.append(dom)
-    out += _target_tables(doc, ntargets, view)
+    if doc["iso230_2"] is not None:
+        out += _target_tables(doc, ntargets, view)
     for w in doc["warnings"]:
         out.append(Text(f"warning: {w}"))
     for note in doc["notes"]:

@@ -33,10 +33,6 @@ from wormgear_cli.measurement.harmonics import harmonic_columns
 SIDEREAL_DAY_S = 86164.0905
 #: degree of the drift polynomial per run
 DRIFT_DEGREE = 3
-#: shortest worm period searched for when none is given [s]
-MIN_WORM_PERIOD_S = 60.0
-#: fewest worm cycles a strongest-period search needs in the data
-MIN_SEARCH_CYCLES = 1.5
 #: a worm cycle left out must hold at least this fraction of a cycle (shorter ends join a neighbour)
 MIN_FOLD_CYCLES = 0.5
 #: points per worm cycle where the peak-to-peak is read
@@ -202,24 +198,6 @@ def pec_curve(theta, y, run, worm_order: float, orders: Sequence[float]) -> PecC
     pe = fit.evaluate(reference + turn * np.arange(rows) / rows, carried)
     return PecCurve(worm_order, period, rows, tuple(carried), tuple(other), reference, pe - float(np.mean(pe)), fit,
                     cycles_covered(th, run, worm_order))
-
-
-def strongest_worm_order(theta, y, run, lowest_period_s: float = MIN_WORM_PERIOD_S) -> float | None:
-    """The order (cycles per axis turn) of largest amplitude in a tracking record, drift removed:
-    periods from ``lowest_period_s`` to the one giving :data:`MIN_SEARCH_CYCLES` cycles in the
-    longest run; None when the runs are too short."""
-    from wormgear_cli.compensation.scan import strongest_order
-
-    run = np.asarray(run)
-    th = continuous(theta, run)
-    longest = max(float(np.ptp(th[run == r])) for r in np.unique(run))
-    if longest <= 0:
-        return None
-    lowest = MIN_SEARCH_CYCLES * 2.0 * math.pi / longest
-    highest = order_of(lowest_period_s)
-    if lowest >= highest:
-        return None
-    return strongest_order(th, y, np.ones_like(th), lowest, highest, base=drift_columns(th, run))[0]
 
 
 def cycle_folds(th, run, worm_order: float) -> np.ndarray:

@@ -15,7 +15,6 @@ numpy; scipy (the chi-square and F tail probabilities) only inside :func:`strong
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -27,8 +26,6 @@ BLOCK_CELLS = 4_000_000
 MAX_ORDERS = 8
 #: significance of one selection step (Bonferroni over the candidates tried)
 ALPHA = 0.01
-#: refinements of the strongest order, each on a grid ten times finer
-REFINEMENTS = 3
 #: a candidate is scanned only when its columns keep at least this share of the norm a sampled
 #: sinusoid has (the smallest eigenvalue of their Gram block once the base is projected out, over
 #: half the sum of the weights); below it the samples cannot tell the candidate from the base or from
@@ -205,32 +202,3 @@ def strongest_orders(theta, y, direction, candidates: Sequence[float], noise_var
         pvals.append(p_adj)
         cols.append(harmonic_block(theta, np.array([k]), d if both else None)[:, 0, :])
     return Selection(tuple(chosen), tuple(pvals), tuple(float(k) for k in candidates), reason)
-
-
-def strongest_order(theta, y, direction, lowest: float, highest: float, base=None, weights=None,
-                    step: float | None = None) -> tuple[float, float]:
-    """The single order in [``lowest``, ``highest``] (not necessarily whole) that explains the
-    largest sum of squares (the peak of a least-squares periodogram), and its common-mode
-    amplitude.  (The fitted amplitude itself peaks away from the true order on a short arc.)
-
-    A grid of step ``step`` (default: a quarter of the resolution 2 pi / span
-    of the angles) is scanned, then the best point is refined :data:`REFINEMENTS`
-    times on a grid ten times finer around it.  Meant for a mount's worm period from a
-    tracking record (a partial turn): pass the drift as ``base`` columns.
-    """
-    theta = np.asarray(theta, dtype=float)
-    span = float(np.ptp(theta)) if theta.size else 0.0
-    resolution = 2.0 * math.pi / span if span > 0 else 1.0
-    step = step or resolution / 4.0
-    grid = np.arange(lowest, highest + 0.5 * step, step)
-    if grid.size == 0:
-        grid = np.array([lowest])
-    scan = order_amplitudes(theta, y, direction, grid, base, weights)
-    best = float(grid[int(np.argmax(scan.reduction))])
-    for _ in range(REFINEMENTS):  # each pass a grid ten times finer around the best point so far
-        fine = np.clip(np.linspace(best - step, best + step, 21), lowest, highest)
-        scan = order_amplitudes(theta, y, direction, fine, base, weights)
-        i = int(np.argmax(scan.reduction))
-        best = float(fine[i])
-        step /= 10.0
-    return best, float(scan.common[i])

@@ -12,9 +12,10 @@ if TYPE_CHECKING:
     from wormgear_cli.diagnosis.phases import ModelFit
 
 
-def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y):
+def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y, base: int = 1):
     """The spec as a TOML dict with fitted phases and the named effects, and its
-    simulation (plus the fitted zero offset) at the measured rows [arcsec]."""
+    simulation (plus the fitted zero offset, and each run's offset and drift: the first ``base``
+    linear columns of ``after``) at the measured rows [arcsec]."""
     from wormgear_cli.analysis.simulate import simulate
     from wormgear_cli.spec.loader import raw_copy, set_path, spec_from_dict
 
@@ -25,4 +26,5 @@ def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y):
     for f in found:
         raw.setdefault("effects", {})[f.name] = augmented_params(f)
     aug = spec_from_dict(raw, str(spec.source), spec.drive.name)
-    return raw, simulate(aug, sig) / ARCSEC + after.offset
+    held = after.offset if base == 1 else after.lin[:, :base] @ after.beta[:base]
+    return raw, simulate(aug, sig) / ARCSEC + held

@@ -333,9 +333,12 @@ def data_findings(meas) -> list:
     """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
     pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
     ``measure``'s checks (:func:`wormgear_cli.measurement.checks.structure_findings`), the one definition."""
-    from wormgear_cli.measurement.checks import structure_findings
+    from wormgear_cli.measurement.checks import guide_log_findings, structure_findings
+    from wormgear_cli.measurement.guidelog_options import is_guide_log
     from wormgear_cli.measurement.iso230 import group_targets
 
+    if is_guide_log(meas):
+        return guide_log_findings(meas)
     tgt, _ = group_targets(meas.angle)
     findings, _ = structure_findings(meas, tgt)
     return findings
@@ -482,6 +485,7 @@ def report(diag: Diagnosis) -> dict:
 
 def _report(diag: Diagnosis) -> dict:
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.measurement.guidelog_options import is_guide_log
 
     g = drive_geometry(diag.spec)
     meas = diag.meas
@@ -513,8 +517,9 @@ def _report(diag: Diagnosis) -> dict:
                   "floor_arcsec": diag.noise_floor if math.isfinite(diag.noise_floor) else None},
         "orders": {"before": orders_before, "after": orders_after},
         "residual_vs": {"before": versus(meas, diag.before.residual, info), "after": versus(meas, resid_after, info)},
-        "iso230": {"measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
-                   "simulated_after": iso_figures(meas, diag.augmented_fitted)},
+        "iso230": None if is_guide_log(meas) else {
+            "measured": iso_figures(meas, y), "simulated_before": iso_figures(meas, diag.before.fitted),
+            "simulated_after": iso_figures(meas, diag.augmented_fitted)},
         "signals": _signals_doc(meas, info),
         "selection": {"alpha": diag.alpha, "steps": diag.steps, "stop": diag.stop.as_dict(),
                       "method": "forward selection; Wald F-test with REML run/pass random intercepts and "

@@ -122,8 +122,10 @@ SEPARATION_ROWS = 20_000
 @dataclass(frozen=True)
 class ScanContext:
     """What a residual scan needs besides the fit: the measurement's signals, groups, the drive's
-    geometry, the level ``alpha``, what varies (``info``), the spec's phase sources, the cells, and a
-    ``cache`` dict kept between the scans of one measurement (what depends on the angles only)."""
+    geometry, the level ``alpha``, what varies (``info``), the spec's phase sources, the cells, a
+    ``cache`` dict kept between the scans of one measurement (what depends on the angles only), and
+    ``run_drift``: each run's offset and drift are in the model already (a guide log's sessions), so
+    orders slower than the longest run are theirs and no other slow part is tested."""
 
     sig: Signals
     groups: Groups
@@ -133,6 +135,7 @@ class ScanContext:
     sources: list
     cells: Cells
     cache: dict | None = None
+    run_drift: bool = False
 
 
 @dataclass
@@ -167,7 +170,7 @@ def scan_residual(state: ModelFit, ctx: ScanContext) -> list[dict]:
     plan = _plan(state, ctx)
     results = _run_tests(plan, ctx, state)
     items = _order_and_trend_items(plan, ctx, state, results)
-    drift = _drift_item(plan, ctx, state)
+    drift = None if ctx.run_drift else _drift_item(plan, ctx, state)
     if drift is not None:
         items.append(drift)
     return _merge_mixed(items, plan.partial_dirs)
@@ -182,7 +185,7 @@ def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
     if "coverage" not in cache:
         cov = coverage(sig.theta)
         slow = slow_model(sig.theta, cov, ctx.groups.pass_run[ctx.groups.pass_id], sig.direction,
-                          sig.time if info.time_range > 0 else None)
+                          sig.time if info.time_range > 0 else None, per_run=ctx.run_drift)
         cache["coverage"] = (cov, slow if slow.degree else None)
     cov, slow = cache["coverage"]
     r = state.residual
@@ -220,7 +223,7 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
     sig = ctx.sig
     if "targets" not in cache:
         cache["targets"] = int(group_targets(sig.theta)[1].shape[0])
-    top = min(30, cache["targets"] // 2)
+    top = 0 if ctx.run_drift else min(30, cache["targets"] // 2)  # a guide log: no low orders of a table
     orders = sorted({*map(float, range(1, top + 1)), *labels})
     owned = sorted(set(catalogue_orders(ctx.geometry)) | {float(s.order) for s in ctx.sources})
     if slow is not None:
@@ -230,7 +233,7 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
         orders = _separable_from(orders, owned, sig.theta, cov, cache)
     dom = dominant_orders(sig.theta, state.residual, sig.direction, sig.time if ctx.info.time_range > 0 else None,
                           ctx.groups.pass_run[ctx.groups.pass_id],
-                          ScanOptions(alpha=ctx.alpha, max_peaks=MAX_SCANNED_PEAKS))
+                          ScanOptions(alpha=ctx.alpha, max_peaks=MAX_SCANNED_PEAKS, drift_per_run=ctx.run_drift))
     scanned = {}
     for p in dom.significant:
         lo, hi = p.group

@@ -228,7 +228,14 @@ def _setup(spec, meas, opt: DiagnoseOptions) -> _Setup:
         groups = replace(groups, describe="no run column: runs inferred where time_s goes backwards, one pass per "
                                           "run and direction")
     few_runs = groups.runs < MIN_RUNS
-    if few_runs:
+    if getattr(meas, "run_drift", False):
+        # each run's offset and drift are fixed terms of the model (base_columns): a random intercept per run
+        # or pass would have nothing left to estimate
+        groups = Groups(groups.pass_id, groups.pass_size, groups.pass_run, groups.pass_direction, groups.runs,
+                        False, False, groups.describe.split(";")[0] + "; each run's offset and drift (a cubic in "
+                        "time) fitted as fixed terms, as a guide log's sessions need: no scatter between runs is "
+                        "estimated, noise taken as white")
+    elif few_runs:
         # one or two runs: scatter between runs and passes cannot be estimated (a variance from one run is
         # meaningless); the noise is taken as white and effects that need replication are not tested
         plural = "s" if groups.runs != 1 else ""
@@ -263,6 +270,7 @@ class _Run:
     lin: np.ndarray
     plain_lin: np.ndarray
     lin_names: list
+    base: int = 1  # the columns every model holds (base_columns)
     fixed: int = 1
     held: list = field(default_factory=list)
     scan_orders: dict = field(default_factory=dict)
@@ -284,14 +292,28 @@ def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
 
     s = _setup(spec, meas, opt)
     opt.say("fitting phases and offset")
-    ones = np.ones((s.n, 1))
-    before = fit_model(s.ctx, ones, opt.fit_phases)
-    run = _Run(s, opt, before, before, before, ones, ones, [("the zero offset", slice(0, 1))])
+    base, name = base_columns(meas)
+    before = fit_model(s.ctx, base, opt.fit_phases)
+    run = _Run(s, opt, before, before, before, base, base, [(name, slice(0, base.shape[1]))], base=base.shape[1],
+               fixed=base.shape[1])
     _hold_nuisance(run)
     run.remaining = {name: candidate(name, s.sig, s.g) for name in train_effects(s.g) if name not in spec.effects}
     run.alias_notes = order_aliases(s.sig.theta, run.remaining, s.sources, s.g)
     _select(run)
     return _conclude(run)
+
+
+def base_columns(meas) -> tuple[np.ndarray, str]:
+    """The linear columns every model of ``meas`` holds, and their name: the zero offset; for a
+    measurement whose runs each have an offset and a drift of their own (``meas.run_drift``: a guide
+    log's sessions), those too (a cubic in time per run,
+    :func:`~wormgear_cli.measurement.drift.drift_columns`)."""
+    ones = np.ones((len(meas), 1))
+    if not getattr(meas, "run_drift", False):
+        return ones, "the zero offset"
+    from wormgear_cli.measurement.drift import drift_columns
+
+    return np.hstack([ones, drift_columns(meas.time, meas.run)]), "the zero offset and each run's offset and drift"
 
 
 def _hold_nuisance(run: _Run) -> None:
@@ -301,7 +323,7 @@ def _hold_nuisance(run: _Run) -> None:
     s, opt = run.s, run.opt
     opt.say("scanning the residual for structure no catalogue effect owns")
     items = scan_residual(run.state, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
-                                                 run.scan_orders))
+                                                 run.scan_orders, s.meas.run_drift))
     held = nuisance_columns(items, s.sig, s.g, run.state, s.info, run.scan_orders)
     lin, names = run.lin, list(run.lin_names)
     for label, cols, _ in held:
@@ -485,7 +507,7 @@ def _conclude(run: _Run) -> Diagnosis:
     # what is left once the named effects are in, tested afresh without the nuisance terms (structure held
     # while the candidates were tested may have been a named effect's content seen from too short an arc)
     unexplained = scan_residual(run.plain, ScanContext(s.sig, s.groups, s.g, opt.alpha, s.info, s.sources, s.cells,
-                                                       run.scan_orders))
+                                                       run.scan_orders, s.meas.run_drift))
     nuisance, rms_with = [], None
     if run.held:
         nuisance = _nuisance_parts(run, after)
@@ -493,14 +515,24 @@ def _conclude(run: _Run) -> Diagnosis:
         # the drive's model without the held structure, which no spec can hold: the named effects at their
         # estimates (as the augmented spec writes them), the phases and the offset refitted
         effects_part = run.lin[:, run.fixed:] @ after.beta[run.fixed:]
-        after = fit_model(s.ctx.replaced(base=s.ctx.base + effects_part), run.lin[:, :1], opt.fit_phases,
+        after = fit_model(s.ctx.replaced(base=s.ctx.base + effects_part), run.lin[:, :run.base], opt.fit_phases,
                           extra_starts=[after.psi, run.plain.psi, run.before.psi])
     floor = noise_floor_rms(after, s.groups, s.sig.time if "time_s" in s.meas.present else None)
     unexplained = annotate(unexplained, run.scores, s.groups, s.few_runs, likely, after, floor, s.g)
-    augmented, aug_fitted = augment(s.spec, s.sig, after, s.sources, found, opt.fit_phases, s.y)
-    return Diagnosis(s.spec, s.meas, s.groups, s.info, s.sources, opt.fit_phases, opt.alpha, s.y - s.simulated_spec,
+    augmented, aug_fitted = augment(s.spec, s.sig, after, s.sources, found, opt.fit_phases, s.y, run.base)
+    return Diagnosis(s.spec, s.meas, s.groups, s.info, s.sources, opt.fit_phases, opt.alpha, _as_specified(run),
                      s.simulated_spec, run.before, after, found, run.scores, run.steps, run.stop, unexplained,
                      augmented, aug_fitted, _thermal_prediction(s.spec), s.few_runs, floor, likely, nuisance, rms_with)
+
+
+def _as_specified(run: _Run) -> np.ndarray:
+    """The measured error minus the spec's model as specified [arcsec]; each run's offset and drift
+    removed (least squares) where the runs have their own (a guide log)."""
+    gap = run.s.y - run.s.simulated_spec
+    if run.base == 1:
+        return gap
+    cols = run.lin[:, :run.base]
+    return gap - cols @ np.linalg.lstsq(cols, gap, rcond=None)[0]
 
 
 def _likely(run: _Run, found) -> dict | None:

@@ -72,6 +72,13 @@ def duplicate_rows(m, repeated=None) -> int:
     return same
 
 
+def guide_log_findings(m) -> list:
+    """The findings of a guide log: the reader's notes and warnings (pulse sign, lock changes); the
+    checks of targets and directions do not apply (every frame is at its own angle, one way)."""
+    return ([Finding("reader", note, False) for note in m.notes]
+            + [Finding("guide_log", w, True, "see warnings") for w in m.warnings])
+
+
 def structure_findings(m, target_index: np.ndarray, repeated=None) -> tuple[list, bool]:
     """Findings about what the file does not state, and whether the directions are mixed.
 

@@ -24,7 +24,9 @@ Method (a periodogram at exact orders, then exact least squares at the peaks):
    Bonferroni over the independent orders scanned.
 4. Peaks are taken one at a time, strongest first, each refined to the exact order of largest
    power (partial arcs) and projected out before the next (prewhitening), while significant, up
-   to ``max_peaks``.  The peaks are then fitted jointly by least squares with the model of step 1;
+   to ``max_peaks``.  Over a partial arc the peaks' orders are then refined together, each with the
+   others held and its own harmonics fitted with it (:func:`_improve`).  The peaks are then fitted
+   jointly by least squares with the model of step 1;
    standard errors from blocks of consecutive rows where the residual is serially correlated
    (:func:`~wormgear_cli.measurement.serial.serial_blocks`).
 5. Each peak's *group*: the interval of orders that cannot be told apart from it (canonical
@@ -72,6 +74,10 @@ MAX_FFT = 1 << 22
 BASIS_ROWS = 100_000
 #: rows per block when the model is handled in blocks
 BLOCK = 65_536
+#: harmonics of a peak fitted with it when the peaks' orders are refined together (partial arcs)
+REFINE_HARMONICS = 3
+#: rounds of that refinement (each peak in turn, the others held)
+REFINE_ROUNDS = 2
 
 
 @dataclass(frozen=True)
@@ -89,7 +95,14 @@ class ScanOptions:
     whose group holds the order (a drive's shafts and meshes);
     ``seconds_per_turn``: time of one turn [s] for the periods (default:
     from ``time`` when the rows move at a steady rate); ``separation``: the
-    canonical correlation of a peak's group."""
+    canonical correlation of a peak's group; ``drift_per_run``: each run
+    (``passes``) has an offset and a drift in time of its own (the sessions of
+    a guide log; :func:`~wormgear_cli.measurement.drift.slow_model`), and
+    orders slower than one cycle over the longest run are not scanned;
+    ``label_window`` [cycles/rev]: a labelled order at most this far from a
+    peak names it even outside the peak's group (runs whose relative phase is
+    known less well than their placement on the angle says: a guide log's
+    sessions placed by their logged hour angle)."""
 
     max_peaks: int = 5
     alpha: float = 0.01
@@ -100,6 +113,8 @@ class ScanOptions:
     labels: tuple = ()
     seconds_per_turn: float | None = None
     separation: float = SEPARATION_CORR
+    drift_per_run: bool = False
+    label_window: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -315,9 +330,9 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     t = None if time is None else _as_1d("time", time, n)
     th = unwrap_passes(theta, passes)
     cov = coverage(theta, orders=[1.0, *[float(k) for k in opt.held]])
-    slow = slow_model(theta, cov, passes, d, t)
+    slow = slow_model(theta, cov, passes, d, t, per_run=opt.drift_per_run)
     slow_at = _slow_at(d, slow.columns)
-    lo, hi, resolution, nyquist = _range(th, cov, slow.kind, opt)
+    lo, hi, resolution, nyquist = _range(th, cov, slow, opt)
     spt = opt.seconds_per_turn if opt.seconds_per_turn else _seconds_per_turn(th, t, passes)
     empty = n < 8 or cov.distinct < 3 or not hi >= lo
     grid = _grid(lo, hi, resolution, cov.full_turn, opt.oversample) if not empty else np.zeros(0)
@@ -328,13 +343,14 @@ def dominant_orders(theta, y, direction=None, time=None, passes=None, options: S
     resid = scan.refresh()
     independent = max(1, int(round((hi - lo) / resolution)) + 1) if grid.size else 0
     found, method = _peaks(scan, resid, independent, opt) if grid.size else ([], "")
+    found = _improve(scan, found, hi, resolution)
     fit = _joint_fit(scan, [f[0] for f in found], passes, t)
     slow_size = drift_size(slow.columns, fit["coef"][slow_at]) if slow.degree else 0.0
     peaks = []
     for i, (k, ratio, p_adj) in enumerate(found):
         group = _group(scan, k, opt.separation, resolution)
         aliases = _aliases(scan, k, [(o, lab) for o, lab in opt.labels if float(o) > hi])
-        label = _label(group, k, opt.labels)
+        label = _label((min(group[0], k - opt.label_window), max(group[1], k + opt.label_window)), k, opt.labels)
         if label is None and aliases:
             o, c, lab = aliases[0]
             label = f"partly aliased with order {o:g} ({lab}; correlation {c:.2f} on these angles)"
@@ -392,8 +408,9 @@ def _base_columns(theta, d, slow_cols, held) -> tuple[np.ndarray, slice]:
     return np.hstack(cols), slice(first, first + slow_cols.shape[1])
 
 
-def _range(theta, cov: Coverage, slow_kind: str, opt: ScanOptions) -> tuple[float, float, float, float]:
-    """(lowest, highest order scanned, resolution, Nyquist limit) [cycles/rev]."""
+def _range(theta, cov: Coverage, slow, opt: ScanOptions) -> tuple[float, float, float, float]:
+    """(lowest, highest order scanned, resolution, Nyquist limit) [cycles/rev] (``slow``: the
+    :class:`~wormgear_cli.measurement.drift.SlowModel`)."""
     two_pi = 2.0 * math.pi
     resolution = 1.0 if cov.full_turn or cov.span <= 0 else two_pi / cov.span
     distinct = np.unique(np.mod(theta, two_pi))
@@ -408,7 +425,9 @@ def _range(theta, cov: Coverage, slow_kind: str, opt: ScanOptions) -> tuple[floa
     if cov.full_turn:
         lo = 1.0
     else:
-        lo = resolution * (MIN_PERIOD_SHARE if slow_kind == "time" else 1.0)
+        lo = resolution * (MIN_PERIOD_SHARE if slow.kind == "time" else 1.0)
+    if slow.run_span > 0:  # an offset and a drift per run: one cycle over the longest run at least
+        lo = max(lo, 2.0 * math.pi / slow.run_span)
     hi = min(nyquist, MAX_SCAN_ORDER)
     if opt.min_order is not None:
         lo = max(lo, float(opt.min_order))
@@ -597,7 +616,9 @@ def _peaks(scan: _Scan, resid: np.ndarray, independent: int, opt: ScanOptions) -
         if not np.any(np.isfinite(ratio)):
             break
         i = int(np.argmax(ratio))
-        k = float(scan.grid[i]) if scan.full_turn else _refine(scan, resid, float(scan.grid[i]))
+        k = float(scan.grid[i]) if scan.full_turn else _refine(scan, resid, float(scan.grid[i]),
+                                                                 bounds=_apart(float(scan.grid[i]), scan.peaks,
+                                                                               _half_width(scan)))
         exact = _powers(scan, resid, np.array([k]))[0]
         r = float(exact / level[i]) if math.isfinite(exact) else float(ratio[i])
         p_adj = min(1.0, independent * math.exp(-r))
@@ -616,26 +637,89 @@ def _half_width(scan: _Scan) -> float:
     return 0.5 if scan.full_turn else math.pi / scan.span
 
 
-def _refine(scan: _Scan, resid: np.ndarray, k: float) -> float:
-    """The order of largest exact power within one grid step of ``k`` (golden-section search)."""
+def _refine(scan: _Scan, resid: np.ndarray, k: float, power=None, bounds=(-math.inf, math.inf)) -> float:
+    """The order of largest exact power within one grid step of ``k`` and inside ``bounds`` (golden-section
+    search); ``power`` (orders -> powers) defaults to :func:`_powers`."""
     step = float(scan.grid[1] - scan.grid[0]) if scan.grid.shape[0] > 1 else 0.0
-    if step <= 0:
+    a, b = max(k - step, bounds[0]), min(k + step, bounds[1])
+    if step <= 0 or not a < b:
         return k
-    a, b = k - step, k + step
+    if power is None:
+        def power(orders):
+            return _powers(scan, resid, orders)
     g = (math.sqrt(5.0) - 1.0) / 2.0
     x1, x2 = b - g * (b - a), a + g * (b - a)
-    f1, f2 = _powers(scan, resid, np.array([x1, x2]))
+    f1, f2 = power(np.array([x1, x2]))
     for _ in range(20):
         if not (f1 < f2):
             b, x2, f2 = x2, x1, f1
             x1 = b - g * (b - a)
-            f1 = _powers(scan, resid, np.array([x1]))[0]
+            f1 = power(np.array([x1]))[0]
         else:
             a, x1, f1 = x1, x2, f2
             x2 = a + g * (b - a)
-            f2 = _powers(scan, resid, np.array([x2]))[0]
+            f2 = power(np.array([x2]))[0]
     best = 0.5 * (a + b)
-    return best if math.isfinite(_powers(scan, resid, np.array([best]))[0]) else k
+    return best if math.isfinite(power(np.array([best]))[0]) else k
+
+
+def _improve(scan: _Scan, found: list, hi: float, resolution: float) -> list:
+    """The peaks' orders refined together over a partial arc (on a full turn they are whole orders).
+
+    Each peak found one at a time was refined with only the stronger ones held; here each is refined
+    again, in turn, with every other peak held and its own harmonics (up to :data:`REFINE_HARMONICS`
+    times its order, below ``hi`` and more than a ``resolution`` from another peak) fitted with it: the
+    fundamental of an error that is not a pure sine is located by its whole series (the multi-harmonic
+    periodogram, Schwarzenberg-Czerny 1996, ApJ 460, L107), and a strong neighbour no longer pulls it
+    (the final step of prewhitening: every frequency improved with the others in the model).
+    :data:`REFINE_ROUNDS` rounds; on more than :data:`BASIS_ROWS` rows (units), on an even subsample of
+    them.  ``found`` [(order, power ratio, adjusted p)] keeps its ratios and p-values (from the scan)."""
+    if scan.full_turn or not found or scan.grid.shape[0] < 2:
+        return found
+    n = scan.theta.shape[0]
+    pick = None if n <= BASIS_ROWS else np.linspace(0, n - 1, BASIS_ROWS).astype(np.int64)
+
+    def rows(x):
+        return x if x is None or pick is None else x[pick]
+
+    sub = _Scan(rows(scan.theta), rows(scan.y), rows(scan.base), scan.grid, scan.span, scan.full_turn, rows(scan.d),
+                sw=rows(scan.sw))
+    ks = [float(f[0]) for f in found]
+    half = _half_width(scan)
+    for _ in range(REFINE_ROUNDS):
+        for j, k in enumerate(ks):
+            others = ks[:j] + ks[j + 1:]
+            sub.peaks, sub.q, sub.q_peaks = others, None, 0
+            resid = sub.refresh()
+            series = [h for h in range(1, REFINE_HARMONICS + 1)
+                      if h == 1 or (h * k <= hi and all(abs(h * k - o) > resolution for o in others))]
+            # never closer than half a resolution to another peak (two columns that close trade amplitude)
+            ks[j] = _refine(sub, resid, k, lambda orders, resid=resid, series=series:
+                            _series_powers(sub, resid, orders, series), _apart(k, others, half))
+    return [(k, r, p) for k, (_, r, p) in zip(ks, found)]
+
+
+def _apart(k: float, others, half: float) -> tuple[float, float]:
+    """The interval around ``k`` that keeps at least ``half`` [cycles/rev] from every order of ``others``
+    (two peaks closer than half a resolution trade amplitude instead of being told apart)."""
+    return (max([o + half for o in others if o < k], default=-math.inf),
+            min([o - half for o in others if o > k], default=math.inf))
+
+
+def _series_powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray, series: list) -> np.ndarray:
+    """Sum of squares of ``resid`` explained by the columns of h x k for h in ``series``, for each k of
+    ``orders``, the model's basis ``scan.q`` projected out (NaN where the columns are degenerate)."""
+    q = scan.q
+    out = np.full(orders.shape[0], np.nan)
+    for i, k in enumerate(orders):
+        c = np.hstack([scan.trig(h * float(k)) for h in series])
+        proj = q.T @ c
+        gram = c.T @ c - proj.T @ proj
+        rhs = c.T @ resid
+        lam = np.linalg.eigvalsh(gram)
+        if np.trace(gram) > MIN_SCAN_SHARE * scan.total * gram.shape[0] / 2 and lam[0] > 1e-9 * max(lam[-1], 1e-300):
+            out[i] = float(rhs @ np.linalg.solve(gram, rhs))
+    return out
 
 
 def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:

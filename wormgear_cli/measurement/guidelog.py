@@ -60,7 +60,8 @@ from datetime import datetime
 import numpy as np
 
 from wormgear_cli.errors import DataError, UsageError
-from wormgear_cli.measurement.reader import ARCSEC, Measurement
+from wormgear_cli.measurement.guidelog_options import GuideLogOptions
+from wormgear_cli.measurement.reader import ARCSEC, Measurement, ReadOptions
 from wormgear_cli.units import DEG, SIDEREAL_DAY_S
 
 #: the start of the column line of a guiding section
@@ -79,52 +80,6 @@ SIGN_MIN_PULSES = 20
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _BEGINS = "Guiding Begins at"
-
-
-@dataclass(frozen=True)
-class GuideLogOptions:
-    """What a guide log may leave out, and which sessions to read (the CLI's option names in brackets).
-
-    Parameters
-    ----------
-    sessions : tuple of int (or one int)
-        Sessions to read, numbered from 1 in file order (``--session N``); empty: all.
-    pixel_scale : float or None
-        Guide-camera pixel scale [arcsec/px] (``--pixel-scale``); wins over the log's.
-    dec_deg : float or None
-        Declination guided on [deg] (``--dec-deg``); wins over the log's.
-    guide_rate : float or None
-        RA guide rate [arcsec of RA axis per second of pulse, i.e. sky arcsec/s at the equator]
-        (``--guide-rate``); wins over the log's calibration.
-
-    Raises
-    ------
-    UsageError
-        A value out of range (naming the option).
-    """
-
-    sessions: tuple[int, ...] = ()
-    pixel_scale: float | None = None
-    dec_deg: float | None = None
-    guide_rate: float | None = None
-
-    def __post_init__(self):
-        if isinstance(self.sessions, (int, np.integer)) and not isinstance(self.sessions, bool):
-            object.__setattr__(self, "sessions", (int(self.sessions),))  # one session given as a number
-        else:
-            object.__setattr__(self, "sessions", tuple(self.sessions))
-        problems = []
-        for k in self.sessions:
-            if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-                problems.append(f"--session {k}: expected a session number, 1 for the first")
-        for value, option, what in ((self.pixel_scale, "--pixel-scale", "arc-seconds per pixel"),
-                                    (self.guide_rate, "--guide-rate", "arc-seconds per second")):
-            if value is not None and not (math.isfinite(value) and value > 0):
-                problems.append(f"{option} {value}: expected a positive number of {what}")
-        if self.dec_deg is not None and not (math.isfinite(self.dec_deg) and abs(self.dec_deg) <= 90.0):
-            problems.append(f"--dec-deg {self.dec_deg}: expected a declination in [-90, 90] degrees")
-        if problems:
-            raise UsageError(problems)
 
 
 def looks_like_guidelog(head: str) -> bool:
@@ -889,9 +844,21 @@ def read_guidelog(text: str, name: str = "<guide log>", options: GuideLogOptions
         run=np.concatenate(run), load=np.zeros(n), temperature=np.full(n, 20.0), time=np.concatenate(time),
         present=frozenset({"run", "time_s"}),
         header=tuple(sorted(sessions[0].sec.columns, key=sessions[0].sec.columns.get)), comments=(),
-        notes=tuple(notes), warnings=tuple(warnings),
+        notes=tuple(notes), warnings=tuple(warnings), input_format="phd2", run_drift=True,
         columns=(("angle_deg", "Time"), ("error_arcsec", "RARawDistance"), ("run", "Guiding Begins"),
                  ("time_s", "Time")))
+
+
+def read_phd2(text: str, name: str, options: ReadOptions) -> Measurement:
+    """The input format's entry point (:mod:`wormgear_cli.measurement.readers`): :func:`read_guidelog`
+    with ``options.guidelog``.  UsageError for the options of tables (``--map``, ``--error-unit``,
+    ``--angle-unit``): a guide log's columns and units are PHD2's."""
+    table = [o for o, given in (("--map", options.column_map), ("--error-unit", options.error_unit),
+                                ("--angle-unit", options.angle_unit)) if given]
+    if table:
+        raise UsageError(f"{', '.join(table)}: for tables; {name} is a PHD2 guide log, whose columns and units are "
+                         "PHD2's (its options: --session, --pixel-scale, --dec-deg, --guide-rate)")
+    return read_guidelog(text, name, options.guidelog)
 
 
 # --- what was done, in words --------------------------------------------------------------------------------

@@ -55,7 +55,9 @@ class OrdersOptions:
     (:data:`~wormgear_cli.measurement.separation.SEPARATION_CORR`);
     ``serial``: standard errors that hold for serially correlated rows
     (:func:`~wormgear_cli.measurement.serial.serial_blocks`; False: ordinary
-    least squares)."""
+    least squares); ``drift_per_run``: each run (``passes``) has an offset and a
+    drift in time of its own (the sessions of a guide log;
+    :func:`~wormgear_cli.measurement.drift.slow_model`)."""
 
     labels: tuple | None = None
     priority: tuple | None = None
@@ -65,6 +67,7 @@ class OrdersOptions:
     unique: object = None
     separation: float = SEPARATION_CORR
     serial: bool = True
+    drift_per_run: bool = False
 
 
 @dataclass(frozen=True)
@@ -217,7 +220,7 @@ def analyse_orders(theta, y, direction, orders: Sequence[float],
     th = unwrap_passes(theta, opt.passes) if unwrapped else theta
     sums = _AngleSums.build(th, y, d, None if unwrapped else opt.unique)
     cov = coverage(theta, opt.passes, unique=sums.ut, orders=req.ords)
-    slow = slow_model(theta, cov, opt.passes, d, opt.time)
+    slow = slow_model(theta, cov, opt.passes, d, opt.time, per_run=opt.drift_per_run)
     if slow.kind == "time":
         sums = _AngleSums.build_rows(th, y, d).with_trend(slow.columns)
     elif slow.degree:
@@ -271,7 +274,11 @@ def _too_slow(state: _Decisions, cov: Coverage, slow: SlowModel) -> None:
             state.reason[k] = f"too few distinct angles ({cov.distinct}): an order needs at least 3 (offset, cos, sin)"
         elif slow.beyond(cov, k):
             state.status[k] = "beyond span"
-            if slow.kind == "angle":
+            if slow.run_span > 0:
+                state.reason[k] = (f"beyond span: one period is longer than the longest run "
+                                   f"({math.degrees(slow.run_span):.4g} deg), so it cannot be told from the runs' own "
+                                   "offsets and drifts (no amplitude)")
+            elif slow.kind == "angle":
                 state.reason[k] = (f"beyond span: one period is longer than the {span_deg:.4g} deg the data cover, so "
                                    "it cannot be told from a trend (no amplitude)")
             else:

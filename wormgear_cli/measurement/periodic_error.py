@@ -34,14 +34,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from wormgear_cli.measurement.coverage import as_1d
+from wormgear_cli.measurement.coverage import TREND_DEGREE, as_1d
+from wormgear_cli.measurement.drift import drift_columns
 from wormgear_cli.measurement.harmonics import fit_orders, harmonic_columns
+from wormgear_cli.measurement.serial import block_covariance, serial_blocks
 from wormgear_cli.units import SIDEREAL_DAY_S
 
 #: worm harmonics fitted by default (the worm order and its next three multiples)
 DEFAULT_HARMONICS = 4
 #: degree of the drift polynomial in time per run (a cubic, as the usual PE analyses)
-DRIFT_DEGREE = 3
+DRIFT_DEGREE = TREND_DEGREE
 #: bins of worm phase for the folded samples
 FOLD_BINS = 50
 #: samples of the smoothed curve over one worm period
@@ -105,38 +107,7 @@ class PeriodicError:
     rms_without_worm: float
     rms_residual: float
     cycles: float
-
-
-def drift_columns(time, run=None, degree: int = DRIFT_DEGREE) -> np.ndarray:
-    """Design columns of a drift per run (n x p), beside an intercept fitted elsewhere.
-
-    For each run (in order of first appearance): Chebyshev polynomials T_1..T_d of its time mapped
-    onto [-1, 1] over the run's span (zero on the other runs' rows), d = min(``degree``, samples
-    of the run - 1), none for a run of one instant; and, for every run after the first, its
-    offset (1 on its rows).  ``time`` (n,) [any unit, e.g. s or rad]; ``run`` (n,) labels or None
-    (one run)."""
-    t = as_1d("time", time)
-    n = t.shape[0]
-    labels = np.zeros(n, dtype=np.int64) if run is None else np.asarray(run)
-    if labels.shape != (n,):
-        raise ValueError(f"run has shape {labels.shape}, expected ({n},)")
-    _, first, inverse = np.unique(labels, return_index=True, return_inverse=True)
-    order = np.argsort(first)
-    cols = []
-    for rank, r in enumerate(order):
-        rows = inverse.reshape(-1) == r
-        tr = t[rows]
-        if rank > 0:
-            cols.append(rows.astype(float))
-        lo, hi = float(tr.min()), float(tr.max())
-        d = min(degree, int(rows.sum()) - 1)
-        if d <= 0 or hi <= lo:
-            continue
-        x = 2.0 * (tr - lo) / (hi - lo) - 1.0
-        block = np.zeros((n, d))
-        block[rows] = np.polynomial.chebyshev.chebvander(x, d)[:, 1:]
-        cols.extend(block.T)
-    return np.column_stack(cols) if cols else np.zeros((n, 0))
+    standard_errors: str = "ordinary least squares, rows taken as independent"
 
 
 def _run_means_rms(y: np.ndarray, run) -> float:
@@ -162,6 +133,28 @@ def _cycles(theta: np.ndarray, run, order: float) -> float:
 
 def _rms(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean(x * x)))
+
+
+def _serial_stderr(theta, orders, cols, fit, run, time) -> tuple[np.ndarray, str]:
+    """The amplitudes' standard errors and how they were made: the fit's own (rows independent) unless
+    the residual is serially correlated within runs; then the sandwich over blocks of consecutive rows
+    after AR(1) prewhitening (:func:`~wormgear_cli.measurement.serial.serial_blocks`), amplitudes by
+    the delta method."""
+    serial = serial_blocks(fit.residual, run, time)
+    if serial.independent:
+        return fit.amplitude_stderr, serial.describe()
+    n = theta.shape[0]
+    x = np.hstack([np.ones((n, 1)), harmonic_columns(theta, orders), cols])
+    gram_inv = np.linalg.pinv(x.T @ x, hermitian=True)
+    scores = np.zeros((serial.blocks, x.shape[1]))
+    np.add.at(scores, serial.block_id, x * serial.whiten(fit.residual)[:, None])
+    cov = block_covariance(gram_inv, scores, n) * serial.recolour
+    a, b = fit.cos, fit.sin
+    ia = 1 + 2 * np.arange(orders.shape[0])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        var = (a * a * cov[ia, ia] + b * b * cov[ia + 1, ia + 1] + 2 * a * b * cov[ia, ia + 1]) / (a * a + b * b)
+    se = np.sqrt(np.maximum(np.where(np.isfinite(var), var, 0.5 * (cov[ia, ia] + cov[ia + 1, ia + 1])), 0.0))
+    return np.where(fit.identifiable, se, np.nan), serial.describe()
 
 
 def periodic_error(theta, y, order: float, *, time=None, run=None, harmonics: int = DEFAULT_HARMONICS,
@@ -212,6 +205,7 @@ def periodic_error(theta, y, order: float, *, time=None, run=None, harmonics: in
     orders = np.concatenate([worm_orders, np.asarray(extra, dtype=float)])
     cols = drift_columns(theta if time is None else as_1d("time", time, n), run, drift_degree)
     fit = fit_orders(theta, y, orders, design_extra=cols)
+    amp_se, serial = _serial_stderr(theta, orders, cols, fit, run, time)
     coef = np.empty(2 * orders.shape[0])
     coef[0::2], coef[1::2] = fit.cos, fit.sin
     drift = fit.offset + cols @ fit.extra
@@ -230,8 +224,8 @@ def periodic_error(theta, y, order: float, *, time=None, run=None, harmonics: in
     return PeriodicError(
         order=float(order), period_s=None if axis_period_s is None else order_period_s(order, axis_period_s),
         harmonics=int(harmonics), orders=orders, amplitude=fit.amplitude, phase=fit.phase,
-        amplitude_stderr=fit.amplitude_stderr, identifiable=fit.identifiable, drift=drift, worm=worm,
+        amplitude_stderr=amp_se, identifiable=fit.identifiable, drift=drift, worm=worm,
         residual=fit.residual, curve_phase=phase_grid, curve=curve, peak_to_peak=float(np.ptp(fine)),
         fold_phase=(np.arange(bins) + 0.5) / bins, fold_mean=mean, fold_count=count,
         rms_raw=_run_means_rms(y, run), rms_detrended=_rms(y - drift), rms_without_worm=_rms(y - drift - worm),
-        rms_residual=_rms(fit.residual), cycles=_cycles(theta, run, order))
+        rms_residual=_rms(fit.residual), cycles=_cycles(theta, run, order), standard_errors=serial)

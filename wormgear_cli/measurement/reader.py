@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from wormgear_cli.errors import DataError
+from wormgear_cli.measurement.guidelog_options import GuideLogOptions
 from wormgear_cli.physics.effects import Signals
 from wormgear_cli.units import RAD_PER_UNIT
 
@@ -81,6 +82,9 @@ class ReadOptions:
     block_chars : int
         Characters (bytes, for a file) of data lines read per block (:data:`BLOCK_CHARS`; a
         small value in tests puts block boundaries everywhere).
+    guidelog : GuideLogOptions
+        Sessions to read and values a PHD2 guide log may lack (``--session``, ``--pixel-scale``,
+        ``--dec-deg``, ``--guide-rate``); given for a file of another format: a UsageError.
     """
 
     column_map: tuple = ()
@@ -90,6 +94,7 @@ class ReadOptions:
     input_format: str | None = None
     require_error: bool = True
     block_chars: int = BLOCK_CHARS
+    guidelog: GuideLogOptions = GuideLogOptions()
 
     def __post_init__(self):
         from wormgear_cli.errors import UsageError
@@ -131,7 +136,11 @@ class Measurement:
     ``#`` comments (skipped, said in ``notes``); ``stated_units``: which of
     "angle" and "error" have a unit the file states (a unit in the header, an
     instrument's unit row, an error formed from stated positions) or an option
-    gives: never argued against; ``input_format``: the name of the format read.
+    gives: never argued against; ``input_format``: the name of the format read;
+    ``run_drift``: each run's errors have an offset and a drift in time of their
+    own (a guide log's sessions: the reconstruction starts from an unknown
+    offset, the drift changes over the night), so the analyses fit an offset
+    and a drift per run.
     """
 
     source: str
@@ -153,6 +162,7 @@ class Measurement:
     preamble: tuple = ()
     stated_units: frozenset = frozenset()
     input_format: str = "csv"
+    run_drift: bool = False
     #: the rows' cells as a sequence read on demand (:class:`~wormgear_cli.measurement.readers.text.Rows`)
     _cells: object = field(default=None, repr=False, compare=False)
     #: a reader without a block source: the data lines' text, their delimiter and the indices of its data

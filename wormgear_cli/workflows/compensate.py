@@ -184,9 +184,10 @@ def choose_orders(options: CompensateOptions) -> OrderChoice:
         from wormgear_cli.spec.loader import load_spec
         from wormgear_cli.workflows.measure import _orders_asked
 
-        _, _, priority, physical, name = _orders_asked(options.drive, None, options.harmonics)
+        spec = load_spec(options.drive)
+        _, _, priority, physical, name = _orders_asked(spec, None, options.harmonics)
         priority = tuple(priority)
-        worm = float(geometry(load_spec(options.drive)).worm_order)
+        worm = float(geometry(spec).worm_order)
     if options.orders is not None:
         from wormgear_cli.workflows.measure import _label_for
 
@@ -444,9 +445,12 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
 # --- the PEC path ----------------------------------------------------------------------------------------
 
 
-def _worm_order(th, y, run, options: CompensateOptions, choice: OrderChoice, source: str) -> tuple[float, str]:
-    """(worm order [cycles per axis turn], where it comes from); DataError when none can be had."""
+def _worm_order(m, th, run, options: CompensateOptions, choice: OrderChoice) -> tuple[float, str]:
+    """(worm order [cycles per axis turn], where it comes from) of the tracking rows ``m``; DataError when
+    none can be had.  Without a drive or orders, the strongest period ``measure`` finds
+    (:func:`~wormgear_cli.workflows.measure.strongest_orders`)."""
     from wormgear_cli.compensation import pec
+    from wormgear_cli.workflows.measure import strongest_orders
 
     if options.worm_period_s is not None:
         return pec.order_of(options.worm_period_s), f"--worm-period {options.worm_period_s:g} s"
@@ -456,11 +460,22 @@ def _worm_order(th, y, run, options: CompensateOptions, choice: OrderChoice, sou
         whole = [k for k in choice.orders if pec.cycles_covered(th, run, k) >= 1.0]
         if whole:
             return min(whole), "the lowest of --orders with a whole cycle in the record"
-    found = pec.strongest_worm_order(th, y, run)
-    if found is None:
-        raise DataError(f"{source}: the record is too short to find a worm period in it; give --worm-period "
-                        "or --drive")
-    return found, "the strongest period found in the record"
+    found = [p.order for p in strongest_orders(m).significant if pec.cycles_covered(th, run, p.order) >= 1.0]
+    if not found:
+        raise DataError(f"{m.source}: no period stands out of the noise in the record, or it is too short to find a "
+                        "worm period in it; give --worm-period or --drive")
+    return found[0], "the strongest period found in the record"
+
+
+def _rows(m, keep: np.ndarray):
+    """The measurement ``m`` with only the rows ``keep`` (``m`` itself when every row is kept)."""
+    if keep.all():
+        return m
+    from dataclasses import fields, replace
+
+    n = len(m)
+    arrays = {f.name: getattr(m, f.name) for f in fields(m)}
+    return replace(m, **{k: v[keep] for k, v in arrays.items() if isinstance(v, np.ndarray) and v.shape[:1] == (n,)})
 
 
 def _pec_path(m, options: CompensateOptions,
@@ -474,7 +489,7 @@ def _pec_path(m, options: CompensateOptions,
         notes.append("the record holds both directions: the PEC curve is made from the forward (tracking) rows")
     theta, y, run = m.angle[keep], m.error[keep], m.run[keep]
     th = pec.continuous(theta, run)
-    worm, where = _worm_order(th, y, run, options, choice, m.source)
+    worm, where = _worm_order(_rows(m, keep), th, run, options, choice)
     period = pec.period_of(worm)
     cycles = pec.cycles_covered(th, run, worm)
     if cycles < 1.0:

@@ -26,7 +26,12 @@ from pathlib import Path
 
 import numpy as np
 
-from wormgear_cli.measurement.checks import Finding, duplicate_rows, structure_findings  # noqa: F401  (re-exported)
+from wormgear_cli.measurement.checks import (  # noqa: F401  (re-exported)
+    Finding,
+    duplicate_rows,
+    guide_log_findings,
+    structure_findings,
+)
 
 #: default orders without a drive spec
 DEFAULT_ORDERS = (1.0, 2.0, 3.0, 4.0)
@@ -46,7 +51,9 @@ class MeasureResult:
     (:class:`~wormgear_cli.measurement.resolution.Resolution` of the error readings, or None), ``dominant``
     (:class:`~wormgear_cli.measurement.dominant.Dominant`: the strongest orders of the
     data, scanned up to the Nyquist limit of the spacing), ``outside`` (the strongest
-    orders left outside the fitted ones when the residual is far above the noise).
+    orders left outside the fitted ones when the residual is far above the noise), ``guide``
+    (:class:`~wormgear_cli.workflows.guidelog.GuideResult`: the periodic error of a guide log, whose
+    ``figures`` and ``resolution`` are None: ISO 230-2 does not apply).
     """
 
     measurement: object
@@ -58,11 +65,18 @@ class MeasureResult:
     dominant: object = None
     outside: tuple = ()
     resolution: object = None
+    guide: object = None
 
     @property
     def verdict(self) -> str:
-        """One line: rows, targets, span, and what needs attention."""
+        """One line: rows, targets, span, and what needs attention (a guide log: sessions, frames, time
+        and span)."""
         m, a = self.measurement, self.analysis
+        flags = [f.verdict for f in self.findings if f.verdict]
+        if self.figures is None:
+            from wormgear_cli.workflows.guidelog import guide_verdict
+
+            return guide_verdict(m, self.guide) + ("; " + "; ".join(flags) if flags else "")
         cov = a.coverage
         nt = len(self.figures.targets)
         span = ("full turn" if cov.full_turn else "one angle" if cov.distinct < 2
@@ -70,7 +84,6 @@ class MeasureResult:
         head = (f"{m.source}: {len(m)} rows, {nt} target{'s' if nt != 1 else ''}, {span} "
                 f"({int(np.count_nonzero(m.direction > 0))} forward, {int(np.count_nonzero(m.direction < 0))} "
                 "reverse rows)")
-        flags = [f.verdict for f in self.findings if f.verdict]
         return head + ("; " + "; ".join(flags) if flags else "")
 
 
@@ -128,9 +141,13 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
     from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.measurement.resolution import reading_resolution
+    from wormgear_cli.workflows.guidelog import is_guide_log
 
-    order_list, labels, priority, physical, drive_name = _orders_asked(drive, orders, harmonics)
+    spec = _load_drive(drive)
     m = read_measurement(data, options=options)
+    if is_guide_log(m):
+        return _measure_guide_log(m, spec, orders, harmonics)
+    order_list, labels, priority, physical, drive_name = _orders_asked(spec, orders, harmonics)
     unique = lean_unique(m.angle)  # one sort of the rows, shared below
     grouping = group_targets(m.angle, unique=unique)
     target_index = grouping[0]
@@ -146,19 +163,42 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     return MeasureResult(m, figures, analysis, drive_name, tuple(findings), mixed, dominant, outside, resolution)
 
 
-def _orders_asked(drive, orders, harmonics):
+def _load_drive(drive):
+    """The loaded drive spec of ``--drive`` (None without one)."""
+    if drive is None:
+        return None
+    from wormgear_cli.spec.loader import load_spec
+
+    return load_spec(drive)
+
+
+def _measure_guide_log(m, spec, orders, harmonics: int) -> MeasureResult:
+    """``measure`` of a PHD2 guide log: no ISO 230-2 figures (every frame its own target); each session
+    its own offset and drift; the orders asked for (or the drive's), the strongest orders, the periodic
+    error."""
+    from wormgear_cli.workflows.guidelog import guide_periodic_error, mount_parts
+
+    order_list, labels, priority, physical, drive_name = _orders_asked(spec, orders, harmonics,
+                                                                       default=())
+    findings = guide_log_findings(m)
+    analysis, dominant = _orders_and_dominant(m, order_list, labels, priority, physical, None)
+    outside = _left_outside(m, analysis) if order_list else ()
+    guide = guide_periodic_error(m, dominant, None if spec is None else mount_parts(spec))
+    return MeasureResult(m, None, analysis, drive_name, tuple(findings), False, dominant, outside, None, guide)
+
+
+def _orders_asked(spec, orders, harmonics, default=DEFAULT_ORDERS):
     """(orders to fit, their labels or None, tie-break priority or None, the drive's (order, label) pairs,
-    the drive's name) from the options."""
+    the drive's name) from the options (``spec``: the loaded drive or None; ``default``: the orders
+    without either)."""
     from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
 
     physical: list = []
     priority = None
     drive_name = None
-    if drive is not None:
+    if spec is not None:
         from wormgear_cli.analysis.accuracy import geometry
-        from wormgear_cli.spec.loader import load_spec
 
-        spec = load_spec(drive)
         drive_name = spec.drive.name
         geo = geometry(spec)  # the worm's starts are part of the geometry
         physical = physical_orders(geo, harmonics)
@@ -169,23 +209,40 @@ def _orders_asked(drive, orders, harmonics):
     elif physical:
         order_list = [k for k, _ in physical]
     else:
-        order_list = list(DEFAULT_ORDERS)
+        order_list = list(default)
     labels = [_label_for(k, physical) for k in order_list] if physical else None
     return order_list, labels, priority, physical, drive_name
 
 
 def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
     """The joint fit at the orders asked for, and the strongest orders of the data."""
-    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
     from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
 
     time = m.time if "time_s" in m.present else None
+    per_run = m.run_drift  # each session of a guide log has its own offset and drift
     options = OrdersOptions(labels=None if labels is None else tuple(labels),
                             priority=None if priority is None else tuple(priority), passes=m.run, time=time,
-                            unique=unique)
+                            unique=unique, drift_per_run=per_run)
     analysis = analyse_orders(m.angle, m.error, m.direction, order_list, options)
-    dominant = dominant_orders(m.angle, m.error, m.direction, time, m.run, ScanOptions(labels=tuple(physical)))
-    return analysis, dominant
+    return analysis, strongest_orders(m, physical)
+
+
+def strongest_orders(m, physical=()):
+    """The strongest orders of the measurement ``m``
+    (:func:`~wormgear_cli.measurement.dominant.dominant_orders`: each guide-log session its own offset and
+    drift; ``physical``: the drive's (order, label) pairs that name them).  ``measure``'s ``dominant``, and
+    the worm period ``compensate`` takes without a drive."""
+    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+
+    time = m.time if "time_s" in m.present else None
+    per_run = m.run_drift
+    window = 0.0
+    if per_run:  # the sessions' relative phases are known as well as the logged hour angle: half a resolution
+        from wormgear_cli.workflows.guidelog import longest_run
+
+        window = math.pi / max(longest_run(m.angle, m.run), 1e-12)
+    return dominant_orders(m.angle, m.error, m.direction, time, m.run,
+                           ScanOptions(labels=tuple(physical), drift_per_run=per_run, label_window=window))
 
 
 def _left_outside(m, analysis) -> tuple:
@@ -200,7 +257,8 @@ def _left_outside(m, analysis) -> tuple:
         return ()
     fitted = tuple(it.order for it in analysis.items if it.fitted)
     time = m.time if "time_s" in m.present else None
-    left = dominant_orders(m.angle, m.error, m.direction, time, m.run, ScanOptions(held=fitted))
+    left = dominant_orders(m.angle, m.error, m.direction, time, m.run,
+                           ScanOptions(held=fitted, drift_per_run=m.run_drift))
     return tuple(p for p in left.significant if not any(p.group[0] - 1e-9 <= k <= p.group[1] + 1e-9
                                                         or abs(k - p.order) < 1e-6 for k in fitted))
 
@@ -216,12 +274,16 @@ def _span_finding(analysis, unit: str) -> Finding | None:
     slow = analysis.slow
     size = ("" if slow is None or not math.isfinite(slow.size) or not slow.degree
             else f", {round(float(to_unit(slow.size, unit)), 4):.4g} {unit} peak to peak")
-    why = ("(less than an eighth of a period over the span) cannot be told from the offset"
+    per_run = slow is not None and slow.per_run
+    why = ("(period longer than the longest run) cannot be told from the runs' offsets and drifts" if per_run else
+           "(less than an eighth of a period over the span) cannot be told from the offset"
            if slow is not None and slow.kind == "time" else "(period longer than the span) cannot be told from a trend")
     text = (f"the data cover {math.degrees(cov.span):.4g} deg of the turn, not a full turn"
             + (f": order{'s' if len(beyond) > 1 else ''} {', '.join(beyond)} {why} and "
                f"{'are' if len(beyond) > 1 else 'is'} reported as beyond span, without amplitude" if beyond else ""))
-    if slow is not None and slow.kind == "time" and slow.degree:
+    if per_run:
+        text += f"; each run (session) has an offset and a drift of its own: {slow.describe()}{size}"
+    elif slow is not None and slow.kind == "time" and slow.degree:
         text += (f"; the arc is traversed {slow.traversals} times, so the slow part is {slow.describe()}{size}, "
                  "fitted apart from the errors fixed to the angle (a once-per-turn runout among them), which are "
                  "fitted as orders")
@@ -316,12 +378,14 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
         x = float(x)
         return float(to_unit(x, unit)) if math.isfinite(x) else None
 
-    t = figures.targets
+    from wormgear_cli.workflows.guidelog import ISO_NOT_APPLICABLE, guide_doc
+
     findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
                                                     _excess_finding(analysis, result.outside, unit)) if f]
-    notes = list(figures.notes) + _resolution_notes(result, unit) + _order_notes(analysis)
-    runs_f = t.n_up[t.n_up > 0]
-    runs_r = t.n_down[t.n_down > 0]
+    if figures is None:  # a guide log: ISO 230-2 does not apply, said once
+        notes = [ISO_NOT_APPLICABLE] + (_order_notes(analysis) if analysis.items else [])
+    else:
+        notes = list(figures.notes) + _resolution_notes(result, unit) + _order_notes(analysis)
     cov = analysis.coverage
     return {
         "source": m.source,
@@ -329,13 +393,10 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
         "unit": unit,
         "verdict": result.verdict,
         "rows": len(m),
-        "targets": len(t),
+        "targets": None if figures is None else len(figures.targets),
         "rows_forward": int(np.count_nonzero(m.direction > 0)),
         "rows_reverse": int(np.count_nonzero(m.direction < 0)),
-        "runs_per_target": {
-            "forward": [int(runs_f.min()), int(runs_f.max())] if runs_f.size else None,
-            "reverse": [int(runs_r.min()), int(runs_r.max())] if runs_r.size else None,
-        },
+        "runs_per_target": None if figures is None else _runs_per_target(figures.targets),
         "columns": dict(m.columns),
         "input_units": dict(m.units),
         "derived_columns": sorted(m.derived),
@@ -348,15 +409,24 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
             "pass_spans_deg": [math.degrees(x) for x in cov.pass_spans],
             "trend_degree": analysis.trend_degree,
         },
-        "iso230_2": _iso_doc(figures, a),
-        "resolution": _resolution_doc(result, a),
+        "iso230_2": None if figures is None else _iso_doc(figures, a),
+        "resolution": None if figures is None else _resolution_doc(result, a),
         "orders": _orders_doc(analysis, a),
-        "dominant": _dominant_doc(result.dominant, a),
+        "dominant": _dominant_doc(result.dominant, a, result.drive_name is not None),
+        "periodic_error": guide_doc(result.guide, a),
         "warnings": [f.text for f in findings if f.warning],
         "checks": [{"kind": f.kind, "text": f.text or f.verdict, "warning": f.warning} for f in findings],
-        "per_target": _target_rows(t, unit) if per_target else [],
+        "per_target": _target_rows(figures.targets, unit) if per_target and figures is not None else [],
         "notes": notes + [f.text for f in findings if not f.warning and f.text],
     }
+
+
+def _runs_per_target(t) -> dict:
+    """The fewest and most runs per target, by direction (None where the direction has no rows)."""
+    runs_f = t.n_up[t.n_up > 0]
+    runs_r = t.n_down[t.n_down > 0]
+    return {"forward": [int(runs_f.min()), int(runs_f.max())] if runs_f.size else None,
+            "reverse": [int(runs_r.min()), int(runs_r.max())] if runs_r.size else None}
 
 
 #: names of the axis figures in the document
@@ -499,15 +569,21 @@ def _orders_doc(analysis, a) -> dict:
     }
 
 
-def _dominant_doc(dominant, a) -> dict | None:
-    """The strongest orders of the data (:func:`~wormgear_cli.measurement.dominant.dominant_orders`)."""
+#: what a strong order of the data belongs to when it matches none of the drive's shafts and meshes
+NO_PART = "none of the drive's shafts and meshes"
+
+
+def _dominant_doc(dominant, a, drive: bool = False) -> dict | None:
+    """The strongest orders of the data (:func:`~wormgear_cli.measurement.dominant.dominant_orders`); with a
+    ``drive``, a peak no shaft or mesh of it explains is labelled :data:`NO_PART`."""
     if dominant is None:
         return None
     slow = dominant.slow
     peaks = [{"order": p.order, "amplitude": a(p.amplitude), "amplitude_stderr": a(p.amplitude_stderr),
               "phase_deg": math.degrees(p.phase), "differential": a(p.differential),
               "differential_stderr": a(p.differential_stderr), "p_adjusted": p.p_adjusted,
-              "significant": p.significant, "group": list(p.group), "period_s": p.period_s, "label": p.label,
+              "significant": p.significant, "group": list(p.group), "period_s": p.period_s,
+              "label": p.label if p.label or not drive else NO_PART,
               "aliases": [{"order": o, "correlation": c, "label": lab} for o, c, lab in p.aliases]}
              for p in dominant.peaks]
     return {

@@ -55,12 +55,10 @@ class InputFormat(NamedTuple):
         return getattr(importlib.import_module(self.module), getattr(self, which))
 
 
-#: the input formats, most specific first (the first whose detect accepts the file reads it).  A PHD2
-#: guide log reader (wormgear_cli/measurement/guidelog.py) registers with the line
-#:     InputFormat("guidelog", "a PHD2 guide log", "wormgear_cli.measurement.guidelog",
-#:                 "looks_like_guidelog", "read_guidelog"),
-#: placed before "csv".
+#: the input formats, most specific first (the first whose detect accepts the file reads it)
 FORMATS = (
+    InputFormat("phd2", "a PHD2 guide log", "wormgear_cli.measurement.guidelog", "looks_like_guidelog",
+                "read_phd2"),
     InputFormat("twincat-scope", "a TwinCAT Scope CSV export", "wormgear_cli.measurement.readers.twincat",
                 "looks_like_twincat_scope", "read_twincat_scope", "read_twincat_source"),
     InputFormat("csv", "a delimited table with a header line", "wormgear_cli.measurement.readers.delimited",
@@ -95,6 +93,11 @@ def detect_format(text: str) -> InputFormat:
 def read_source(source, name: str, options: ReadOptions) -> Measurement:
     """A :mod:`~.source`'s measurement in its format (named in ``options`` or detected from its head)."""
     fmt = find_format(options.input_format) if options.input_format else detect_format(source.head(HEAD_CHARS))
+    if options.guidelog.given and fmt.name != "phd2":
+        from wormgear_cli.errors import UsageError
+
+        raise UsageError(f"{', '.join(options.guidelog.given)}: only for a PHD2 guide log; {name} is read as "
+                         f"{fmt.title} (--input-format phd2 if it is a guide log)")
     if fmt.read_source:
         return fmt.function("read_source")(source, name, options)
     return fmt.function("read")(source.text(), name, options)
