@@ -246,8 +246,8 @@ def test_check_judges_the_sampled_limits_by_yield_and_the_peak_by_the_corner(tmp
     text = (CONFIGS / "mch50.toml").read_text(encoding="utf-8")
     text = re.sub(r"(?ms)^\[requirements\].*?(?=^\[|\Z)", "", text)
     path = tmp_path / "d.toml"
-    path.write_text(text + "\n[requirements]\nmin_yield = 0.5\nmax_budget_linear_arcsec = 60.0\n"
-                    "max_budget_peak_arcsec = 60.0\n", encoding="utf-8")
+    path.write_text(text + "\n[requirements]\nmin_yield = 0.5\nmax_budget_linear_arcsec = 50.0\n"
+                    "max_budget_peak_arcsec = 50.0\n", encoding="utf-8")
     result = check_file(path)
     rows = {r["key"]: r["passed"] for r in result.requirements}
     assert rows["requirements.max_budget_linear_arcsec"] is None  # judged by the yield

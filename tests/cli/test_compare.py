@@ -39,8 +39,8 @@ def test_the_totals_and_budget_lines_are_analyzes(three):
         t = doc["totals"]
         assert t["total_transmission_error"]["values"][k] == a["total"]["transmission_error"]
         assert t["total_backlash"]["values"][k] == a["total"]["backlash"]
-        for key, name in (("budget_linear", "linear"), ("budget_rss", "rss"), ("budget_peak", "peak")):
-            assert t[key]["values"][k] == a["total_with_budget"][f"transmission_error_{name}"]
+        for key, name in (("budget_linear", "linear"), ("budget_statistical", "statistical"), ("budget_peak", "peak")):
+            assert t[key]["values"][k] == a["total_with_budget"][f"transmission_error_amplitude_{name}"]
         for line in a["budget"]:
             assert doc["budget"][line["source"]]["values"][k] == line["amplitude"]
 

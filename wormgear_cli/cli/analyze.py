@@ -77,9 +77,15 @@ def _budget_tables(r: dict, unit: str) -> list:
         bt.add_row(ln["source"], ln["kind"], f"{ln['order']:g}", a(ln["amplitude"]), ln["origin"],
                    f"{ln['share_pct']:.1f} %")
     t = r["total_with_budget"]
-    note = escape(f"total_with_budget: linear sum {a(t['transmission_error_linear'])}, root-sum-square "
-                  f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
-                  "(docs/budget.md); the paper's total above is unchanged")
+    note = escape(f"total_with_budget, TE amplitude (zero to peak): linear sum "
+                  f"{a(t['transmission_error_amplitude_linear'])}, statistical "
+                  f"{a(t['transmission_error_amplitude_statistical'])}, phased peak "
+                  f"{a(t['transmission_error_amplitude_peak'])}; range (peak to peak) of the phased curve "
+                  f"{a(t['transmission_error_range_peak'])} {unit} (docs/budget.md); the paper's total above is "
+                  "unchanged")
+    for off in r.get("budget_offsets", ()):
+        note += escape(f"\n{off['source']}: its curve's constant mean {a(off['offset'])} {unit} is no positioning "
+                       "error (a shift of every position) and is in no total")
     vt = Table(title="values used", title_justify="left")
     for col in ("key", escape("value [mm]"), "origin"):  # in the keys' own unit (_mm), as the spec writes them
         vt.add_column(col, justify="right" if col.startswith("value") else "left")

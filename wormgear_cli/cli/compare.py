@@ -45,7 +45,7 @@ def compare(
     """Drives side by side: totals, error budget and yield, and each one's difference to the first.
 
     For each drive the paper's total TE and backlash, the full budget's TE
-    totals (linear, rss, peak) and every budget line at the output, as
+    totals (linear, statistical, peak) and every budget line at the output, as
     analyze computes them; with --samples the yield of each [requirements]
     limit and of all together, as tolerance estimates it.  Differences are
     each drive minus the first (yields in percentage points).

@@ -56,7 +56,10 @@ class Source(NamedTuple):
     stage keys its size comes from; ``size(value)`` -> amplitude [rad at the output] from
     ``value(stage_key)`` (numbers or arrays: the same function gives the spec's amplitude and,
     vectorised, a sampled drive's); ``tier``: 0 the model's sources (always listed), 1 the full
-    budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size)."""
+    budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size);
+    ``offset``: the mean of ``curve`` over a turn [rad] (0 for a sinusoid; the paper's spur curve
+    has one: a constant shift of every position, no positioning error), so ``peak`` is the
+    largest value of ``curve - offset``, the periodic part the budget counts."""
 
     name: str
     phase_path: str
@@ -76,11 +79,13 @@ class Source(NamedTuple):
     size_keys: tuple = ()
     size: Callable | None = None
     tier: int = 0
+    offset: float = 0.0
 
 
 class Static(NamedTuple):
     """A static transmission-error term at the output (tooth deflection, belt stretch under the
-    process load) [rad], with the same identifying fields as :class:`Source`."""
+    process load; ``kind`` "static") or a thermal drift at the operating temperatures (``kind``
+    "thermal") [rad], with the same identifying fields as :class:`Source`."""
 
     name: str
     amplitude: float
@@ -89,17 +94,24 @@ class Static(NamedTuple):
     stage_kind: str
     origin: str
     size_paths: tuple = ()
+    kind: str = "static"
 
 
 class Clearance(NamedTuple):
     """A constant lost motion at the output [rad] not tied to a periodic source (a belt's tooth
-    clearance, the residual of an anti-backlash arrangement)."""
+    clearance, the residual of an anti-backlash arrangement, a worm's thrust-bearing play, a
+    thermal change of a clearance (negative: it closes), the wind-up of a friction torque;
+    ``stage_index`` 0 and ``stage`` "drive" for a drive-level term).  ``origin``: spec / default;
+    ``in_stage``: already part of the stage's backlash (its :class:`StageResult`), else an
+    addition to the drive's total."""
 
     name: str
     amount: float
     stage: str
     stage_index: int
     stage_kind: str
+    origin: str = "spec"
+    in_stage: bool = True
 
 
 class Compliance(NamedTuple):

@@ -6,7 +6,9 @@ the gear shaft (:mod:`wormgear_cli.physics.spur`), by ``kinematics``:
 
 * ``paper``: Delta phi_cc(phi) = (R1+R2)/(2R2) F(l, phi) + delta1 sin(alpha + lambda1)/R2 at its
   maximum over the pinion angle phi; Delta phi_ch = 2 Delta C1 / (m1 z1) with
-  Delta C1 = 2 Delta e tan(alpha) |sin phi| + 2 delta1.
+  Delta C1 = 2 Delta e tan(alpha) |sin phi| + 2 delta1.  The stage's TE is the paper's figure (the
+  curve's maximum); its source in the budget is the curve's periodic part (the maximum less the
+  curve's mean, ``Source.offset``, which shifts every position alike and is reported apart).
 * ``involute``: an eccentricity e gives TE e / r_b2 at the pinion's order, a centre-distance error
   Delta a a backlash 2 Delta a tan(alpha) and no TE, the thickness allowances add to the backlash.
 
@@ -114,16 +116,20 @@ def _eccentricity_source(stage, t, origin) -> Source:
         def lost(theta, phase):
             return de * math.tan(alpha) * (1.0 + np.sin(o_p * theta + phase)) / r2 / after
 
-        def size(v):  # the curve's peak as a function of Delta e
-            return model.gear_te_max_fast(r1, r2, v("eccentricity_mm"), alpha, 0.0)[0] / after
+        def size(v):  # the periodic part's peak (the curve less its mean) as a function of Delta e
+            e = v("eccentricity_mm")
+            return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
+                / after
 
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
-        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after
+        offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
+        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset
     else:
         # involute: e / r_b at the pinion's order, i.e. e / r_b2 at the gear (models.gear.involute_stage);
         # the static part of the lost motion (centre distance, thickness allowances) is constant
         r_b = base_radius(stage)
         amp = peak = de / r_b / after
+        offset = 0.0
         curve = sine(amp, o_p)
         static = (2.0 * stage.centre_distance_error * math.tan(alpha)
                   + stage.gear.thickness_deviation + stage.pinion.thickness_deviation)
@@ -138,7 +144,7 @@ def _eccentricity_source(stage, t, origin) -> Source:
             return counts * v("eccentricity_mm") / r_b / after
     return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
                   curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
-                  stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0)
+                  stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0, offset)
 
 
 def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:

@@ -150,14 +150,32 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     return out, static, clear
 
 
+def lost_motion_terms(stage, parts: WormParts, value=None) -> tuple:
+    """(constant, amplitude) of the worm stage's clearance on the wheel's pitch circle [mm] at no load:
+    L(theta) = max(constant + amplitude sin(A theta + psi_Fi), 0) (arrays of sampled drives allowed).
+
+    What varies over a turn and what does not: the wheel's radial composite deviation F_i is the
+    change of the working centre distance over one wheel turn (double-flank test, peak to peak), so
+    the centre distance swings by +/- F_i / 2 and the circumferential backlash by
+    +/- 2 (F_i / 2) tan(alpha_2) = +/- F_i tan(alpha_2) (reference facts: j_t = 2 Delta a tan alpha),
+    once per wheel turn.  Everything else in the paper's Delta j (profile and thickness errors, the
+    six alignment errors e_i, the lead error, the centre-distance error f_a) is a property of the
+    assembled pair that does not turn with the wheel: a constant.  The largest clearance stays the
+    paper's bound Delta j_central + h_j (analyze's Delta phi_wh without the deflection), reached
+    where the runout opens the mesh most; the smallest is 2 F_i tan(alpha_2) below it.
+    ``parts``: :func:`paper` at deflection 0; ``value``: the stage's values (default its own)."""
+    v = value or values(stage)
+    amplitude = v("wheel.radial_composite_error_mm") * math.tan(stage.transverse_pressure_angle)
+    top = parts.backlash_profile + parts.backlash_thickness + parts.backlash_halfwidth
+    return top - amplitude, amplitude
+
+
 def _lost_motion(stage, after: float, to_out: float, own):
-    """max(Delta j_central(no load) + h_j sin(A theta + psi), 0) / r_w / A  [rad] at the output, the
-    paper's Delta j +/- its half-width varying with the wheel's runout.  Clipped at zero: a clearance
-    cannot be negative (only matters when the half-width exceeds the central backlash)."""
-    p = paper(stage, 0.0, own)
-    central = float(p.backlash_profile + p.backlash_thickness)
-    h_j = float(p.backlash_halfwidth)
-    return lambda theta, phase: np.maximum(central + h_j * np.sin(after * theta + phase), 0.0) * to_out
+    """max(constant + amplitude sin(A theta + psi), 0) / r_w / A  [rad] at the output
+    (:func:`lost_motion_terms`): the paper's clearance, constant where its causes are, varying once
+    per wheel turn with the wheel's runout (F_i).  Clipped at zero: a clearance cannot be negative."""
+    constant, amplitude = (float(x) for x in lost_motion_terms(stage, paper(stage, 0.0, own), own))
+    return lambda theta, phase: np.maximum(constant + amplitude * np.sin(after * theta + phase), 0.0) * to_out
 
 
 def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:

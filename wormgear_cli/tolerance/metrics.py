@@ -30,7 +30,7 @@ sinusoidal sources of one shaft combined into one term
 
     e(theta, d) = gear(i_c theta + psi_e) + sum_k a_k sin(o_k theta + psi_k)
                   - d/2 [gear_lost(i_c theta + psi_e)
-                         + max(central + h_j sin(i_c theta + psi_Fi), 0) / (r_w i_c)]
+                         + max(c_w + v_w sin(i_c theta + psi_Fi), 0) / (r_w i_c)]
                   + fixed(theta, d)
 
 with gear = the paper's gear_kinematic_te (paper) or e/r_b1 sin (involute, then one
@@ -38,7 +38,9 @@ of the sinusoids), gear_lost = Delta e tan(alpha)(1 + sin) / R2 (paper) or
 max(2 Delta a tan(alpha) + E_sn1 + E_sn2 + e tan(alpha)(1 + sin), 0) / R2 (involute;
 clipped at 0 as a clearance, which matters only for sampled negative deviations),
 the sinusoids the worm-stage sources (orders n_w and i_c) and the pitch deviations
-(orders 1, i_c, z1), and fixed = tooth-deflection lag and the spec's effects (not varied).
+(orders 1, i_c, z1), c_w + v_w sin the worm stage's clearance (constant where its causes are,
+varying with F_i: :func:`wormgear_cli.drive.worm.lost_motion_terms`) and fixed = tooth-deflection
+lag and the spec's effects (not varied).
 All angles [rad], lengths [mm].
 """
 
@@ -229,7 +231,7 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
 
     Lines: the gear eccentricity (paper: the kinematic maximum of Delta phi_cc at no
-    load; involute: e/r_b1), the sinusoids (:func:`_sinusoids`), and the static tooth
+    load less the curve's mean, its periodic part; involute: e/r_b1), the sinusoids (:func:`_sinusoids`), and the static tooth
     deflections (gear: analyze's gear_te_deformation, which under the paper's
     kinematics depends on Delta e; worm: delta2 on the wheel pitch circle / i_c).
     """
@@ -239,7 +241,9 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     periodic = [np.asarray(a, dtype=float) for a, _, _ in _sinusoids(ctx, values)]
     if gp.kinematics == "paper":
         de = values["assembly.gear_eccentricity_mm"]
-        periodic.insert(0, np.asarray(ctx.gear_kin(de), dtype=float))
+        r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
+        mean = gear_model.gear_kinematic_mean(r1, r2, de, gp.pressure_angle)  # a constant: no budget line's part
+        periodic.insert(0, np.asarray(ctx.gear_kin(de), dtype=float) - mean)
         static = ctx.gear_def(de) + worm_static
     else:
         r_b1 = gp.module * gp.output_gear.teeth * math.cos(gp.pressure_angle) / 2.0
@@ -298,13 +302,14 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     common = coef @ basis
     if paper:
         common += gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha)
-    # lost motion (never negative): the gear part and the worm stage's (drive.worm: the paper's Delta j
-    # without load, central + h_j sin at the wheel's order)
+    # lost motion (never negative): the gear part and the worm stage's (drive.worm.lost_motion_terms: the
+    # paper's Delta j without load, constant where its causes are, varying with F_i at the wheel's order)
+    from wormgear_cli.drive.worm import lost_motion_terms
     from wormgear_cli.drive.worm import paper as worm_paper
 
     worm = ctx.registry.train.stages[0]
-    ws = worm_paper(worm, 0.0, stage_value(ctx, v, worm))
-    prof, thk, h_j = ws.backlash_profile, ws.backlash_thickness, ws.backlash_halfwidth
+    wv = stage_value(ctx, v, worm)
+    worm_constant, worm_amplitude = lost_motion_terms(worm, worm_paper(worm, 0.0, wv), wv)
     psi_f = np.asarray(ph["worm_pair.wheel.radial_composite_phase_deg"], dtype=float)
     n = de.shape[0]
 
@@ -320,7 +325,7 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
         static = (2.0 * math.tan(alpha) * np.asarray(v["assembly.gear_centre_distance_error_mm"], dtype=float)
                   + v["gear_pair.output_gear.thickness_deviation_mm"] + v["gear_pair.pinion.thickness_deviation_mm"])
         gear_lost = np.maximum(at_ic(c_gear, psi_e[:, 0], c_gear + np.asarray(static) / r2), 0.0)
-    worm_inner = at_ic(h_j, psi_f, np.broadcast_to(prof + thk, c_gear.shape))
+    worm_inner = at_ic(worm_amplitude, psi_f, np.broadcast_to(worm_constant, c_gear.shape))
     lost = gear_lost + np.maximum(worm_inner, 0.0) * to_out
     up = common - 0.5 * lost + ctx.fixed_up[None, :]
     down = common + 0.5 * lost + ctx.fixed_down[None, :]
