@@ -231,7 +231,8 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
 
     Lines: the gear eccentricity (paper: the kinematic maximum of Delta phi_cc at no
-    load less the curve's mean, its periodic part; involute: e/r_b1), the sinusoids (:func:`_sinusoids`), and the static tooth
+    load less the curve's mean, its periodic part; involute: e/r_b1), the sinusoids
+    (:func:`_sinusoids`), and the static tooth
     deflections (gear: analyze's gear_te_deformation, which under the paper's
     kinematics depends on Delta e; worm: delta2 on the wheel pitch circle / i_c).
     """
