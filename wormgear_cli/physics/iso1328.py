@@ -28,9 +28,10 @@ geometric means of the standard's module and diameter ranges:
 * total radial composite      F_i'' = (3.2 m + 1.01 sqrt(d) + 6.4) 2^(0.5 (Q - 5))
 * tooth-to-tooth composite    f_i'' = (2.96 m + 0.01 sqrt(d) + 0.8) 2^(0.5 (Q - 5))
 
-Scope: 0.2 <= m_n <= 10 mm, 5 <= d <= 1000 mm.  Outside it the nearest range
-is extrapolated with the gear's own m and d, and :func:`radial_composite`
-reports a warning.
+Scope: 0.2 <= m_n <= 10 mm, 5 <= d <= 1000 mm.  Outside it the formulas are not
+extrapolated: the gear takes the nearest range's geometric mean (the end range:
+0.2..0.5 or 6..10 mm, 5..20 or 560..1000 mm), i.e. the tolerance of the nearest
+size the standard covers, and :func:`radial_composite` reports a warning saying so.
 
 Check value (ISO 1328-1:2013 worked example, d = 100 mm, m = 2 mm, b = 20 mm,
 A = 6): f_pT 8.5, F_pT 27, F_aT 11, F_rT 24 um.  Second check (hand calculation,
@@ -61,8 +62,8 @@ class ValidityRange:
 
     ``name``: parameter (``module``, ``diameter``, ``face_width``, ``teeth``);
     ``lo``/``hi`` in ``unit``; ``on_violation``: ``"error"`` where the standard
-    does not apply outside the range, ``"warning"`` where its formulas are
-    merely extrapolated.
+    does not apply outside the range, ``"warning"`` where the nearest range's
+    value is used instead.
     """
 
     name: str
@@ -86,7 +87,7 @@ PART1_SCOPE = (
     ValidityRange("face_width", 4.0, 1200.0, "mm", "error"),
     ValidityRange("teeth", 5.0, 1000.0, "", "error"),
 )
-#: ISO 1328-2:1997 scope; outside it the formulas are extrapolated -> warning
+#: ISO 1328-2:1997 scope; outside it the nearest range's value is used -> warning
 PART2_SCOPE = (
     ValidityRange("module", 0.2, 10.0, "mm", "warning"),
     ValidityRange("diameter", 5.0, 1000.0, "mm", "warning"),
@@ -127,7 +128,7 @@ class RadialComposite:
     """ISO 1328-2:1997 radial composite tolerances [um] and the range means used.
 
     ``warnings``: one sentence per parameter outside the standard's scope
-    (the formulas extrapolated)."""
+    (the nearest range's mean used instead of the gear's own value)."""
 
     grade: int
     F_i2T: float
@@ -238,8 +239,8 @@ def radial_composite(grade: int, module: float, diameter: float) -> RadialCompos
     Parameters
     ----------
     grade : radial composite grade Q [-], integer 4..12
-    module : normal module [mm], > 0 (scope 0.2..10: outside it a warning)
-    diameter : reference diameter [mm], > 0 (scope 5..1000: outside it a warning)
+    module : normal module [mm], > 0 (scope 0.2..10: outside it the end range's mean, and a warning)
+    diameter : reference diameter [mm], > 0 (scope 5..1000: outside it the end range's mean, and a warning)
 
     Raises
     ------
@@ -247,8 +248,9 @@ def radial_composite(grade: int, module: float, diameter: float) -> RadialCompos
         grade outside 4..12.
     """
     _check_grade(grade, PART2_GRADES, "ISO 1328-2:1997")
-    warnings = tuple(f"{r.name} {v:g} outside ISO 1328-2:1997's scope {r.describe()}: its formulas are "
-                     "extrapolated" for r, v in scope_problems(PART2_SCOPE, module=module, diameter=diameter))
+    warnings = tuple(f"{r.name} {v:g} outside ISO 1328-2:1997's scope {r.describe()}: the tolerance of its "
+                     "nearest range is given (the formulas are not extrapolated)"
+                     for r, v in scope_problems(PART2_SCOPE, module=module, diameter=diameter))
     m = _range_mean(module, PART2_MODULE_BOUNDS)
     d = _range_mean(diameter, PART2_DIAMETER_BOUNDS)
     step = 2.0 ** (0.5 * (grade - 5))
