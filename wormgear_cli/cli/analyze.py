@@ -18,6 +18,7 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    load_drive,
     output_format,
     render,
     say,
@@ -44,11 +45,9 @@ def analyze(
     """
     from wormgear_cli.analysis.accuracy import analyze as run
     from wormgear_cli.output.analyze import document
-    from wormgear_cli.spec.loader import load_spec
-
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     result = run(spec)
-    warn_if_absurd(result.angles, drive)
+    warn_if_absurd(result.angles, drive, strict=True)
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     if fmt == "csv":

@@ -18,6 +18,7 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    load_drive,
     output_format,
     render,
 )
@@ -53,7 +54,6 @@ def compare(
     Example: wormgear compare configs/mch50.toml configs/rotary-table-precision.toml --samples 2e4
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.workflows.compare import MIN_DRIVES, Options, compare, csv_rows
 
     fmt = output_format(format, output)
@@ -61,7 +61,7 @@ def compare(
     if len(drives) < MIN_DRIVES:
         raise UsageError(f"compare needs at least {MIN_DRIVES} drive specs, got {len(drives)}: "
                          f"wormgear compare A.toml B.toml")
-    specs = [load_spec(d) for d in drives]
+    specs = [load_drive(d) for d in drives]
     options = Options(unit=unit, samples=samples, seed=seed)
     total = (samples or 0) * len(specs)
     with Progress(total, total * _SECONDS_PER_SAMPLE, "yield") as bar:

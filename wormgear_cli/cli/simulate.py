@@ -20,6 +20,7 @@ from wormgear_cli.cli.common import (
     emit,
     jobs_count,
     json_text,
+    load_drive,
     output_format,
     warn_if_absurd,
 )
@@ -103,7 +104,6 @@ def simulate(
 
     from wormgear_cli.analysis.synth import parse_effects
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.workflows import simulate as report
 
     unit = getattr(unit, "value", unit)
@@ -121,7 +121,7 @@ def simulate(
 
         check_plot_path(plot)
     requested = parse_effects(effect)
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
     from wormgear_cli.files import refuse_same_outputs
@@ -225,7 +225,6 @@ def synth(
         synthesize,
     )
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
 
     for name, value in (("--noise-arcsec", noise_arcsec), ("--run-noise-arcsec", run_noise_arcsec),
                         ("--offset-arcsec", offset_arcsec), ("--dwell-s", dwell_s),
@@ -246,7 +245,7 @@ def synth(
 
     for p in outs:
         refuse_input(p, [drive], "name")
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     the_plan = Plan(kind=getattr(plan, "value", plan), targets=targets, points=points, runs=runs, revolutions=revs,
                     dwell_s=dwell_s, jitter=jitter, cycles=cycles, cycle_gap_s=cycle_gap_s)
     _check_synth_memory(the_plan)

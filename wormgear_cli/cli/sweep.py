@@ -28,6 +28,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    load_drive,
     output_format,
     render,
     shard_part,
@@ -95,7 +96,6 @@ def sweep(
     from wormgear_cli.analysis import sweep as core
     from wormgear_cli.analysis import sweep_limits as limits
     from wormgear_cli.plots import check_plot_path
-    from wormgear_cli.spec.loader import load_spec
 
     fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
@@ -123,7 +123,7 @@ def sweep(
         parameters = {"param": [[ax.key, list(ax.values)] for ax in axes], "format": fmt, "unit": unit}
         out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
         if not out.done():
-            _param_sweep(load_spec(drive), drive, axes, fmt, unit, out, plot, k_n, jobs)
+            _param_sweep(load_drive(drive), drive, axes, fmt, unit, out, plot, k_n, jobs)
         return
     # sizes first: nothing is built, loaded or printed before the grid is known to be feasible
     i_range = core.parse_range_spec(i, "--i", positive=True) if i is not None else None
@@ -145,7 +145,7 @@ def sweep(
     out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
     if out.done():
         return
-    sw = core.ratio_distance_sweep(load_spec(drive), i_range, l_range, hold=getattr(hold, "value", hold),
+    sw = core.ratio_distance_sweep(load_drive(drive), i_range, l_range, hold=getattr(hold, "value", hold),
                                    module=module_mm, min_teeth=min_pinion_teeth)
     _ratio_distance_sweep(sw, drive, fmt, unit, out, plot, k_n, jobs)
 

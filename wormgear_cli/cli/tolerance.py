@@ -22,6 +22,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    load_drive,
     output_format,
     render,
     say,
@@ -110,7 +111,6 @@ def tolerance(
     from dataclasses import replace
 
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
 
     fmt = output_format(format, output)
@@ -133,7 +133,7 @@ def tolerance(
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if target_yield is not None and not 0.0 < target_yield < 1.0:
         raise UsageError(f"--target-yield: expected a number in (0, 1), got {target_yield:g}")
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     n_rows = None
     npy_input = summarize is not None and report.is_npy(summarize)
     if summarize is not None:

@@ -219,6 +219,27 @@ def flank_tolerances(grade: int, module: float, diameter: float, face_width: flo
                            r(f_hb), r(f_fb), r(math.hypot(f_hb, f_fb)), r(0.9 * f_p))
 
 
+#: the coarsest accuracy used as a plausibility scale: one class beyond ISO 1328-1's coarsest (11),
+#: the coarsest grade of ISO 1328-2 (12)
+SCALE_GRADE = 12
+
+
+def coarse_scale(module: float, diameter: float) -> dict[str, float]:
+    """The size of a coarse gear's deviations [um]: ISO 1328-1:2013's formulas at class 12 (one
+    step, sqrt(2), beyond its coarsest class), unrounded and without the scope check, and
+    ISO 1328-2:1997's grade-12 F_i'' (the nearest range's mean outside its scope).  Not a
+    tolerance anyone specifies: the scale a plausible deviation of a gear of this size stays
+    well below (:mod:`wormgear_cli.spec.plausibility`).  Keys ``F_pT``, ``f_pT``, ``F_alphaT``,
+    ``F_rT``, ``F_i2T``; ``module``, ``diameter`` [mm], > 0."""
+    s = grade_step(SCALE_GRADE)
+    m, d = module, diameter
+    f_ha, f_fa = (0.4 * m + 0.001 * d + 4.0) * s, (0.55 * m + 5.0) * s
+    f_p = (0.002 * d + 0.55 * math.sqrt(d) + 0.7 * m + 12.0) * s
+    md, dd = _range_mean(m, PART2_MODULE_BOUNDS), _range_mean(d, PART2_DIAMETER_BOUNDS)
+    return {"F_pT": f_p, "f_pT": (0.001 * d + 0.4 * m + 5.0) * s, "F_alphaT": math.hypot(f_ha, f_fa),
+            "F_rT": 0.9 * f_p, "F_i2T": (3.2 * md + 1.01 * math.sqrt(dd) + 6.4) * 2.0 ** (0.5 * (SCALE_GRADE - 5))}
+
+
 def _range_mean(value: float, bounds) -> float:
     """Geometric mean of the standard's range holding ``value`` (lower bound exclusive,
     as the standard's tables read "above .. up to and including"); the end range outside."""

@@ -674,8 +674,21 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
     _legacy_derived(v)
     top = _LEGACY.records(v)
     raw = _freeze(data)
-    return Spec(**top, effects=MappingProxyType(effects), source=source, raw=raw,
-                stages=_legacy_stages(v, raw), form="legacy")
+    return _reviewed(Spec(**top, effects=MappingProxyType(effects), source=source, raw=raw,
+                          stages=_legacy_stages(v, raw), form="legacy"))
+
+
+def _reviewed(spec: Spec) -> Spec:
+    """``spec`` with its plausibility warnings; SpecError for an impossible value
+    (:mod:`wormgear_cli.spec.plausibility`)."""
+    import dataclasses
+
+    from wormgear_cli.spec.plausibility import review
+
+    problems, warnings = review(spec)
+    if problems:
+        raise SpecError(problems)
+    return dataclasses.replace(spec, warnings=tuple(warnings)) if warnings else spec
 
 
 def _legacy_stages(v: dict, raw) -> tuple:
@@ -749,10 +762,10 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     legacy = _legacy_views(v, stages) if _stages.is_legacy_train(stages) else None
     requirements = (legacy or {}).get("requirements") or _SECTION_CLASSES["requirements"](**{
         **{f.attr: None for f in FIELDS if f.section == "requirements"}, **top["requirements"].__dict__})
-    return Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
-                requirements=requirements, test_plan=top["test_plan"],
-                **{t: (legacy or {}).get(t) for t in LEGACY_TABLES},
-                effects=MappingProxyType(effects), source=source, raw=_freeze(data), stages=stages, form="stages")
+    return _reviewed(Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
+                          requirements=requirements, test_plan=top["test_plan"],
+                          **{t: (legacy or {}).get(t) for t in LEGACY_TABLES}, effects=MappingProxyType(effects),
+                          source=source, raw=_freeze(data), stages=stages, form="stages"))
 
 
 def _torque(v: dict) -> float | None:

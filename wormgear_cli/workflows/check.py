@@ -60,7 +60,7 @@ def check_file(path) -> FileCheck:
     try:
         spec = load_spec(path)
         result = analyze(spec)
-        absurd = check_angles(result.angles, name)  # not finite: a problem; beyond a full turn: a warning
+        absurd = check_angles(result.angles, name, strict=True)  # not finite, beyond a full turn: a problem
         verdicts = evaluate(spec, result)
         yc, by_yield = None, set()
         if spec.requirements.min_yield is not None:  # a Monte Carlo estimate: imported only then
