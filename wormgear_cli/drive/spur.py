@@ -74,6 +74,9 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
     else:
         bl_parts = {"deformation": float(bl_def), "residual": float(stage.residual_lost_motion)}
         backlash = sum(bl_parts.values())
+    if stage.shaft_stiffness:  # the gear shaft's wind-up under the gear's torque F_N r_b2, both ways
+        bl_parts["shaft_compliance"] = 2.0 * stage.normal_force * base_radius(stage) / 1000.0 / stage.shaft_stiffness
+        backlash += bl_parts["shaft_compliance"]
     info = {
         "kinematics": stage.kinematics,
         "line_load_N_per_mm": stiffness.line_load(spec, stage),
@@ -189,9 +192,14 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
 def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:
     """(process lag, wind-up per N m of output torque) at the output: paper, delta1 on the pitch arc
     (its Delta phi_ch); involute, along the line of action, 1 / r_b2; the gear's torque T / A gives the
-    normal force T / (A r_b2) (ISO 6336-1's c' held at the spec's load)."""
+    normal force T / (A r_b2) (ISO 6336-1's c' held at the spec's load); with the gear shaft's
+    torsional stiffness k_s its wind-up adds (1 / (k_s O^2) at the output)."""
     after = t.after(stage)
     r_b = base_radius(stage)
     angle_per_mm = (1.0 / radii(stage)[1] if stage.kinematics == "paper" else 1.0 / r_b) / after
     unit = stiffness.deflection(spec, stage, 1.0, linear_at_spec_load=True)
-    return float(deflection * angle_per_mm), float(unit * (1000.0 / after / r_b) * angle_per_mm)
+    lag, per_nm = float(deflection * angle_per_mm), float(unit * (1000.0 / after / r_b) * angle_per_mm)
+    if stage.shaft_stiffness:  # the gear shaft: T / (k A) per direction, 1 / (k A^2) per N m at the output
+        k = stage.shaft_stiffness
+        lag, per_nm = lag + stage.normal_force * r_b / 1000.0 / k / after, per_nm + 1.0 / (k * after * after)
+    return lag, per_nm

@@ -76,27 +76,73 @@ def paper(stage, deflection, value=None) -> WormParts:
     return WormParts(wte, wbl, h_te, h_j, j_def, j_prof, j_thk)
 
 
+def additions(spec, stage) -> tuple[dict, dict]:
+    """What the stage adds beyond the paper's equations, at the wheel shaft [rad]: (backlash additions,
+    TE additions), each only when the spec gives it a size (docs/models.md, "Beyond the paper"):
+
+    * ``axial_play``: the thrust bearing's axial play c_a.  The worm's axial section is a rack: an
+      axial shift x of the worm turns the wheel by the arc x on its pitch circle (the lead maps it one
+      to one), so a play c_a is a lost motion c_a / r_w;
+    * ``axial_compliance``: a preloaded thrust bearing of axial stiffness k_a yields F_a / k_a under the
+      axial force F_a = the wheel's tangential force F_N cos(alpha_n) cos(lambda); both ways: 2 F_a / (k_a r_w);
+    * ``shaft_compliance``: the wheel shaft's torsional stiffness k_s under the wheel's torque
+      T = F_a r_w: 2 T / k_s;
+    * ``thermal``: the backlash change of the mesh and housing warmed by different amounts,
+      2 Delta a tan(alpha_2) / r_w with Delta a = a alpha_H dT_H - (r_1 alpha_1 + r_2 alpha_2) dT_mesh
+      (:func:`wormgear_cli.physics.thermal.centre_distance_growth`; negative: it closes);
+    * TE ``thermal_drift``: the worm shaft's axial growth between its thrust bearing and the mesh,
+      L alpha_worm dT_shaft / r_w (:func:`wormgear_cli.physics.thermal.axial_growth`), a drift of the
+      output against the calibration (its size).
+    """
+    from wormgear_cli.physics import thermal
+
+    r_w, w = stage.output_radius, stage.worm
+    force = float(stiffness.tangential_force(stage, stage.normal_force))
+    bl, te = {}, {}
+    if w.axial_play:
+        bl["axial_play"] = w.axial_play / r_w
+    if w.axial_stiffness:
+        bl["axial_compliance"] = 2.0 * force / w.axial_stiffness / r_w
+    if stage.shaft_stiffness:
+        bl["shaft_compliance"] = 2.0 * force * r_w / 1000.0 / stage.shaft_stiffness
+    mat = spec.materials
+    if stage.mesh_temperature_rise or stage.housing_temperature_rise:
+        r1 = stage.worm.starts * stage.module / math.tan(stage.lead_angle) / 2.0
+        da = thermal.centre_distance_growth(r1 + r_w, r1, r_w, mat.housing_expansion, mat.worm_expansion,
+                                            mat.wheel_expansion, stage.housing_temperature_rise,
+                                            stage.mesh_temperature_rise, stage.mesh_temperature_rise)
+        bl["thermal"] = 2.0 * da * math.tan(stage.transverse_pressure_angle) / r_w
+    growth = thermal.axial_growth(w.thrust_bearing_distance, mat.worm_expansion, stage.worm_shaft_temperature_rise)
+    if growth:
+        te["thermal_drift"] = abs(growth) / r_w
+    return bl, te
+
+
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
     """The stage's TE and backlash at the wheel shaft, with their parts (``spec``: the drive-level
-    settings; ``t``: the train)."""
+    settings; ``t``: the train); the parts beyond the paper (:func:`additions`) only when given."""
     p = paper(stage, deflection)
 
     def arc(x):
         return float(pitch_arc_to_angle(x, stage.module, stage.wheel.teeth))
 
-    te_parts = {"deformation": arc(deflection), "envelope": arc(p.te_halfwidth)}
+    extra_bl, extra_te = additions(spec, stage)
+    te_parts = {"deformation": arc(deflection), "envelope": arc(p.te_halfwidth), **extra_te}
     if stage.anti_backlash == "none":
-        backlash = float(p.backlash)
         bl_parts = {"deformation": arc(p.backlash_deformation), "profile": arc(p.backlash_profile),
-                    "thickness": arc(p.backlash_thickness), "envelope": arc(p.backlash_halfwidth)}
+                    "thickness": arc(p.backlash_thickness), "envelope": arc(p.backlash_halfwidth), **extra_bl}
+        backlash = float(p.backlash) + sum(extra_bl.values())
     else:
-        bl_parts = {"deformation": arc(p.backlash_deformation), "residual": float(stage.residual_lost_motion)}
+        bl_parts = {"deformation": arc(p.backlash_deformation), "residual": float(stage.residual_lost_motion),
+                    **extra_bl}
         backlash = sum(bl_parts.values())
+    backlash = max(backlash, 0.0)  # a mesh warmed shut has no clearance (it binds), not a negative one
     info = {"deflection_um": float(deflection * 1e3), "line_load_N_per_mm": stiffness.line_load(spec, stage),
             "normal_force_N": float(stage.normal_force), "anti_backlash": stage.anti_backlash,
             "starts": stage.worm.starts}
-    return StageResult(stage.index, stage.name, "worm", stage.ratio, t.after(stage), float(p.transmission_error),
-                       backlash, te_parts, bl_parts, info, SYMBOLS)
+    return StageResult(stage.index, stage.name, "worm", stage.ratio, t.after(stage),
+                       float(p.transmission_error) + sum(extra_te.values()), backlash, te_parts, bl_parts, info,
+                       SYMBOLS)
 
 
 def _runout(runout, clearance, angle):
@@ -141,12 +187,23 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
             lambda v: v("wheel.cumulative_pitch_deviation_mm") / (2.0 * r_w) / after,
             ("wheel.cumulative_pitch_deviation_mm",), "wheel", stage.wheel.cumulative_pitch_phase, tier=1),
     ]
+    if stage.worm.axial_runout:  # an axial motion a/2 sin(worm turn), an arc of the wheel (listed when given)
+        out.append(src("worm_axial_runout", "worm.axial_runout_phase_deg", n_w,
+                       lambda v: v("worm.axial_runout_mm") * (0.5 * to_out), ("worm.axial_runout_mm",), "worm",
+                       stage.worm.axial_runout_phase, tier=1))
     static = [Static("worm_deflection", result.te_parts["deformation"] / after,
                      stage.name, stage.index, "worm", origin(stage, ("normal_force_N",)),
                      (stage.paths["normal_force_N"],))]
+    keys = ("worm.thrust_bearing_distance_mm", "worm_shaft_temperature_rise_K")
+    if "thermal_drift" in result.te_parts:
+        static.append(Static("worm_thermal_drift", result.te_parts["thermal_drift"] / after, stage.name, stage.index,
+                             "worm", origin(stage, keys), tuple(stage.paths[k] for k in keys), "thermal"))
     clear = [] if stage.anti_backlash == "none" else [
         Clearance("worm_residual_lost_motion", float(stage.residual_lost_motion) / after, stage.name, stage.index,
                   "worm")]
+    for part, name in (("axial_play", "worm_axial_play"), ("thermal", "worm_thermal_backlash")):
+        if part in result.backlash_parts:  # constant lost motion (the compliances are compliance())
+            clear.append(Clearance(name, result.backlash_parts[part] / after, stage.name, stage.index, "worm"))
     return out, static, clear
 
 
@@ -181,9 +238,20 @@ def _lost_motion(stage, after: float, to_out: float, own):
 def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:
     """(process lag, wind-up per N m of output torque) at the output [rad, rad/(N m)]: the deflection
     along the flanks, delta2 / (cos(lambda) r_w), per direction; the wheel's torque T / A gives the
-    normal force T / (A r_w cos(alpha_n) cos(lambda)) (ISO 6336-1's c' held at the spec's load)."""
+    normal force T / (A r_w cos(alpha_n) cos(lambda)) (ISO 6336-1's c' held at the spec's load).  With
+    a thrust bearing's axial stiffness k_a and the wheel shaft's torsional stiffness k_s
+    (:func:`additions`) their wind-up adds: F_a / (k_a r_w A) and T_wheel / (k_s A) per direction,
+    1 / (k_a r_w^2 A^2) and 1 / (k_s A^2) per N m of output torque."""
     after, r_w = t.after(stage), stage.output_radius
     angle_per_mm = 1.0 / (math.cos(stage.lead_angle) * r_w * after)
     unit = stiffness.deflection(spec, stage, 1.0, linear_at_spec_load=True)
     force_per_nm = 1000.0 / after / (r_w * math.cos(stage.normal_pressure_angle) * math.cos(stage.lead_angle))
-    return float(deflection * angle_per_mm), float(unit * force_per_nm * angle_per_mm)
+    lag, per_nm = float(deflection * angle_per_mm), float(unit * force_per_nm * angle_per_mm)
+    force = float(stiffness.tangential_force(stage, stage.normal_force))  # the wheel's, the worm's axial force
+    if stage.worm.axial_stiffness:
+        k = stage.worm.axial_stiffness
+        lag, per_nm = lag + force / k / (r_w * after), per_nm + 1000.0 / (after * r_w) / k / (r_w * after)
+    if stage.shaft_stiffness:
+        k = stage.shaft_stiffness
+        lag, per_nm = lag + force * r_w / 1000.0 / k / after, per_nm + 1.0 / (k * after * after)
+    return lag, per_nm

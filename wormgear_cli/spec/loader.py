@@ -233,6 +233,10 @@ DRIVE_FIELDS: tuple[Field, ...] = (
            "torque on the output under the process load: the load of every stage that does not give its own "
            "(normal_force_N, effective_tension_N), carried back through the ratios after it (losses neglected)",
            lo=0.0, hi=1e9),
+    field_("drive.friction_torque_Nm", "friction_torque", "N m", "",
+           "friction torque the drive overcomes at the output (table bearings, seals, clamps); it reverses with the "
+           "motion, so the train's compliance winds up by it each way: a lost motion 2 T_f C_out (default: none)",
+           lo=0.0, hi=1e9),
     *(f for f in FIELDS if f.section in ("stiffness", "materials", "test_plan")),
     *(f for f in FIELDS if f.section == "requirements" and f.path not in _stages.LEGACY_KEYS),
 )
@@ -708,8 +712,20 @@ def _legacy_stages(v: dict, raw) -> tuple:
             else:
                 paths[f.path] = _stages.stage_path(index, f.path)
                 origins[f.path] = "default"
+                if f.path not in values:  # a stage key the legacy form has no table for: its default
+                    values[f.path] = _stage_default(f)
         out.append(_stages.make_record(kind, index, _stages.DEFAULT_NAMES[kind], values, paths, origins))
     return tuple(out)
+
+
+def _stage_default(f: Field):
+    """The default of a stage key in internal units (None for an optional key; a derived default of the
+    keys below, which only the stage form has, is the default of the key it derives from: 0)."""
+    if f.default in ("", None):
+        return None
+    if f.default == "derived":
+        return 0.0
+    return float(f.default) * UNIT_SCALE[f.unit] if f.kind == "float" else f.default
 
 
 def legacy_stages(spec: Spec) -> tuple:

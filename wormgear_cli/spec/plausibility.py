@@ -63,6 +63,8 @@ RULES = (
       for m, k in (("worm", _W), ("wheel", _W), ("pinion", _S), ("gear", _S))),
     *(Rule(f"{m}.{key}", _W, "F_rT", 10.0, "depth") for m in ("worm", "wheel")
       for key in ("runout_mm", "bearing_clearance_mm")),
+    Rule("worm.axial_play_mm", _W, "F_rT", 10.0, "depth"),
+    Rule("worm.axial_runout_mm", _W, "F_rT", 10.0, "depth"),
     Rule("wheel.radial_composite_error_mm", _W, "F_i2T", 10.0, "depth"),
     Rule("wheel.cumulative_pitch_deviation_mm", _W, "F_pT", 10.0, "radius"),
     Rule("eccentricity_mm", _S, "F_rT", 10.0, "depth"),

@@ -64,7 +64,8 @@ DRIVE_EXAMPLES: dict[str, tuple] = {
 #: value shown on the commented lines of the optional requirement keys
 EXAMPLE_LIMIT_ARCSEC = 60.0
 #: values shown on the commented lines of other optional keys (each valid when uncommented)
-OPTIONAL_EXAMPLES = {"accuracy_grade": 6, "min_yield": 0.99, "output_torque_Nm": 20.0,
+OPTIONAL_EXAMPLES = {"accuracy_grade": 6, "min_yield": 0.99, "output_torque_Nm": 20.0, "friction_torque_Nm": 2.0,
+                     "axial_stiffness_N_per_um": 300.0, "shaft_stiffness_Nm_per_arcmin": 100.0,
                      "targets_deg": (0.0, 47.5, 91.0, 136.5, 178.0, 226.5, 271.0, 317.5)}
 #: keys with a default that the template leaves commented (they take effect only with another key)
 COMMENTED_DEFAULTS = ("residual_lost_motion_arcsec",)

@@ -146,6 +146,9 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
         parts = components(spec, Signals.make(theta, sign, 0.0, 20.0, times), registry=reg)
         fixed[sign] = sum((v for k, v in parts.items() if k == "deformation" or k.startswith("effect:")),
                           np.zeros(n))
+        # the registry's constant clearances (an anti-backlash residual, a thrust bearing's play, a thermal
+        # change of the backlash, a friction torque's wind-up): not varied, -d C / 2
+        fixed[sign] = fixed[sign] - sign * sum(c.amount for c in reg.clearances) / 2.0
     paper = spec.gear_pair.kinematics == "paper"
     t = gear_eccentricity_tolerance if paper else 0.0  # the involute stage needs no interpolant
     return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, t, d.gear), GearTeMax(spec, t, 0.0),
@@ -208,7 +211,8 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
 
 
 def _sinusoids(ctx: Context, v: dict) -> list:
-    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), the
+    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order, the spec's
+    phase [rad]), the
     registry's sources in their order (all of them: the budget's too) with their sizes evaluated on
     the samples (:attr:`wormgear_cli.drive.records.Source.size`); the paper kinematics' gear curve,
     not a sinusoid, is left out (the gear eccentricity is one only under the involute kinematics)."""
@@ -221,7 +225,7 @@ def _sinusoids(ctx: Context, v: dict) -> list:
         if getattr(src.curve, "sine", None) is None:
             continue
         stage = stages[src.stage_index - 1]
-        out.append((src.size(stage_value(ctx, v, stage)), legacy_path(stages, src.phase_path), src.order))
+        out.append((src.size(stage_value(ctx, v, stage)), legacy_path(stages, src.phase_path), src.order, src.phase))
     return out
 
 
@@ -239,7 +243,7 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     spec = ctx.spec
     gp = spec.gear_pair
     worm_static = next(x.amplitude for x in ctx.registry.statics if x.stage_kind == "worm")  # not sampled
-    periodic = [np.asarray(a, dtype=float) for a, _, _ in _sinusoids(ctx, values)]
+    periodic = [np.asarray(a, dtype=float) for a, *_ in _sinusoids(ctx, values)]
     if gp.kinematics == "paper":
         de = values["assembly.gear_eccentricity_mm"]
         r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
@@ -287,7 +291,10 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     de, psi_e = col(v["assembly.gear_eccentricity_mm"]), col(ph["assembly.gear_eccentricity_phase_deg"])
     # sources without a size in this chunk (a tolerance of 0: the budget's pitch deviations of most specs)
     # are left out, and with them their orders
-    sines = [(a, k, o) for a, k, o in _sinusoids(ctx, v) if np.any(a)]
+    # a source whose phase is not sampled (a key beyond the legacy form's, e.g. the worm's axial runout) keeps
+    # the spec's phase
+    sines = [(a, ph[k] if k in ph else np.full(np.shape(a), fixed), o)
+             for a, k, o, fixed in _sinusoids(ctx, v) if np.any(a)]
     # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term
     orders = list(dict.fromkeys([i_c] + [o for _, _, o in sines]))  # i_c always: the lost motion's order
     th = ctx.theta
@@ -295,11 +302,11 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     where = {o: 2 * k for k, o in enumerate(orders)}
     j_ic = where[i_c]
     coef = np.zeros((de.shape[0], basis.shape[0]))
-    for a, k, o in sines:
+    for a, psi, o in sines:
         j = where[o]
         amp = np.asarray(a, dtype=float)
-        coef[:, j] += amp * np.cos(ph[k])
-        coef[:, j + 1] += amp * np.sin(ph[k])
+        coef[:, j] += amp * np.cos(psi)
+        coef[:, j + 1] += amp * np.sin(psi)
     common = coef @ basis
     if paper:
         common += gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha)
