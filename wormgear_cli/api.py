@@ -995,7 +995,7 @@ def compare(specs: Sequence, *, samples: int | None = None, seed: int = 0) -> Co
     >>> c.differences["total_transmission_error"][1] < Angle(0, "arcsec")
     True
     >>> f"{c.totals['budget_statistical'][1]:.2f}"
-    '27.02 arcsec'
+    '27.00 arcsec'
     """
     from wormgear_cli.workflows.compare import Options
     from wormgear_cli.workflows.compare import compare as run

@@ -41,7 +41,7 @@ def test_the_precision_table_fails_e_20_and_passes_a_limit_above_its_predicted_e
     assert row["key"] == "requirements.max_iso230_E_arcsec" and row["measure"] == "range"
     assert row["value_arcsec"] == pytest.approx(e, rel=1e-12) and row["passed"] is False
     assert row["predicted"] == {"figure": "ISO 230-2 E", "targets": 24, "spacing": "irregular", "jitter": 0.25,
-                                "seed": 0, "runs": 5, "reading_scatter_arcsec": 0.0}
+                                "seed": 0, "runs": 5, "reading_scatter_arcsec": 1.0}
     text = runner.invoke(app, ["check", str(failing)])
     assert text.stdout == (f"{failing}: FAIL requirements.max_iso230_E_arcsec: limit 20 arcsec, predicted ISO 230-2 "
                            f"E (range) {e:.2f} arcsec\n")

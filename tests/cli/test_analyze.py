@@ -8,6 +8,7 @@ import json
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -171,14 +172,37 @@ def test_check_json(runner, tmp_path):
     first, second = doc["files"]
     assert first["passed"] is False and first["requirements"][0]["key"] == "requirements.max_backlash_arcsec"
     assert first["requirements"][0]["value_arcsec"] > first["requirements"][0]["limit_arcsec"]
-    assert second["passed"] is True and second["valid"] is True
+    # the MCH50 fails the paper's +/-0.010 deg read as an amplitude (36 arcsec; issue 19)
+    assert second["passed"] is False and second["valid"] is True
+    assert [row["key"] for row in second["requirements"] if not row["passed"]] == [
+        "requirements.max_transmission_error_arcsec"]
 
 
-def test_shipped_configs_pass_check(runner):
-    files = sorted(str(p) for p in CONFIGS.glob("*.toml"))
-    assert len(files) >= 3
-    r = runner.invoke(app, ["check", *files])
-    assert r.exit_code == 0, r.stdout + r.stderr
+#: the shipped drives' verdicts, their limits restated from their sources like with like (issue 19; the
+#: closing table of docs/budget.md, "The shipped drives"): file -> the requirement keys that fail
+SHIPPED_FAILURES = {
+    "eq6-belt-worm.toml": set(),
+    "mch50.toml": {"requirements.max_transmission_error_arcsec"},
+    "radar-pedestal-2start.toml": set(),
+    "rotary-table-precision.toml": {"requirements.max_budget_statistical_arcsec", "requirements.max_iso230_A_arcsec"},
+    "rotary-table-worm.toml": {"requirements.max_transmission_error_arcsec",
+                               "requirements.max_budget_statistical_arcsec", "requirements.max_iso230_A_arcsec"},
+}
+
+
+def test_shipped_configs_have_their_documented_verdicts(runner):
+    files = sorted(CONFIGS.glob("*.toml"))
+    assert sorted(p.name for p in files) == sorted(SHIPPED_FAILURES)
+    r = runner.invoke(app, ["check", *map(str, files), "-f", "json"])
+    assert r.exit_code == 1 and r.stderr == ""
+    for entry in json.loads(r.stdout)["files"]:
+        failed = {row["key"] for row in entry["requirements"] if row["passed"] is False}
+        assert entry["valid"] and failed == SHIPPED_FAILURES[Path(entry["file"]).name], entry["file"]
+        assert entry["passed"] is not failed
+    text = (CONFIGS.parent / "docs" / "budget.md").read_text(encoding="utf-8")
+    for name, fails in SHIPPED_FAILURES.items():
+        row = next(ln for ln in text.splitlines() if ln.startswith(f"| `{name}` |"))
+        assert ("FAIL" in row.split("|")[3]) is bool(fails), row
 
 
 # --- new ---------------------------------------------------------------------------------------------
@@ -282,7 +306,7 @@ def test_new_escapes_the_name_and_refuses_a_dangling_symlink(runner, tmp_path):
 def test_check_echoes_the_limit_as_written(runner):
     r = runner.invoke(app, ["check", str(MCH50), "-f", "json"])
     limits = {q["key"]: q["limit_arcsec"] for q in json.loads(r.stdout)["files"][0]["requirements"]}
-    assert limits == {"requirements.max_transmission_error_arcsec": 72.0, "requirements.max_backlash_arcsec": 252.0}
+    assert limits == {"requirements.max_transmission_error_arcsec": 36.0, "requirements.max_backlash_arcsec": 252.0}
 
 
 def test_load_share_is_undefined_without_eccentricity(runner, tmp_path):

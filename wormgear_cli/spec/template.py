@@ -58,8 +58,8 @@ STAGE_EXAMPLES: dict[str, dict[str, tuple]] = {
 #: the drive-level tables: values of the MCH50 (configs/mch50.toml)
 DRIVE_EXAMPLES: dict[str, tuple] = {
     "stiffness.model": ("iso6336", "ISO 6336-1"),
-    "requirements.max_transmission_error_arcsec": (72.0, "the paper's measured span"),
-    "requirements.max_backlash_arcsec": (252.0, "the paper's measured span"),
+    "requirements.max_transmission_error_arcsec": (36.0, "the paper's measured +/-0.010 deg, an amplitude"),
+    "requirements.max_backlash_arcsec": (252.0, "the paper's measured +/-0.035 deg, the whole reversal"),
 }
 #: value shown on the commented lines of the optional requirement keys
 EXAMPLE_LIMIT_ARCSEC = 60.0
