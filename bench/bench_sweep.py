@@ -24,6 +24,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVE = ROOT / "configs" / "mch50.toml"
+#: a train of three stages (spur gearmotor, two-start worm, bull gear): its last spur stage is swept,
+#: the worm and the gearmotor carried through the ratios
+TRAIN = ROOT / "configs" / "radar-pedestal-2start.toml"
 
 _FAST = r"""
 import json, resource, sys, time
@@ -33,12 +36,12 @@ from wormgear_cli.analysis.sweep import RatioDistanceSweep
 base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 n = int(sys.argv[1])
 spec = load_spec(sys.argv[2])
-t0 = time.perf_counter()
+t0, c0 = time.perf_counter(), time.process_time()
 sw = RatioDistanceSweep(spec, np.linspace(2, 10, n), np.linspace(100, 300, n))
 data = sw.collect()
-wall = time.perf_counter() - t0
+wall, cpu = time.perf_counter() - t0, time.process_time() - c0
 peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(json.dumps({"wall": wall, "peak_kb": peak, "import_kb": base, "points": int(data["i"].size)}))
+print(json.dumps({"wall": wall, "cpu": cpu, "peak_kb": peak, "import_kb": base, "points": int(data["i"].size)}))
 """
 
 
@@ -90,8 +93,12 @@ def main() -> None:
     fast = json.loads(subprocess.run([sys.executable, "-c", _FAST, str(n), str(DRIVE)], check=True,
                                      capture_output=True, text=True).stdout)
     print(f"grid: {n} x {n} = {total} designs of {DRIVE.name} (i = 2..10, l = 100..300 mm)")
-    print(f"fast core   : {fast['wall']:.3f} s wall, peak RSS {fast['peak_kb'] / 1024:.0f} MB "
+    print(f"fast core   : {fast['wall']:.3f} s wall, {fast['cpu']:.3f} s cpu, peak RSS {fast['peak_kb'] / 1024:.0f} MB "
           f"(after imports {fast['import_kb'] / 1024:.0f} MB)")
+    train = json.loads(subprocess.run([sys.executable, "-c", _FAST, str(n), str(TRAIN)], check=True,
+                                      capture_output=True, text=True).stdout)
+    print(f"fast core, {TRAIN.name} (3 stages, its bull-gear stage swept): {train['wall']:.3f} s wall, "
+          f"{train['cpu']:.3f} s cpu")
 
     import numpy as np
 

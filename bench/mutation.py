@@ -105,6 +105,16 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
                              ("tests/tolerance/test_statistics.py",), None),
     # --shard K/N and --shard auto (the schedulers' array variables)
     "batch-shards": (("wormgear_cli/batch/shards.py",), ("tests/batch/test_shards.py",), None),
+    # compensate: the writers (checked against LinuxCNC's and EQASCOM's reading rules) and the
+    # table arithmetic (points, what a table carries, how a controller applies it, noise, scans)
+    "compensation-writers": (("wormgear_cli/output/writers/__init__.py", "wormgear_cli/output/writers/linuxcnc.py",
+                              "wormgear_cli/output/writers/eqmod.py",
+                              "wormgear_cli/output/writers/correction_csv.py"),
+                             ("tests/output/test_writers.py",), None),
+    "compensation-table": (("wormgear_cli/compensation/table.py", "wormgear_cli/compensation/noise.py",
+                            "wormgear_cli/compensation/scan.py"),
+                           ("tests/compensation/test_table.py", "tests/compensation/test_noise.py",
+                            "tests/compensation/test_scan.py"), None),
     # the gear functions that compute values (the maximiser is scored with them; the location of
     # its maximum is checked against scipy's bounded minimiser in test_hand_worked.py)
     "gear-values": (("wormgear_cli/physics/spur.py",),
@@ -120,6 +130,11 @@ TARGETS: dict[str, tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...] | Non
     # the guard on the model's results (issue 23, item 11)
     "sanity": (("wormgear_cli/analysis/sanity.py",),
                ("tests/analysis/test_sanity.py",), None),
+    # the guide-log reader (PHD2 logs) and the periodic error of a worm, checked by their tests
+    "guidelog": (("wormgear_cli/measurement/guidelog.py",),
+                 ("tests/measurement/test_guidelog.py",), None),
+    "periodic-error": (("wormgear_cli/measurement/periodic_error.py",),
+                       ("tests/measurement/test_periodic_error.py",), None),
 }
 
 

@@ -395,3 +395,38 @@ def test_package_names_do_not_shadow_submodules():
     assert wormgear_cli.analyze is wg.analyze and wormgear_cli.Angle is Angle
     with pytest.raises(AttributeError):
         wormgear_cli.no_such_name  # noqa: B018
+
+
+# --- compensate ----------------------------------------------------------------------------------------------
+
+
+def test_compensate_matches_cli(runner, tmp_path):
+    out, rep = tmp_path / "t.comp", tmp_path / "t.json"
+    result = runner.invoke(app, ["compensate", str(WARM), "--orders", "1,8", "-o", str(out), "--report", str(rep),
+                                 "--unit", "arcmin"])
+    assert result.exit_code == 0, result.stderr
+    c = wg.compensate(WARM, "linuxcnc", orders=[1, 8], output=tmp_path / "api.comp", unit="arcmin")
+    assert c.text == out.read_text() == (tmp_path / "api.comp").read_text()
+    doc = json.loads(rep.read_text())
+    api_doc = c.to_dict("arcmin")
+    assert api_doc.pop("load")[1] == "COMP_FILE = " + str(tmp_path / "api.comp")
+    assert doc.pop("load")[1] == "COMP_FILE = " + str(out)
+    assert api_doc == doc
+    for k, f in doc["prediction"]["after"].items():
+        assert c.predicted[k].arcmin == pytest.approx(f["median"], rel=1e-12)
+        assert c.predicted_range[k][1].arcmin == pytest.approx(f["high_95pct"], rel=1e-12)
+    assert c.measured["E"].arcmin == pytest.approx(doc["prediction"]["before"]["E"], rel=1e-12)
+    assert c.method == "cross-validated" and c.format == "linuxcnc" and c.orders == (1.0, 8.0)
+
+
+def test_compensate_takes_a_measurement_and_a_limit_as_an_angle():
+    m = wg.read_measurement(WARM)
+    by_path = wg.compensate(WARM, "csv", orders=[1, 8], points=19)
+    by_record = wg.compensate(m, "csv", orders=[1, 8], points=19)
+    by_core = wg.compensate(m.core, "csv", orders=[1, 8], points=19)
+    assert by_path.text == by_record.text == by_core.text
+    limited = wg.compensate(m, "csv", orders=[1, 8], points=19, max_correction=Angle(1, "arcmin"))
+    assert limited.exceeded and limited.largest_correction > Angle(1, "arcmin")
+    assert not wg.compensate(m, "csv", orders=[1, 8], points=19, max_correction=10.0, unit="arcmin").exceeded
+    with pytest.raises(UsageError, match="unit='mm'"):
+        wg.compensate(m, "csv", unit="mm")

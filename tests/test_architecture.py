@@ -99,3 +99,17 @@ def test_every_module_imports_on_its_own():
         if proc.returncode:
             failed[mod] = proc.stderr.strip().splitlines()[-1]
     assert not failed, failed
+
+
+#: modules mypy still checks with their errors ignored (pyproject's type-check debt); the number only
+#: goes down: lower it when a module comes off the list
+TYPE_DEBT_MODULES = 65
+
+
+def test_the_type_check_debt_only_shrinks():
+    import tomllib
+
+    overrides = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mypy"]["overrides"]
+    debt = [m for o in overrides if o.get("ignore_errors") for m in o["module"]]
+    assert len(debt) <= TYPE_DEBT_MODULES, "a module joined the type-check debt: fix its types instead"
+    assert len(debt) == len(set(debt))

@@ -1,4 +1,4 @@
-"""wormgear-cli: accuracy of two-stage worm + spur gear drives.
+"""wormgear-cli: accuracy of precision drives, worm, spur and belt stages in series.
 
 The Python API (:mod:`wormgear_cli.api`, docs/api.md) is re-exported here
 lazily: ``from wormgear_cli import analyze`` loads the API on first use, so
@@ -13,7 +13,7 @@ __version__ = "0.1.0"
 
 #: names of :mod:`wormgear_cli.api` available as ``wormgear_cli.NAME`` (never the name of a submodule)
 _API = ("Angle", "AngleArray", "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose",
-        "compare")
+        "compare", "compensate")
 
 __all__ = ["__version__", *_API]
 

@@ -329,7 +329,7 @@ def refresh_session(text: str, root: Path) -> str:
 SESSION_PAGES = ("tutorial.md", "commands/analyze.md", "commands/check.md", "commands/sweep.md",
                  "commands/simulate.md", "commands/synth.md", "commands/measure.md", "commands/diagnose.md",
                  "commands/compare.md",
-                 "commands/upgrade.md")
+                 "commands/upgrade.md", "commands/compensate.md", "compensation.md")
 
 
 # --- driver ---------------------------------------------------------------------------------------------------------

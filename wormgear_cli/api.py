@@ -10,7 +10,7 @@ the same report function, so the API and the CLI cannot disagree; the test
 
 Functions: :func:`load_spec`, :func:`analyze`, :func:`simulate`,
 :func:`read_measurement`, :func:`measure`, :func:`diagnose`,
-:func:`sweep`, :func:`tolerance`, :func:`compare`.  Wherever a function takes ``spec`` it
+:func:`sweep`, :func:`tolerance`, :func:`compare`, :func:`compensate`.  Wherever a function takes ``spec`` it
 accepts a loaded :class:`~wormgear_cli.spec.loader.Spec` or a path to a TOML file.
 Bad input raises the CLI's errors (:class:`~wormgear_cli.errors.SpecError`,
 :class:`~wormgear_cli.errors.DataError`,
@@ -37,8 +37,9 @@ from wormgear_cli.angles import Angle, AngleArray
 __all__ = [
     "Angle", "AngleArray",
     "load_spec", "analyze", "simulate", "read_measurement", "measure", "diagnose", "sweep", "tolerance", "compare",
+    "compensate",
     "Analysis", "Stage", "Simulation", "SimulationAt", "Measurement", "MeasureResult", "Order",
-    "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats", "Comparison",
+    "Diagnosis", "Gap", "Sweep", "Tolerance", "MetricStats", "Comparison", "Compensation",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -616,6 +617,145 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
                          tuple(doc["notes"]), _angle(res.get("step")), tuple(res.get("below", ())), core)
 
 
+# --- compensate ----------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Compensation:
+    """Result of :func:`compensate`.
+
+    ``text``: the file (write it with :meth:`write`); ``format``: the
+    writer's name; ``load``: how to load the file (e.g. the LinuxCNC INI
+    lines); ``orders`` and ``orders_source``: what the correction is made
+    of; ``measured``: figures as measured and ``predicted``: what a repeat
+    measurement will show once the file is loaded, each name -> :class:`Angle`
+    (a table: the ISO 230-2 ``E``, ``B``, ``A``, ``M``; a mount: ``PE_pp``,
+    the peak-to-peak over a worm cycle); ``predicted_range``: name ->
+    (5 %, 95 %) of the repeat tests (a table, cross-validated); ``method``:
+    how the prediction was made; ``largest_correction``: :class:`Angle`;
+    ``exceeded``: it exceeds ``max_correction``; ``warnings``, ``notes``.
+    """
+
+    source: str
+    format: str
+    text: str
+    load: tuple
+    orders: tuple
+    orders_source: str
+    measured: dict
+    predicted: dict
+    predicted_range: dict
+    method: str
+    largest_correction: Angle
+    exceeded: bool
+    warnings: tuple
+    notes: tuple
+    core: object = field(repr=False, compare=False)
+
+    def to_dict(self, unit: str = "arcsec") -> dict:
+        """The document of ``wormgear compensate --report FILE --unit UNIT``."""
+        from wormgear_cli.workflows.compensate import report
+
+        return _plain(report(self.core, unit))
+
+    def write(self, path: PathLike) -> None:
+        """Write the file to ``path`` atomically."""
+        from wormgear_cli.files import atomic_write
+
+        atomic_write(path, self.text)
+
+
+def _compensation(core) -> Compensation:
+    from wormgear_cli.workflows.compensate import TableDetails, report
+
+    doc = report(core, "rad")
+    if isinstance(core.details, TableDetails):
+        pr = doc["prediction"]
+        measured = {k: _angle(v) for k, v in pr["before"].items()}
+        predicted = {k: _angle(f["median"]) for k, f in pr["after"].items()}
+        ranges = {k: (_angle(f["low_5pct"]), _angle(f["high_95pct"])) for k, f in pr["after"].items()}
+        method, largest = pr["method"], doc["table"]["largest_correction"]
+    else:
+        pe = doc["pec"]
+        measured, predicted = {"PE_pp": _angle(pe["peak_to_peak_before"])}, {"PE_pp": _angle(pe["peak_to_peak_after"])}
+        ranges, method = {}, pe["method"]
+        largest = float(abs(core.details.curve.pe).max())
+    return Compensation(core.source, core.writer.name, core.text, core.instructions, tuple(doc["orders"]["requested"]),
+                        doc["orders"]["source"], measured, predicted, ranges, method, Angle(largest), core.exceeded,
+                        core.warnings, core.notes, core)
+
+
+def compensate(data, format: str | None = None, *, output: PathLike | None = None, drive=None,
+               orders: Sequence[float] | None = None, harmonics: int = 3, points: int | None = None,
+               range_deg: tuple[float, float] = (0.0, 360.0), file_type: int = 1, unit: str = "arcsec",
+               max_correction=None, worm_period_s: float | None = None, steps_per_worm: int | None = None,
+               column_map: dict | None = None, error_unit: str | None = None,
+               angle_unit: str | None = None) -> Compensation:
+    """The correction a controller or a mount loads, and what it will leave (``wormgear compensate``).
+
+    Parameters
+    ----------
+    data : path-like or Measurement
+        The measurement CSV, a :class:`Measurement` from :func:`read_measurement`, or a core
+        :class:`~wormgear_cli.measurement.reader.Measurement` (e.g. from a guide-log reader).
+    format : str or None
+        ``linuxcnc``, ``eqmod`` or ``csv`` (any name of the writer registry); None: from
+        ``output``'s file name ending.
+    output : path-like or None
+        Where the file will go: it is written there, and named in the loading instructions.
+    drive, orders, harmonics
+        As for :func:`measure`; a mount's worm period comes from the drive's worm.
+    points, range_deg
+        Table points and their span [deg] (default: the writer's, 0 to 360).
+    file_type : int
+        LinuxCNC COMP_FILE_TYPE (1: corrections, 0: positions reached).
+    unit : str
+        Unit of the CSV values, of ``max_correction`` given as a number, and of ``to_dict``.
+    max_correction : Angle, float (in ``unit``) or None
+        The largest correction allowed; beyond it ``exceeded`` is True and a warning says so.
+    worm_period_s, steps_per_worm
+        A mount's worm period [s] and RA motor steps per worm turn.
+    column_map, error_unit, angle_unit
+        As for :func:`read_measurement` (a file only).
+
+    Raises
+    ------
+    DataError, SpecError, UsageError
+
+    Examples
+    --------
+    >>> c = compensate("configs/mch50-warm.csv", "linuxcnc", orders=[1, 8])
+    >>> c.format, len(c.text.splitlines()), c.method
+    ('linuxcnc', 256, 'cross-validated')
+    """
+    from wormgear_cli.units import from_unit
+    from wormgear_cli.workflows.compensate import CompensateOptions, compensate_measurement
+    from wormgear_cli.workflows.compensate import compensate as run
+
+    _choice("unit", unit, ("deg", "arcmin", "arcsec", "urad"))
+    if orders is not None:
+        from wormgear_cli.workflows.measure import parse_orders
+
+        orders = tuple(parse_orders(",".join(repr(float(k)) for k in orders)))
+    limit = None
+    if max_correction is not None:
+        limit = float(max_correction) if isinstance(max_correction, Angle) else from_unit(float(max_correction), unit)
+    options = CompensateOptions(format=format, drive=drive, orders=orders, harmonics=int(harmonics), points=points,
+                                range_deg=(float(range_deg[0]), float(range_deg[1])), file_type=int(file_type),
+                                unit=unit, max_correction=limit, worm_period_s=worm_period_s,
+                                steps_per_worm=steps_per_worm, output=None if output is None else str(output))
+    if isinstance(data, Measurement):
+        core = compensate_measurement(data.core, options)
+    elif all(hasattr(data, a) for a in ("angle", "error", "present")):  # a core Measurement
+        core = compensate_measurement(data, options)
+    else:
+        core = run(data, options, _read_options(column_map, error_unit, angle_unit))
+    result = _compensation(core)
+    if output is not None:
+        result.write(output)
+    return result
+
+
 # --- diagnose ------------------------------------------------------------------------------------------------
 
 
@@ -745,6 +885,11 @@ class Sweep:
     core: object = field(repr=False, compare=False)
     _data: dict = field(repr=False, compare=False)
 
+    @property
+    def stage(self):
+        """The swept spur stage (its record: ``index``, ``name``, ``module``, ...)."""
+        return self.core.stage
+
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear sweep --format json --unit UNIT``."""
         return _plain(_sweep_report(self.core, self._data, unit))
@@ -773,7 +918,7 @@ def _axis(value, option: str):
 
 
 def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | None = None,
-          min_pinion_teeth: int | None = None, jobs: int = 1) -> Sweep:
+          min_pinion_teeth: int | None = None, jobs: int = 1, stage: int | None = None) -> Sweep:
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
     Parameters
@@ -793,10 +938,13 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
         With ``module_mm``: skip designs whose smaller gear has fewer teeth.
     jobs : int
         Worker processes (0: every core); the result is the same whatever the count.
+    stage : int or None
+        The spur stage swept (1-based from the motor); None: the drive's last spur stage.
 
     Raises
     ------
     UsageError, SpecError
+        UsageError for a drive without a spur stage, or a ``stage`` that is not one.
 
     Examples
     --------
@@ -813,12 +961,11 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     _choice("hold", hold, ("force", "torque"))
     if min_pinion_teeth is not None and module_mm is None:
         raise UsageError("min_pinion_teeth applies only with module_mm")
-    core.check_train(spec)
-    gp = spec.gear_pair
-    i_values = _axis(i, "--i") if i is not None else [gp.output_gear.teeth / gp.pinion.teeth]
-    l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [gp.module * (gp.output_gear.teeth
-                                                                             + gp.pinion.teeth) / 2.0]
-    sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth)
+    st = core.spur_stage(spec, stage)
+    i_values = _axis(i, "--i") if i is not None else [st.gear.teeth / st.pinion.teeth]
+    l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [st.module * (st.gear.teeth + st.pinion.teeth) / 2.0]
+    sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth,
+                                 stage=st.index)
     data = sw.collect(0, sw.size, jobs=_jobs(jobs))
     doc = _sweep_report(sw, data, "rad")  # the CLI's document in radians
     points = {c: (AngleArray(data[c]) if c in core.ANGLE_COLUMNS else data[c]) for c in sw.columns}

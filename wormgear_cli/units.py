@@ -38,3 +38,8 @@ def to_unit(value_rad, unit: str):
 def from_unit(value, unit: str):
     """Convert an angle in ``unit`` to [rad]."""
     return value * RAD_PER_UNIT[unit]
+
+
+#: one sidereal day [s]: the time an equatorial mount's RA axis takes to turn once while tracking the stars
+#: (23 h 56 min 4.0905 s; a worm of z teeth on the RA wheel turns in SIDEREAL_DAY_S / z)
+SIDEREAL_DAY_S = 86164.0905

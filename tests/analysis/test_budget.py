@@ -164,13 +164,13 @@ def test_analyze_json_budget_in_the_chosen_unit(runner):
 
 def test_check_holds_a_budget_requirement(runner, tmp_path):
     text = (CONFIGS / "rotary-table-precision.toml").read_text().replace(
-        "max_budget_rss_arcsec = 20.0", "max_budget_rss_arcsec = 5.0")
+        "max_budget_statistical_arcsec = 10.0", "max_budget_statistical_arcsec = 5.0")
     path = tmp_path / "t.toml"
     path.write_text(text)
     r = runner.invoke(app, ["check", str(path), "--format", "json"])
     assert r.exit_code == 1
     [verdict] = [v for v in json.loads(r.stdout)["files"][0]["requirements"]
-                 if v["key"] == "requirements.max_budget_rss_arcsec"]
+                 if v["key"] == "requirements.max_budget_statistical_arcsec"]
     assert verdict["passed"] is False and verdict["value_arcsec"] > 5.0
 
 

@@ -21,6 +21,9 @@ from wormgear_cli.spec.loader import load_spec
 
 SHIPPED = sorted(p.name for p in CONFIGS.glob("*.toml"))
 DRAWS = 150
+#: draws where a turn is cheap to sample (a grid of at most 20 000 points): a bimodal peak distribution
+#: (two sources of one order with close amplitudes, the telescope mount's wheel) has a noisy median at 150
+MANY_DRAWS = 1000
 
 
 def _random_phase_peaks(spec, draws: int, seed: int) -> np.ndarray:
@@ -54,7 +57,9 @@ def test_the_statistical_total_is_within_ten_percent_of_the_median_random_phase_
     spec = load_spec(CONFIGS / name)
     b = budget(spec)
     static = sum(ln.amplitude for ln in b.lines if ln.kind in ("static", "thermal"))
-    median = static + float(np.median(_random_phase_peaks(spec, DRAWS, seed=19)))
+    top = max(ln.order for ln in b.lines)
+    draws = MANY_DRAWS if 24 * top <= 20_000 else DRAWS
+    median = static + float(np.median(_random_phase_peaks(spec, draws, seed=19)))
     assert b.statistical == pytest.approx(median, rel=0.10), (name, b.statistical, median)
     # and the old rule does not: everything in quadrature under-states the peak on these drives
     assert b.rss < 0.9 * median

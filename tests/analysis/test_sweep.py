@@ -218,7 +218,7 @@ def test_undercut_min_teeth_is_safe_for_any_angle():
 
 
 
-@pytest.mark.parametrize("config", ["rotary-table-precision.toml", "radar-pedestal-2start.toml"])
+@pytest.mark.parametrize("config", ["rotary-table-precision.toml", "../tests/data/legacy/radar-pedestal-2start.toml"])
 def test_involute_drives_are_swept_with_the_involute_stage(config):
     """A drive with ``gear_pair.kinematics = "involute"`` is swept by the stage analyze uses for it:
     at the spec's own point and at snapped designs the sweep equals analyze (the paper's
@@ -263,7 +263,8 @@ def test_the_sweep_table_names_the_involute_stage(runner):
     assert "the paper's findings on this grid, with the involute stage" in text
 
 
-@pytest.mark.parametrize("config,module", [("radar-pedestal-2start.toml", 4.0), ("mch50.toml", 2.5)])
+@pytest.mark.parametrize("config,module", [("../tests/data/legacy/radar-pedestal-2start.toml", 4.0),
+                                           ("mch50.toml", 2.5)])
 def test_torque_hold_equals_analyze_at_the_torque_scaled_loads(config, module):
     """With the output torque held, a snapped design is analyze of that design at the loads the torque
     gives: spur normal force x R2_spec / R2 and worm normal force x i_spec / i (the worm stage is not
@@ -289,3 +290,54 @@ def test_torque_hold_equals_analyze_at_the_torque_scaled_loads(config, module):
         a = analyze(other).angles
         for key in ("gear_transmission_error", "total_transmission_error", "total_backlash"):
             assert data[key][k] == pytest.approx(a[key], rel=1e-9), (key, z1, z2)
+
+
+# --- any train: the swept spur stage and the stages around it ------------------------------------------------------
+
+RADAR3 = "radar-pedestal-2start.toml"  # spur gearmotor 17:85 -> two-start worm 2:60 -> pinion 25 : bull gear 200
+
+
+@pytest.mark.parametrize("stage", [1, 3])
+def test_a_spur_stage_of_a_three_stage_train_is_swept_as_analyze_of_that_design(stage):
+    """The radar's output torque sets every stage's load (T through the ratios after it, over its radius),
+    so holding the torque, a snapped design of stage 1 or 3 is analyze of the file with those teeth:
+    the stages after the swept one as they are, the stage itself over O_k, those before it over i O_k."""
+    from tests.support.paths import CONFIGS
+    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.sweep import RatioDistanceSweep
+    from wormgear_cli.spec.loader import load_spec, with_values
+
+    spec = load_spec(CONFIGS / RADAR3)
+    st = spec.stages[stage - 1]
+    m = st.module
+    i0, l0 = st.gear.teeth / st.pinion.teeth, m * (st.gear.teeth + st.pinion.teeth) / 2
+    data = RatioDistanceSweep(spec, [0.6 * i0, i0, 1.5 * i0], [0.9 * l0, l0], hold="torque", module=m,
+                              min_teeth=12, stage=stage).collect()
+    assert data["z1"].size >= 4
+    for k in range(data["z1"].size):
+        z1, z2 = int(data["z1"][k]), int(data["z2"][k])
+        a = analyze(with_values(spec, {f"stage.{stage}.gear.teeth": z1, f"stage.{stage}.pinion.teeth": z2}))
+        own = a.stages[stage - 1]
+        assert data["gear_transmission_error"][k] == pytest.approx(own.transmission_error, rel=1e-9)
+        assert data["gear_backlash"][k] == pytest.approx(own.backlash, rel=1e-9)
+        for key in ("total_transmission_error", "total_backlash"):
+            assert data[key][k] == pytest.approx(a.angles[key], rel=1e-9), (key, z1, z2)
+
+
+def test_the_default_spur_stage_is_the_last_and_a_train_without_one_is_refused():
+    from tests.support.paths import CONFIGS
+    from wormgear_cli.analysis.sweep import spur_stage
+    from wormgear_cli.errors import UsageError
+    from wormgear_cli.spec.loader import load_spec
+
+    radar = load_spec(CONFIGS / RADAR3)
+    assert spur_stage(radar).index == 3 and spur_stage(radar, 1).index == 1
+    with pytest.raises(UsageError) as err:
+        spur_stage(radar, 2)
+    assert str(err.value) == (f"--stage 2: stage 2 of {radar.source} is a worm stage, the ratio and centre-distance "
+                              "sweep varies a spur stage; its spur stages are 1, 3")
+    with pytest.raises(UsageError) as err:
+        spur_stage(radar, 4)
+    assert str(err.value) == f"--stage 4: {radar.source} has 3 stages (stages: 1 spur, 2 worm, 3 spur)"
+    with pytest.raises(UsageError):
+        spur_stage(load_spec(CONFIGS / "rotary-table-worm.toml"))

@@ -39,11 +39,14 @@ COUNT_OPTIONS = {
     "diagnose": ["--max-effects", "--resamples", "--jobs"],
     "sweep": ["--min-pinion-teeth", "--jobs"],
     "merge": ["--jobs"],
+    "compensate": ["--harmonics", "--points", "--steps-per-worm"],
     "grade": ["--teeth"],
     "compare": ["--samples"],
 }
 #: integer options that are not counts (identifiers and classes), read as plain integers
-NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("compare", "--seed"), ("grade", "--grade")}
+NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("compare", "--seed"), ("grade", "--grade"),
+              ("compensate", "--type"),
+              ("sweep", "--stage")}  # a stage's position (1 = the first), checked against the drive
 
 
 def test_every_integer_option_is_a_count_or_named_as_not_one():

@@ -106,7 +106,7 @@ def test_stdout_keeps_the_default(runner):
 #: the least arguments of each command with --format (its inputs are not read before the check)
 LEAST_ARGS = {**COMMANDS, "measure": ["measure", str(WARM)],
               "diagnose": ["diagnose", str(MCH50), str(WARM)], "compare": ["compare", str(MCH50), str(MCH50)],
-              "merge": ["merge", str(MCH50)]}
+              "merge": ["merge", str(MCH50)], "compensate": ["compensate", str(WARM)]}
 
 
 def test_every_command_with_format_follows_the_rule_before_any_work(runner, tmp_path):

@@ -34,7 +34,7 @@ def test_json_contract(runner):
     assert doc["samples"] == 2000 and doc["seed"] == 7
     # the six metrics in its order, then the full budget's totals (more keys may be added)
     assert list(doc["metrics"]) == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B",
-                                    "iso230_M", "iso230_A", "budget_linear", "budget_rss"]
+                                    "iso230_M", "iso230_A", "budget_linear", "budget_statistical", "budget_rss"]
     for v in doc["metrics"].values():
         assert list(v["percentiles"]) == PERCENTILE_KEYS
         p = [v["percentiles"][k] for k in PERCENTILE_KEYS]
@@ -86,8 +86,9 @@ def test_csv_columns(runner):
     assert header[0] == "sample"
     assert "assembly.wheel_eccentricity_mm" in header and "assembly.worm_pair_errors_mm[5]" in header
     assert "worm_pair.lead_error_phase_deg" in header
-    assert header[-8:] == ["total_transmission_error_deg", "total_backlash_deg", "iso230_E_deg", "iso230_B_deg",
-                           "iso230_M_deg", "iso230_A_deg", "budget_linear_deg", "budget_rss_deg"]
+    assert header[-9:] == ["total_transmission_error_deg", "total_backlash_deg", "iso230_E_deg", "iso230_B_deg",
+                           "iso230_M_deg", "iso230_A_deg", "budget_linear_deg", "budget_statistical_deg",
+                           "budget_rss_deg"]
     assert len(r.stdout.splitlines()) == 4
 
 
@@ -239,7 +240,7 @@ def test_check_min_yield_without_limits_is_an_input_error(runner, tmp_path):
     assert r.exit_code == 2
     assert r.stderr == (f"error: {drive}: requirements.min_yield: needs a limit to count the yield against "
                         "(max_transmission_error_arcsec, max_backlash_arcsec, max_budget_linear_arcsec, "
-                        "max_budget_rss_arcsec)\n")
+                        "max_budget_statistical_arcsec, max_budget_rss_arcsec)\n")
 
 
 def test_plot(runner, tmp_path):

@@ -10,7 +10,7 @@ import math
 
 import pytest
 
-from tests.support.paths import CONFIGS, MCH50
+from tests.support.paths import CONFIGS, DATA, MCH50
 from wormgear_cli.analysis.accuracy import analyze
 from wormgear_cli.drive import train as train_mod
 from wormgear_cli.drive.registry import build
@@ -76,9 +76,9 @@ def totals(spec) -> tuple[float, float]:
     return arcsec(a.angles["total_transmission_error"]), arcsec(a.angles["total_backlash"])
 
 
-@pytest.mark.parametrize("name", ["mch50", "rotary-table-precision", "radar-pedestal-2start"])
+@pytest.mark.parametrize("name", ["mch50", "rotary-table-precision", "legacy/radar-pedestal-2start"])
 def test_old_form_and_upgraded_give_the_same_totals(name):
-    path = CONFIGS / f"{name}.toml"
+    path = (DATA if name.startswith("legacy") else CONFIGS) / f"{name}.toml"
     old = load_spec(path)
     new = loads_spec(upgrade_text(path.read_text(), str(path)).text, "upgraded.toml")
     assert new.form == "stages" and old.form == "legacy"
@@ -234,5 +234,5 @@ def test_every_shaft_and_mesh_is_named():
     assert mch50[("mesh", 1)] == 240.0 and mch50[("mesh", 2)] == 144.0  # worm mesh z3 i_c, spur mesh z1
     two = train_mod.of(loads_spec(WORM + WORM))
     labels = [o.label for o in train_mod.orders(two)]
-    assert labels == ["output shaft (wheel of worm2)", "shaft 1 (wheel of worm1, worm of worm2)",
-                      "motor shaft (worm of worm1)", "worm mesh of worm2", "worm mesh of worm1"]
+    assert labels == ["output shaft (wheel of stage 2)", "shaft 1 (wheel of stage 1, worm of stage 2)",
+                      "motor shaft (worm of stage 1)", "worm mesh of stage 2", "worm mesh of stage 1"]

@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from wormgear_cli.analysis.accuracy import deflections, line_loads
+from tests.support.specs import deflections, line_loads
 from wormgear_cli.physics import deformation
 from wormgear_cli.spec.loader import with_values
 
@@ -46,3 +46,22 @@ def test_linearised_compliance_holds_c_prime_at_the_spec_load(mch50_spec):
     # the secant through the operating point: 666 N x (mm per N) = delta1 at 666 N
     assert lin1.gear * 666.0 == pytest.approx(spec.gear, rel=1e-12)
     assert math.isfinite(lin1.worm) and lin1.worm > 0
+
+
+def test_the_legacy_two_stage_helpers_warn_and_give_the_trains_values(mch50_spec):
+    """The helpers of analysis.accuracy that read a worm + spur drive by its legacy sections are deprecated:
+    each warns, naming its replacement, and gives what the train's own definition gives."""
+    from wormgear_cli.analysis import accuracy
+    from wormgear_cli.drive.worm import paper
+
+    worm, gear = mch50_spec.stages
+    with pytest.warns(DeprecationWarning, match=r"drive\.stiffness\.deflection"):
+        old = accuracy.deflections(mch50_spec)
+    new = deflections(mch50_spec)
+    assert (old.gear, old.worm) == (new.gear, new.worm)
+    with pytest.warns(DeprecationWarning, match=r"drive\.stiffness\.line_load"):
+        assert accuracy.line_loads(mch50_spec) == line_loads(mch50_spec)
+    with pytest.warns(DeprecationWarning, match="model_eccentricity"):
+        assert accuracy.gear_eccentricity(mch50_spec) == gear.model_eccentricity == 0.030
+    with pytest.warns(DeprecationWarning, match=r"drive\.worm\.paper"):
+        assert accuracy.worm_stage(mch50_spec, 0.001) == paper(worm, 0.001)

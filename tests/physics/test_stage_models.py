@@ -9,7 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from wormgear_cli.analysis.accuracy import analyze, deflections
+from tests.support.specs import deflections
+from wormgear_cli.analysis.accuracy import analyze
 from wormgear_cli.physics import deformation, worm
 from wormgear_cli.physics import spur as gear
 from wormgear_cli.spec.loader import with_values

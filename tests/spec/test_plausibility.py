@@ -81,7 +81,7 @@ def test_a_value_deeper_than_the_teeth_or_thicker_than_the_tooth_is_impossible(o
 @pytest.mark.parametrize("old, new, words", [
     ("lead_angle_deg = 3.178 ", "lead_angle_deg = 0.2 ", "the worm's diameter quotient q = d1 / m = 286"),
     ("face_width_mm = 50.0", "face_width_mm = 500.0", "the face width over the module b / m = 200"),
-    ("teeth = 18 ", "teeth = 6 ", "gear_pair.pinion.teeth = 6: fewer than 10 teeth"),
+    ("teeth = 18 ", "teeth = 6 ", "gear_pair.pinion.teeth = 6: fewer than 9 teeth"),
 ])
 def test_proportions_outside_what_is_made_warn(old, new, words):
     spec = loads_spec(_mch50(old, new), "x.toml")

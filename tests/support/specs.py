@@ -17,3 +17,23 @@ starts = 1
 [worm_pair.wheel]
 teeth = 30
 """
+
+
+def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=False):
+    """(gear, worm) tooth deflections [mm] of a [worm, spur] drive at the given normal forces (default
+    the stages' own), from each stage's one definition (:func:`wormgear_cli.drive.stiffness.deflection`)."""
+    from types import SimpleNamespace
+
+    from wormgear_cli.drive.stiffness import deflection
+
+    worm, gear = spec.stages
+    return SimpleNamespace(gear=deflection(spec, gear, gear_force, linear_at_spec_load),
+                           worm=deflection(spec, worm, worm_force, linear_at_spec_load), model=spec.stiffness.model)
+
+
+def line_loads(spec):
+    """F_t K_A / b [N/mm] of the spur and the worm mesh of a [worm, spur] drive."""
+    from wormgear_cli.drive.stiffness import line_load
+
+    worm, gear = spec.stages
+    return line_load(spec, gear), line_load(spec, worm)

@@ -9,7 +9,9 @@ of the ratios after it (the paper's Delta phi = sum_h Delta phi_h / i_h).
 
 The legacy two-stage helpers (:func:`deflections`, :func:`worm_stage`,
 :func:`gear_eccentricity`, :func:`line_loads`) read a [worm, spur] drive through
-its legacy sections, as the ratio/centre-distance sweep changes them.
+its legacy sections.  Deprecated: nothing in the tool uses them any more (the train serves
+every drive: :mod:`wormgear_cli.drive`); they keep working, with a DeprecationWarning naming
+their replacement, for callers that hold them.
 """
 
 from __future__ import annotations
@@ -63,6 +65,13 @@ def geometry(spec):
     return drive_geometry(spec)
 
 
+def _superseded(name: str, new: str) -> None:
+    import warnings
+
+    warnings.warn(f"wormgear_cli.analysis.accuracy.{name} reads only a worm + spur drive and is superseded by "
+                  f"{new}; it will be removed in wormgear-cli 0.3", DeprecationWarning, stacklevel=3)
+
+
 def _legacy(spec) -> tuple:
     """(worm stage, spur stage) of a [worm, spur] drive, read from its legacy sections as they are."""
     from wormgear_cli.errors import SpecError
@@ -84,10 +93,12 @@ def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=Fals
     at the spec's own loads and keep it fixed, so the deflection is linear in
     the given forces (the compliance about the operating point; a spec without
     load uses the unreduced c').  Otherwise c' follows the given forces.
-    The one definition per stage: :func:`wormgear_cli.drive.stiffness.deflection`.
+    The one definition per stage: :func:`wormgear_cli.drive.stiffness.deflection` (deprecated
+    wrapper of it; a drive's deflections at its loads: ``drive.registry.build(spec).deflections``).
     """
     from wormgear_cli.drive.stiffness import deflection
 
+    _superseded("deflections", "wormgear_cli.drive.stiffness.deflection(spec, stage, force)")
     stages = _legacy(spec)
     d1, d2 = (deflection(spec, s, f, linear_at_spec_load, stages) for s, f in ((stages[1], gear_force),
                                                                               (stages[0], worm_force)))
@@ -96,9 +107,11 @@ def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=Fals
 
 
 def line_loads(spec) -> tuple[float, float]:
-    """F_t K_A / b [N/mm] of the spur and the worm mesh of a [worm, spur] drive at its loads (ISO 6336-1)."""
+    """F_t K_A / b [N/mm] of the spur and the worm mesh of a [worm, spur] drive at its loads (ISO 6336-1).
+    Deprecated: :func:`wormgear_cli.drive.stiffness.line_load` of each stage."""
     from wormgear_cli.drive.stiffness import line_load
 
+    _superseded("line_loads", "wormgear_cli.drive.stiffness.line_load(spec, stage)")
     worm, gear = _legacy(spec)
     return line_load(spec, gear), line_load(spec, worm)
 
@@ -106,16 +119,19 @@ def line_loads(spec) -> tuple[float, float]:
 def gear_eccentricity(spec) -> float:
     """The spur stage's eccentricity Delta e [mm] the chosen kinematics uses (a [worm, spur] drive):
     ``paper``, ``assembly.gear_eccentricity_mm`` (default the centre-distance error, as the paper
-    reads Table 1); ``involute``, only an eccentricity written in the spec."""
+    reads Table 1); ``involute``, only an eccentricity written in the spec.  Deprecated: a spur
+    stage's ``model_eccentricity``."""
+    _superseded("gear_eccentricity", "the spur stage's model_eccentricity (spec.stages[k].model_eccentricity)")
     return _legacy(spec)[1].model_eccentricity
 
 
 def worm_stage(spec, deflection):
     """The paper's worm stage of a [worm, spur] ``spec`` at tooth deflection ``deflection`` [mm] (delta2;
     scalar or array): :func:`wormgear_cli.drive.worm.paper`, the one definition that ``analyze`` and
-    the torque-held ``sweep`` use."""
+    the torque-held ``sweep`` use.  Deprecated: :func:`wormgear_cli.drive.worm.paper` of the stage."""
     from wormgear_cli.drive.worm import paper
 
+    _superseded("worm_stage", "wormgear_cli.drive.worm.paper(stage, deflection)")
     return paper(_legacy(spec)[0], deflection)
 
 

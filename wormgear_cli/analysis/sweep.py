@@ -2,8 +2,9 @@
 
 No I/O, no typer, no rich.  Two kinds of sweep:
 
-* :class:`RatioDistanceSweep` -- the paper's Figure 1 study.  For every (i, l) of a grid the
-  spur stage gets R1 = l/(1+i), R2 = l i/(1+i); everything else comes from the drive spec.
+* :class:`RatioDistanceSweep` -- the paper's Figure 1 study.  For every (i, l) of a grid a
+  spur stage (``--stage N``, default the drive's last spur stage) gets R1 = l/(1+i),
+  R2 = l i/(1+i); everything else comes from the drive spec.
   Evaluated in chunks, fully vectorised, with the exact maximum over phi from
   :func:`wormgear_cli.physics.spur.gear_te_max_fast` (the kinematic peak is found once per
   centre distance).  ``module`` snaps each point to whole tooth counts.
@@ -16,14 +17,17 @@ What is held fixed as i and l change (``hold``):
 * ``"force"`` (default): the normal forces on the spur teeth and on the worm mesh stay at the
   spec's values (the paper's "holding other error sources constant").
 * ``"torque"``: the output torque F_N cos(alpha) R2 stays at the spec's value, so the spur
-  normal force scales as R2_spec / R2, and the worm-mesh force follows the intermediate-shaft
-  torque T_out / i, i.e. scales as i_spec / i.
+  normal force scales as R2_spec / R2, and the loads of the stages before the swept one (the
+  paper's worm mesh) follow the torque of its input shaft T_out / (O_k i), i.e. scale as
+  i_spec / i.
 
 Tooth deflection delta1 comes from the spec's stiffness model with the tooth counts implied
 by the module, z1 = 2 R2 / m and z2 = 2 R1 / m (fractional between whole-tooth designs;
 m = the spec's module, or the snapping module).  The gear backlash 2 Delta C1 / (m1 z1) uses
-m1 z1 = 2 R2.  The worm stage is unchanged by i and l except through its load (torque hold);
-it reaches the output divided by i.
+m1 z1 = 2 R2.  The other stages are unchanged by i and l except through their loads (torque
+hold): the stages after the swept stage k reach the output as they are, the stage itself
+divided by O_k (the product of the ratios after it), the stages before it divided by i O_k
+(for the paper's [worm, spur] drive: the worm stage divided by i).
 
 Units: lengths [mm], forces [N], angles [rad] (conversion to an output unit is the CLI's job).
 """
@@ -190,32 +194,95 @@ def check_module(module: float) -> None:
 
 @dataclass(frozen=True)
 class _Reference:
-    """The spec's own design, which the sweep reproduces at its (i, l)."""
+    """The spec's own design, which the sweep reproduces at its (i, l): the swept spur stage's ratio
+    ``i``, centre distance ``l`` [mm], gear radius ``r2`` [mm] and normal force; ``after``: the product
+    of the ratios after it (O_k, fixed); ``downstream_te``/``downstream_backlash``: the stages after it
+    at the output, sum_{h>k} value_h / O_h [rad]; ``upstream_te``/``upstream_backlash``: the stages
+    before it carried to its input shaft, sum_{h<k} value_h / (O_h / i_k) [rad] (reaching the output
+    divided by i O_k: the ratio i of each design); ``upstream``: (stage, O_h / i_k) of those stages."""
 
     i: float
     l: float
     r2: float
     gear_force: float
-    worm_force: float
-    worm_te: float  # at the spec's worm force [rad]
-    worm_backlash: float
+    after: float
+    downstream_te: float
+    downstream_backlash: float
+    upstream_te: float
+    upstream_backlash: float
+    upstream: tuple = ()
+
+    @property
+    def worm_force(self) -> float:
+        """The load of the stages before the swept one (0: none has one; kept for the legacy name)."""
+        return max((_load(st) for st, _ in self.upstream), default=0.0)
+
+
+def _load(stage) -> float:
+    return stage.effective_tension if stage.kind == "belt" else stage.normal_force
+
+
+def spur_stage(spec, stage: int | None = None):
+    """The spur stage ``--i``/``--l-mm`` act on: stage ``stage`` (1-based from the motor), default the
+    drive's last spur stage.  UsageError naming ``--stage`` when the drive has no spur stage or stage N
+    is not one."""
+    kinds = ", ".join(f"{s.index} {s.kind}" for s in spec.stages)
+    spurs = [s for s in spec.stages if s.kind == "spur"]
+    if stage is None:
+        if not spurs:
+            raise UsageError(f"--i/--l-mm: the ratio and centre-distance sweep varies a spur stage; {spec.source} "
+                             f"has none (stages: {kinds}); sweep another key with --param KEY=START:STOP:N, e.g. "
+                             f"{spec.stages[-1].paths.get('module_mm', 'stage.1.module_mm')}=...")
+        return spurs[-1]
+    if not 1 <= stage <= len(spec.stages):
+        raise UsageError(f"--stage {stage}: {spec.source} has {len(spec.stages)} stage"
+                         f"{'s' if len(spec.stages) != 1 else ''} (stages: {kinds})")
+    if spec.stages[stage - 1].kind != "spur":
+        hint = (f"; its spur stage{'s are' if len(spurs) > 1 else ' is'} "
+                + ", ".join(str(s.index) for s in spurs)) if spurs else "; it has no spur stage"
+        raise UsageError(f"--stage {stage}: stage {stage} of {spec.source} is a {spec.stages[stage - 1].kind} stage, "
+                         f"the ratio and centre-distance sweep varies a spur stage{hint}")
+    return spec.stages[stage - 1]
+
+
+def _reference(spec, st) -> _Reference:
+    from wormgear_cli.drive.registry import build
+
+    reg = build(spec)
+    t, k = reg.train, st.index
+    i_k = t.ratios[k - 1]
+    down = [r for r in reg.results if r.index > k]
+    up = [r for r in reg.results if r.index < k]
+    # added from the output back, as the registry's totals (for the paper's [worm, spur] drive: nothing
+    # after the spur stage, the worm stage / 1 before it, so the total is the paper's te + w_te / i)
+    down_te = down_bl = 0.0
+    for r in reversed(down):
+        down_te, down_bl = down_te + r.transmission_error / r.after, down_bl + r.backlash / r.after
+    up_te = up_bl = 0.0
+    for r in reversed(up):
+        up_te, up_bl = up_te + r.transmission_error / (r.after / i_k), up_bl + r.backlash / (r.after / i_k)
+    g = st.gear.teeth
+    return _Reference(i=g / st.pinion.teeth, l=st.module * (g + st.pinion.teeth) / 2.0, r2=st.module * g / 2.0,
+                      gear_force=st.normal_force, after=t.after(st), downstream_te=down_te,
+                      downstream_backlash=down_bl, upstream_te=up_te, upstream_backlash=up_bl,
+                      upstream=tuple((t.stages[r.index - 1], r.after / i_k) for r in up))
 
 
 class RatioDistanceSweep:
-    """The (i, l) response surface of a drive (see the module docstring).
+    """The (i, l) response surface of a spur stage of a drive (see the module docstring).
 
     ``i_values`` and ``l_values`` [mm] span the grid; points are numbered row-major with i
     outermost: point p is (i_values[p // len(l_values)], l_values[p % len(l_values)]).
     ``module`` [mm]: snap each point to whole teeth (:meth:`snap`), skipping designs whose
     smaller gear has fewer than ``min_teeth`` teeth (default :func:`undercut_min_teeth`).
+    ``stage``: the spur stage swept (1-based; default the last spur stage, :func:`spur_stage`).
     """
 
     def __init__(self, spec, i_values, l_values, hold: str = "force", module: float | None = None,
-                 min_teeth: int | None = None):
-        from wormgear_cli.analysis.accuracy import analyze, gear_eccentricity
+                 min_teeth: int | None = None, stage: int | None = None):
         from wormgear_cli.physics import spur as gear
 
-        check_train(spec)
+        st = spur_stage(spec, stage)
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
         if module is not None:
@@ -223,6 +290,7 @@ class RatioDistanceSweep:
         if min_teeth is not None and min_teeth < 1:
             raise UsageError(f"--min-pinion-teeth {min_teeth}: expected a whole number >= 1")
         self.spec = spec
+        self.stage = st
         self.i_values = np.asarray(i_values, dtype=float)
         self.l_values = np.asarray(l_values, dtype=float)
         if module is not None and self.l_values.size:
@@ -233,26 +301,17 @@ class RatioDistanceSweep:
                                  "module or a shorter --l-mm range")
         self.hold = hold
         self.module = module
-        gp = spec.gear_pair
-        self.alpha = gp.pressure_angle
-        self.eccentricity = gear_eccentricity(spec)  # the one the chosen kinematics uses, as analyze
+        self.alpha = st.pressure_angle
+        self.eccentricity = st.model_eccentricity  # the one the chosen kinematics uses, as analyze
         self.min_teeth = (min_teeth if min_teeth is not None else undercut_min_teeth(self.alpha)) \
             if module is not None else None
-        raw = spec.raw
-        self._face_width_given = "face_width_mm" in raw.get("gear_pair", {})
-        self._contact_ratio_given = "contact_ratio" in raw.get("stiffness", {})
-
-        base = analyze(spec)
-        z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
-        fw = spec.loads.worm_normal_force
-        w_te, w_bl = base.angles["worm_transmission_error"], base.angles["worm_backlash"]
-        self.reference = _Reference(i=z1 / z2, l=gp.module * (z1 + z2) / 2.0, r2=gp.module * z1 / 2.0,
-                                    gear_force=spec.loads.gear_normal_force, worm_force=fw,
-                                    worm_te=w_te, worm_backlash=w_bl)
+        self._face_width_given = st.origins.get("face_width_mm") == "spec"
+        self._contact_ratio_given = "contact_ratio" in spec.raw.get("stiffness", {})
+        self.reference = _reference(spec, st)
         # the structure: the kinematic peak depends on l only -> once per grid centre distance
         # (precomputed for up to one block of l values; a longer l axis gets it per block,
         # which keeps memory bounded: every l then appears at most twice in a block)
-        self._paper = gp.kinematics == "paper"  # the involute stage has no kinematic peak to search
+        self._paper = st.kinematics == "paper"  # the involute stage has no kinematic peak to search
         self._peak = gear.kinematic_peak(self.l_values, self.eccentricity, self.alpha) \
             if self._paper and module is None and self.l_values.size <= CHUNK_POINTS else None
         self._peak_blocks: dict = {}
@@ -313,39 +372,56 @@ class RatioDistanceSweep:
     # -- evaluation --------------------------------------------------------------------------------
 
     def _deflections(self, z1, z2, module, r2, ratio):
-        """delta1 [mm] of the spur mesh and the worm-mesh load factor, per design."""
-        from wormgear_cli.analysis.accuracy import deflections
+        """delta1 [mm] of the swept spur mesh and the load factor of the stages before it, per design."""
+        from wormgear_cli.drive.stiffness import deflection
         from wormgear_cli.physics.deformation import spur_contact_ratio
 
-        spec, ref = self.spec, self.reference
-        gp, st = spec.gear_pair, spec.stiffness
+        spec, ref, st = self.spec, self.reference, self.stage
         if self.hold == "torque":
             gear_force = ref.gear_force * ref.r2 / r2
-            worm_scale = ref.i / ratio
+            up_scale = ref.i / ratio
         else:
             gear_force = np.full(np.shape(r2), ref.gear_force)
-            worm_scale = np.ones(np.shape(r2))
-        face = gp.face_width if (self._face_width_given or module == gp.module) else 10.0 * module
-        new_gp = gp._replace(module=module, face_width=face, output_gear=gp.output_gear._replace(teeth=z1),
-                             pinion=gp.pinion._replace(teeth=z2))
-        new_st = st if self._contact_ratio_given else st._replace(
-            contact_ratio=spur_contact_ratio(z1, z2, gp.pressure_angle))
-        shadow = dataclasses.replace(spec, gear_pair=new_gp, stiffness=new_st)
-        d1 = deflections(shadow, gear_force=gear_force).gear
-        return np.broadcast_to(np.asarray(d1, dtype=float), np.shape(r2)), worm_scale
+            up_scale = np.ones(np.shape(r2))
+        face = st.face_width if (self._face_width_given or module == st.module) else 10.0 * module
+        shadow_stage = st._replace(module=module, face_width=face, gear=st.gear._replace(teeth=z1),
+                                   pinion=st.pinion._replace(teeth=z2))
+        stiff = spec.stiffness if self._contact_ratio_given else spec.stiffness._replace(
+            contact_ratio=spur_contact_ratio(z1, z2, st.pressure_angle))
+        shadow = dataclasses.replace(spec, stiffness=stiff)
+        d1 = deflection(shadow, shadow_stage, gear_force)
+        return np.broadcast_to(np.asarray(d1, dtype=float), np.shape(r2)), up_scale
+
+    def _upstream(self, scale):
+        """(TE, backlash) [rad] of the stages before the swept one at its input shaft, each stage's load
+        times ``scale`` (the torque hold: their torques follow 1 / i), by their kinds' models."""
+        from wormgear_cli.drive import belt, spur, worm
+        from wormgear_cli.drive.stiffness import deflection
+
+        te = bl = 0.0
+        for stage, per in reversed(self.reference.upstream):
+            if stage.kind == "belt":
+                t, b = belt.totals(stage._replace(effective_tension=stage.effective_tension * scale))
+            else:
+                d = deflection(self.spec, stage, stage.normal_force * scale)
+                t, b = (worm if stage.kind == "worm" else spur).totals(stage, d)
+            te, bl = te + t / per, bl + b / per
+        return te, bl
 
     def evaluate(self, i, l, peak=None, teeth=None) -> dict:
         """Metrics [rad, mm, um, deg] of designs with ratio ``i`` and centre distance ``l`` [mm]
         (arrays), with the sweep's module, hold and spec.  ``peak``: the kinematic peak per
         design (:func:`~wormgear_cli.physics.spur.kinematic_peak`), computed when omitted.
         ``teeth``: whole (z1, z2) of snapped designs (then R = m z / 2 exactly); otherwise
-        z = 2 R / m."""
+        z = 2 R / m.  Totals at the output: the stages after the swept one as they are, the swept
+        stage / O_k, the stages before it / (i O_k)."""
         from wormgear_cli.physics import spur as gear
 
         i = np.asarray(i, dtype=float)
         l = np.asarray(l, dtype=float)
         i, l = np.broadcast_arrays(i, l)
-        m = self.module if self.module is not None else self.spec.gear_pair.module
+        st = self.stage
+        m = self.module if self.module is not None else st.module
         if teeth is None:
             r1 = l / (1.0 + i)
             r2 = l * i / (1.0 + i)
@@ -353,36 +429,35 @@ class RatioDistanceSweep:
         else:
             z1, z2 = (np.asarray(z, dtype=float) for z in teeth)
             r1, r2 = m * z2 / 2.0, m * z1 / 2.0
-        d1, worm_scale = self._deflections(z1, z2, m, r2, i)
-        gp = self.spec.gear_pair
-        if not self._paper:  # involute: the same stage as analyze's (models.gear.involute_stage)
-            inv = gear.involute_stage(r2, self.alpha, self.eccentricity,
-                                      self.spec.assembly.gear_centre_distance_error, d1,
-                                      gp.output_gear.thickness_deviation + gp.pinion.thickness_deviation)
-            te, bl = inv.te_eccentricity + inv.te_deformation, inv.backlash
+        d1, up_scale = self._deflections(z1, z2, m, r2, i)
+        if not self._paper:  # involute: the same stage as analyze's (physics.spur.involute_stage)
+            inv = gear.involute_stage(r2, self.alpha, self.eccentricity, st.centre_distance_error, d1,
+                                      st.gear.thickness_deviation + st.pinion.thickness_deviation)
+            te, bl, bl_def = inv.te_eccentricity + inv.te_deformation, inv.backlash, inv.backlash_deformation
             phi = np.full(np.shape(te), 0.5 * np.pi)  # e sin(phi) peaks at a quarter turn of the pinion
         else:
             if peak is None:
                 peak = gear.kinematic_peak(r1 + r2, self.eccentricity, self.alpha)
             te, phi = gear.gear_te_max_fast(r1, r2, self.eccentricity, self.alpha, d1, peak=peak)
             bl = gear.gear_backlash_max(m, z1, self.eccentricity, self.alpha, d1)
+            bl_def = gear.pitch_arc_to_angle(2.0 * d1, m, z1)  # 2 delta1 on the gear's pitch arc
+        if st.anti_backlash != "none":  # a split pinion: the deflection's part and the stated residual
+            bl = 0.0 + bl_def + float(st.residual_lost_motion)
         ref = self.reference
         if self.hold == "torque" and ref.worm_force > 0.0:
-            # the worm-mesh force follows the intermediate-shaft torque: the worm stage at that force, by the
-            # same equations as analyze (the deflection is not linear in the force: ISO 6336-1's low-load
-            # stiffness), once per distinct ratio
-            from wormgear_cli.analysis.accuracy import deflections, worm_stage
-
-            scales, where = np.unique(np.asarray(worm_scale, dtype=float), return_inverse=True)
-            ws = worm_stage(self.spec, deflections(self.spec, worm_force=ref.worm_force * scales).worm)
-            w_te = np.broadcast_to(ws.transmission_error, scales.shape)[where].reshape(np.shape(worm_scale))
-            w_bl = np.broadcast_to(ws.backlash, scales.shape)[where].reshape(np.shape(worm_scale))
+            # the loads before the swept stage follow its input torque T_out / (O_k i): those stages at
+            # their scaled loads, by the same models as analyze (the deflection is not linear in the force:
+            # ISO 6336-1's low-load stiffness), once per distinct ratio
+            scales, where = np.unique(np.asarray(up_scale, dtype=float), return_inverse=True)
+            u_te, u_bl = self._upstream(scales)
+            w_te = np.broadcast_to(u_te, scales.shape)[where].reshape(np.shape(up_scale))
+            w_bl = np.broadcast_to(u_bl, scales.shape)[where].reshape(np.shape(up_scale))
         else:
-            w_te, w_bl = ref.worm_te, ref.worm_backlash
+            w_te, w_bl = ref.upstream_te, ref.upstream_backlash
         return {
             "gear_transmission_error": te,
-            "total_transmission_error": te + w_te / i,
-            "total_backlash": bl + w_bl / i,
+            "total_transmission_error": ref.downstream_te + te / ref.after + w_te / i,
+            "total_backlash": ref.downstream_backlash + bl / ref.after + w_bl / i,
             "gear_backlash": bl,
             "gear_te_phi_deg": np.degrees(phi),
             "gear_deflection_um": d1 * 1e3,
@@ -468,7 +543,7 @@ class RatioDistanceSweep:
         """The same sweep without snapping (the paper's continuous study)."""
         if self.module is None:
             return self
-        return RatioDistanceSweep(self.spec, self.i_values, self.l_values, self.hold)
+        return RatioDistanceSweep(self.spec, self.i_values, self.l_values, self.hold, stage=self.stage.index)
 
     def gear_te(self, i, l) -> np.ndarray:
         """Gear-stage TE [rad] of the continuous model at arbitrary (i, l)."""
@@ -480,26 +555,23 @@ def _chunk(sweep: RatioDistanceSweep, span: tuple[int, int]) -> dict:
     return sweep.chunk(*span)
 
 
-def check_train(spec) -> None:
-    """UsageError unless ``spec`` is a drive of one worm stage followed by one spur stage: the (i, l)
-    surface is of that spur stage (read through the legacy sections)."""
-    if spec.gear_pair is None:
-        kinds = ", ".join(s.kind for s in spec.stages)
-        raise UsageError(f"--i/--l-mm: the ratio and centre-distance sweep varies the spur stage of a drive of "
-                         f"one worm stage followed by one spur stage; {spec.source} has the stages {kinds}")
+def check_train(spec, stage: int | None = None) -> None:
+    """UsageError unless ``spec`` has a spur stage for the (i, l) sweep (:func:`spur_stage`)."""
+    spur_stage(spec, stage)
 
 
 def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | None,
                          hold: str | None = None, module: float | None = None,
-                         min_teeth: int | None = None) -> RatioDistanceSweep:
-    """The (i, l) sweep of ``spec`` over checked ranges; an axis not given is the spec's own
-    value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold`` None means "force"."""
-    check_train(spec)
-    gp = spec.gear_pair
-    i_values = i_range.values() if i_range is not None else np.array([gp.output_gear.teeth / gp.pinion.teeth])
+                         min_teeth: int | None = None, stage: int | None = None) -> RatioDistanceSweep:
+    """The (i, l) sweep of ``spec``'s spur stage ``stage`` (default the last spur stage) over checked
+    ranges; an axis not given is the stage's own value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold``
+    None means "force"."""
+    st = spur_stage(spec, stage)
+    i_values = i_range.values() if i_range is not None else np.array([st.gear.teeth / st.pinion.teeth])
     l_values = l_range.values() if l_range is not None else \
-        np.array([gp.module * (gp.output_gear.teeth + gp.pinion.teeth) / 2.0])
-    return RatioDistanceSweep(spec, i_values, l_values, hold=hold or "force", module=module, min_teeth=min_teeth)
+        np.array([st.module * (st.gear.teeth + st.pinion.teeth) / 2.0])
+    return RatioDistanceSweep(spec, i_values, l_values, hold=hold or "force", module=module, min_teeth=min_teeth,
+                              stage=st.index)
 
 
 def best_points(data: dict) -> dict:
@@ -657,29 +729,22 @@ def _effect_param_keys() -> list[str]:
     return [f"effects.{name}.{p.key}" for name, eff in EFFECTS.items() for p in eff.params]
 
 
-def parse_param(text: str) -> ParamAxis:
+def parse_param(text: str, spec=None) -> ParamAxis:
     """``KEY=START:STOP:N`` over a numeric spec key; :class:`UsageError` naming it otherwise.
 
-    N is checked against :data:`MAX_PARAM_POINTS` before the values are built.  Keys of the
-    ``[effects.*]`` tables are refused with their own message: effects feed ``simulate`` and
-    ``diagnose``, not the ``analyze`` metrics a --param sweep reports, so every row would be
-    the same.
+    KEY is a TOML path: a drive-level key (``stiffness.iso_ka``), a stage key ``stage.N.KEY`` (N the
+    stage's position from the motor) or, for a drive of one worm and one spur stage, a key of the
+    legacy two-table form (``worm_pair.lead_error_mm``).  With ``spec`` the key is checked against that
+    drive (the stage's kind); without, against the keys any drive may have.  N is checked against
+    :data:`MAX_PARAM_POINTS` before the values are built.  Keys of the ``[effects.*]`` tables are
+    refused with their own message: effects feed ``simulate`` and ``diagnose``, not the ``analyze``
+    metrics a --param sweep reports, so every row would be the same.
     """
-    from wormgear_cli.spec.loader import FIELD_BY_PATH
-
     if "=" not in text:
         raise UsageError(f'--param "{text}": expected KEY=START:STOP:N, e.g. worm_pair.lead_error_mm=0:0.05:11')
     key, rng = text.split("=", 1)
     key = key.strip()
-    field = FIELD_BY_PATH.get(key)
-    if field is None:
-        effect_keys = _effect_param_keys()
-        if key in effect_keys:
-            raise UsageError(f"--param {key}: effect parameters cannot be swept with --param (the [effects.*] "
-                             "tables feed simulate and diagnose, not the analyze metrics of a sweep); vary it "
-                             "in the drive file and run wormgear simulate")
-        hint = did_you_mean(key, list(FIELD_BY_PATH) + effect_keys, otherwise=" (see the key reference: wormgear new)")
-        raise UsageError(f"--param {key}: unknown spec key{hint}")
+    field = _param_field(key, spec)
     if field.kind not in ("float", "int"):
         what = {"str": f"takes {field.expected()}", "floats": "is an array"}.get(field.kind, "is not a number")
         raise UsageError(f"--param {key}: not a numeric key (it {what}); only single numbers can be swept")
@@ -693,6 +758,61 @@ def parse_param(text: str) -> ParamAxis:
             raise UsageError(f"--param {key}: value {v:g} is out of range, expected {field.expected()}")
     vals = tuple(int(round(v)) for v in values) if field.kind == "int" else tuple(float(v) for v in values)
     return ParamAxis(key, vals)
+
+
+def _param_field(key: str, spec):
+    """The schema's :class:`~wormgear_cli.spec.fields.Field` of a --param key (see :func:`parse_param`)."""
+    from wormgear_cli.spec.loader import DRIVE_FIELDS, FIELD_BY_PATH
+    from wormgear_cli.spec.stages import LEGACY_KEYS, STAGE_FIELD_BY_KEY, is_legacy_train
+
+    parts = key.split(".", 2)
+    if len(parts) == 3 and parts[0] == "stage" and parts[1].isdigit():
+        return _stage_field(key, int(parts[1]), parts[2], spec)
+    drive_level = {f.path: f for f in DRIVE_FIELDS}
+    legacy_ok = spec is None or is_legacy_train(spec.stages)
+    field = drive_level.get(key) or (FIELD_BY_PATH.get(key) if legacy_ok else None)
+    if field is not None:
+        return field
+    effect_keys = _effect_param_keys()
+    if key in effect_keys:
+        raise UsageError(f"--param {key}: effect parameters cannot be swept with --param (the [effects.*] "
+                         "tables feed simulate and diagnose, not the analyze metrics of a sweep); vary it "
+                         "in the drive file and run wormgear simulate")
+    if key in LEGACY_KEYS and not legacy_ok:
+        kind, stage_key = LEGACY_KEYS[key]
+        where = [s.paths[stage_key] for s in spec.stages if s.kind == kind and stage_key in STAGE_FIELD_BY_KEY[kind]]
+        raise UsageError(f"--param {key}: a key of the legacy two-table form; this drive names its stages' keys "
+                         f"stage.N.KEY" + (f" (did you mean {' or '.join(where)}?)" if where else
+                                           f" and has no {kind} stage"))
+    known = list(drive_level) + (list(FIELD_BY_PATH) if legacy_ok else []) + effect_keys
+    if spec is not None:
+        known += [p for s in spec.stages for p in s.paths.values()]
+    hint = did_you_mean(key, known, otherwise=" (see the key reference: wormgear new)")
+    raise UsageError(f"--param {key}: unknown spec key{hint}")
+
+
+def _stage_field(key: str, n: int, stage_key: str, spec):
+    """The Field of ``stage.N.KEY``: of stage N's kind with ``spec``, else of any kind having KEY."""
+    from wormgear_cli.spec.stages import STAGE_FIELD_BY_KEY, STAGE_KINDS
+
+    if spec is None:
+        for kind in STAGE_KINDS:
+            if stage_key in STAGE_FIELD_BY_KEY[kind]:
+                return STAGE_FIELD_BY_KEY[kind][stage_key]
+        every = sorted({k for fs in STAGE_FIELD_BY_KEY.values() for k in fs})
+        hint = did_you_mean(stage_key, every, show=lambda m: f"stage.{n}.{m}")
+        raise UsageError(f"--param {key}: unknown stage key{hint}")
+    count = len(spec.stages)
+    if not 1 <= n <= count:
+        raise UsageError(f"--param {key}: {spec.source} has {count} stage{'s' if count != 1 else ''}, no stage {n}")
+    kind = spec.stages[n - 1].kind
+    field = STAGE_FIELD_BY_KEY[kind].get(stage_key)
+    if field is None:
+        others = [k for k in STAGE_KINDS if k != kind and stage_key in STAGE_FIELD_BY_KEY[k]]
+        hint = (f" (a key of {' and '.join(others)} stages; stage {n} is a {kind} stage)" if others else
+                did_you_mean(stage_key, list(STAGE_FIELD_BY_KEY[kind]), show=lambda m: f"stage.{n}.{m}"))
+        raise UsageError(f"--param {key}: unknown key of stage {n} ({kind}){hint}")
+    return field
 
 
 def check_param_axes(axes: list[ParamAxis]) -> None:

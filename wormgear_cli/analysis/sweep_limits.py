@@ -13,12 +13,13 @@ from wormgear_cli.errors import UsageError
 
 def check_options(*, params: list, i: str | None, l_mm: str | None, module_mm: float | None,
                   hold: str | None, min_teeth: int | None, shard: str | None, fmt: str,
-                  plot: bool) -> None:
+                  plot: bool, stage: int | None = None) -> None:
     """Refuse option combinations that cannot run (UsageError naming them)."""
     if params and (i is not None or l_mm is not None or module_mm is not None or hold is not None
-                   or min_teeth is not None):
-        raise UsageError("--param cannot be combined with --i, --l-mm, --module-mm, --hold or "
-                         "--min-pinion-teeth; run two sweeps")
+                   or min_teeth is not None or stage is not None):
+        raise UsageError("--param cannot be combined with --i, --l-mm, --stage, --module-mm, --hold or "
+                         "--min-pinion-teeth; run two sweeps (--param names its stage in the key: "
+                         "stage.N.KEY)")
     if not params and i is None and l_mm is None:
         raise UsageError("nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, "
                          "or --param KEY=START:STOP:N")

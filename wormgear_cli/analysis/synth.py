@@ -306,9 +306,16 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
     if include_spec:
         for name, params in spec.effects.items():
             merged[name] = params_to_keys(name, params)
+    from wormgear_cli.drive.train import drive_geometry
+    from wormgear_cli.physics.effects import geometry_absent_reason
+
+    g = drive_geometry(spec) if effects else None
     for name, values in (effects or {}).items():
         if name not in EFFECTS:
             raise UsageError(f"--effect: unknown effect {name!r} (known: {', '.join(EFFECTS)})")
+        absent = geometry_absent_reason(name, g)
+        if absent is not None:
+            raise UsageError(f"--effect {name}: not an effect of this drive: {absent}")
         merged.setdefault(name, {}).update({k: float(v) for k, v in values.items()})
     out: dict[str, dict] = {}
     for name in EFFECTS:

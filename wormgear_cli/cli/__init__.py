@@ -25,6 +25,7 @@ COMMAND_MODULES = {
     "grade": "grade",
     "merge": "merge",
     "compare": "compare",
+    "compensate": "compensate",
 }
 
 

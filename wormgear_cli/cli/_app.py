@@ -171,7 +171,7 @@ def _output_error_exit(exc: OSError):
 SETTINGS = dict(
     name="wormgear",
     cls=WormgearGroup,
-    help="Transmission error and backlash of two-stage worm + spur gear precision drives.\n\n"
+    help="Transmission error and backlash of precision drives: worm, spur and belt stages in series.\n\n"
     "Example: wormgear analyze configs/mch50.toml --unit arcsec",
     no_args_is_help=True,
     add_completion=False,
@@ -196,7 +196,7 @@ def _main(
     version: bool = typer.Option(False, "--version", help="Print the version and exit.", callback=_version,
                                  is_eager=True),
 ) -> None:
-    """Transmission error and backlash of two-stage worm + spur gear precision drives."""
+    """Transmission error and backlash of precision drives: worm, spur and belt stages in series."""
 
 
 def single_command_app(name: str):

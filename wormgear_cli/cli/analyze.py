@@ -9,9 +9,11 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     FormatOption,
     OutputOption,
+    TableFormat,
     TextJsonFormat,
     UnitOption,
     csv_text,
@@ -31,8 +33,8 @@ from wormgear_cli.cli.helptext import HelpCommand
 @app.command(cls=HelpCommand)
 def analyze(
     drive: DriveArgument,
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
 ):
     """Transmission error and backlash of each stage and of the whole drive.
@@ -51,8 +53,12 @@ def analyze(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     if fmt == "csv":
+        from wormgear_cli.analysis.figures import FIGURE_COLUMNS, figures
+        from wormgear_cli.units import to_unit
+
         m = result.metrics(unit)
-        cols = ["drive", "unit", *result.columns[0], *result.columns[1]]
+        m.update({k: float(to_unit(v, unit)) for k, v in figures(spec, result).items()})  # the sign-off figures
+        cols = ["drive", "unit", *result.columns[0], *result.columns[1], *FIGURE_COLUMNS]
         emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
         return
     report = document(spec, result, unit)
@@ -211,7 +217,7 @@ def _tables(r: dict, unit: str) -> list:
 def check(
     drives: Annotated[list[Path], typer.Argument(help="One or more drive specs (TOML).", show_default=False,
                                                 metavar="DRIVE.toml...")],
-    format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = "text",
+    format: Annotated[TextJsonFormat, typer.Option("--format", "-f", help="Output format.")] = TextJsonFormat.text,
     output: OutputOption = None,
 ):
     """Validate drive specs and check their [requirements].

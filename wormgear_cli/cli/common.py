@@ -15,7 +15,9 @@ italic, dim) only on a terminal without NO_COLOR.
 from __future__ import annotations
 
 import os
+import re
 import sys
+from collections import Counter
 from collections.abc import Iterable
 from enum import Enum
 from functools import lru_cache
@@ -475,28 +477,42 @@ def _rich_table(t):
     return out
 
 
-def _longest_word(column) -> int:
-    """Longest unbreakable run (word or number) among a rich column's header and body cells."""
+def _words(table) -> Counter:
+    """Every word and number of a rich table's header and body cells, with its count."""
     from rich.text import Text
 
-    longest = 0
-    for cell in [column.header, *column.cells]:
-        text = cell.plain if isinstance(cell, Text) else Text.from_markup(str(cell)).plain
-        longest = max([longest] + [len(w) for w in text.split()])
-    return longest
+    words: Counter = Counter()
+    for column in table.columns:
+        for cell in [column.header, *column.cells]:
+            text = cell.plain if isinstance(cell, Text) else Text.from_markup(str(cell)).plain
+            words.update(text.split())
+    return words
+
+
+_RULES = re.compile("[\u2500-\u257f]")  # box-drawing characters: the table's rules and edges
 
 
 def _fits(table, console, width: int) -> bool:
-    """True when rich lays ``table`` out in ``width`` columns without narrowing any column
-    below its longest word (so nothing is cut: text wraps at spaces)."""
+    """True when rich lays ``table`` out in ``width`` columns without breaking a word or
+    number: the table is drawn (without its title and caption) and every word of its cells
+    must come out whole.  Only rich's public drawing is used, so the answer does not depend
+    on how a rich version computes its column widths or paddings."""
+    import io
+
+    from rich.console import Console
+
+    probe = Console(file=io.StringIO(), width=width, no_color=True, color_system=None, highlight=False,
+                    force_terminal=False, soft_wrap=False, legacy_windows=False)
+    title, caption = table.title, table.caption
+    table.title = table.caption = None
     try:
-        options = console.options.update_width(width - table._extra_width)
-        widths = table._calculate_column_widths(console, options)
-    except Exception:  # pragma: no cover - a rich without these internals: split by words
+        probe.print(table)
+    finally:
+        table.title, table.caption = title, caption
+    drawn = probe.file.getvalue()
+    if any(len(line.rstrip()) > width for line in drawn.splitlines()):
         return False
-    if sum(widths) + table._extra_width > width:
-        return False
-    return all(w >= _longest_word(c) + table._get_padding_width(c._index) for w, c in zip(widths, table.columns))
+    return not (_words(table) - Counter(_RULES.sub(" ", drawn).split()))
 
 
 def _part(table, columns: list, title, caption):

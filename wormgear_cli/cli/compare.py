@@ -9,9 +9,11 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     FormatOption,
     OutputOption,
     Progress,
+    TableFormat,
     UnitOption,
     count_type,
     csv_text,
@@ -39,8 +41,8 @@ def compare(
         show_default=False, click_type=count_type(1, 10**8))] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the yield's samples (same seed, same output).",
                                       min=0)] = 0,
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
 ):
     """Drives side by side: totals, error budget and yield, and each one's difference to the first.

@@ -62,8 +62,8 @@ def diagnose(
         "spec: the fitted phases and an [effects.NAME] table per named effect; the input's comments are not "
         "kept); never the input files.", show_default=False)] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
-                                                    case_sensitive=False)] = "table",
-    unit: DiagnoseUnitOption = "arcsec",
+                                                    case_sensitive=False)] = TableJsonFormat.table,
+    unit: DiagnoseUnitOption = AngleUnit.arcsec,
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,

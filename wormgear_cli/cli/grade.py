@@ -33,7 +33,7 @@ def grade(
                                                  "standard's scope; default d/m).", show_default=False,
                                                  click_type=count_type())] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format.",
-                                                    case_sensitive=False)] = "table",
+                                                    case_sensitive=False)] = TableJsonFormat.table,
     output: OutputOption = None,
 ):
     """Tolerances of one spur gear from its accuracy grade (ISO 1328-1:2013 and ISO 1328-2:1997).

@@ -10,8 +10,10 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     FormatOption,
     OutputOption,
+    TableFormat,
     UnitOption,
     announce_written,
     count_type,
@@ -70,8 +72,8 @@ def measure(
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
     input_format: InputFormatOption = "auto",
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs "

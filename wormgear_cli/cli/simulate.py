@@ -10,6 +10,7 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     CsvJsonFormat,
     DriveArgument,
     JobsOption,
@@ -84,7 +85,7 @@ def simulate(
         "repeatable; overrides the spec's [effects.NAME] keys).", show_default=False)] = None,
     format: Annotated[CsvJsonFormat, typer.Option("--format", "-f", help="Output format.",
                                                   case_sensitive=False)] = CsvJsonFormat.csv,
-    unit: UnitOption = "arcsec",
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
     plot: PlotOption = None,
     jobs: JobsOption = 1,

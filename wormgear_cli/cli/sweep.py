@@ -14,6 +14,7 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     FormatOption,
     JobsOption,
@@ -21,6 +22,7 @@ from wormgear_cli.cli.common import (
     PartOutput,
     Progress,
     ShardOption,
+    TableFormat,
     UnitOption,
     announce_written,
     count_type,
@@ -60,10 +62,15 @@ def sweep(
                                                      "STOP (default: the spec's).", show_default=False)] = None,
     param: Annotated[list[str] | None, typer.Option(
         "--param", metavar="KEY=START:STOP:N",
-        help="Sweep a numeric spec key (TOML path, the key's unit), e.g. worm_pair.lead_error_mm=0:0.05:11. "
+        help="Sweep a numeric spec key (TOML path, the key's unit; a stage's key as stage.N.KEY), e.g. "
+             "worm_pair.lead_error_mm=0:0.05:11 or stage.2.lead_error_mm=0:0.05:11. "
              "Repeatable: the grid spans all of them (first key outermost), at most 100000 points. Every "
              "analyze metric is a column. Not for effects.* keys; not combinable with --i/--l-mm.",
         show_default=False)] = None,
+    stage: Annotated[int | None, typer.Option(
+        "--stage", metavar="N", help="The spur stage --i/--l-mm vary: its position from the motor (1 = the "
+                                     "first stage; default: the drive's last spur stage).",
+        show_default=False, min=1)] = None,
     hold: Annotated[HoldMode | None, typer.Option(
         "--hold", help="What stays fixed as i and l change: the normal tooth forces (force, default) or "
                        "the output torque (torque).", case_sensitive=False, show_default=False)] = None,
@@ -79,17 +86,18 @@ def sweep(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs "
                        "matplotlib).", show_default=False)] = None,
-    format: FormatOption = "table",
-    unit: UnitOption = "arcsec",
+    format: FormatOption = TableFormat.table,
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
 ):
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
-    The paper's design study (its Figure 1): for every (i, l), R1 = l/(1+i) and R2 = l i/(1+i),
-    all other inputs from the drive spec; the gear TE is the exact maximum over the pinion
-    angle.  CSV columns start with i, l_mm, gear_transmission_error, total_transmission_error,
-    total_backlash.  The table shows heat maps and checks the paper's three findings on the
-    grid.  --param sweeps any numeric spec key instead, with every analyze metric as a column.
+    The paper's design study (its Figure 1): for every (i, l), a spur stage (--stage N, default
+    the drive's last spur stage) gets R1 = l/(1+i) and R2 = l i/(1+i), all other inputs from the
+    drive spec; the gear TE is the exact maximum over the pinion angle.  CSV columns start with
+    i, l_mm, gear_transmission_error, total_transmission_error, total_backlash.  The table shows
+    heat maps and checks the paper's three findings on the grid.  --param sweeps any numeric
+    spec key instead (a stage's as stage.N.KEY), with every analyze metric as a column.
 
     Example: wormgear sweep configs/mch50.toml --i 2:10:9 --l-mm 100:300:11 --unit arcsec
     """
@@ -101,7 +109,7 @@ def sweep(
     unit = getattr(unit, "value", unit)
     params = list(param or [])
     limits.check_options(params=params, i=i, l_mm=l_mm, module_mm=module_mm, hold=hold, min_teeth=min_pinion_teeth,
-                         shard=shard, fmt=fmt, plot=plot is not None)
+                         shard=shard, fmt=fmt, plot=plot is not None, stage=stage)
     if plot is not None:
         check_plot_path(plot)
         from wormgear_cli.files import refuse_same_outputs
@@ -111,19 +119,7 @@ def sweep(
     k_n = (part.k, part.n) if part is not None else None
     jobs = jobs_count(jobs)
     if params:
-        axes = [core.parse_param(p) for p in params]
-        limits.check_param_size(axes, fmt, k_n)
-        if plot is not None:
-            from wormgear_cli.plots.sweep import check_param_plot
-
-            check_param_plot([len(ax.values) for ax in axes])
-            _require_matplotlib()
-        total = core.param_size(axes)
-        start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
-        parameters = {"param": [[ax.key, list(ax.values)] for ax in axes], "format": fmt, "unit": unit}
-        out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
-        if not out.done():
-            _param_sweep(load_drive(drive), drive, axes, fmt, unit, out, plot, k_n, jobs)
+        _param_command(drive, params, fmt, unit, output, part, k_n, plot, jobs)
         return
     # sizes first: nothing is built, loaded or printed before the grid is known to be feasible
     i_range = core.parse_range_spec(i, "--i", positive=True) if i is not None else None
@@ -140,14 +136,39 @@ def sweep(
         _require_matplotlib()
     total = n_i * n_l
     start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
+    spec = load_drive(drive)
+    st = core.spur_stage(spec, stage)  # a drive without a spur stage: exit 2 before anything is written
     parameters = {"i": _range_key(i_range), "l_mm": _range_key(l_range), "hold": getattr(hold, "value", hold),
                   "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
+    if stage is not None:
+        parameters["stage"] = st.index
     out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
     if out.done():
         return
-    sw = core.ratio_distance_sweep(load_drive(drive), i_range, l_range, hold=getattr(hold, "value", hold),
-                                   module=module_mm, min_teeth=min_pinion_teeth)
+    sw = core.ratio_distance_sweep(spec, i_range, l_range, hold=getattr(hold, "value", hold),
+                                   module=module_mm, min_teeth=min_pinion_teeth, stage=st.index)
     _ratio_distance_sweep(sw, drive, fmt, unit, out, plot, k_n, jobs)
+
+
+def _param_command(drive: Path, params: list[str], fmt: str, unit: str, output, part, k_n, plot, jobs: int) -> None:
+    """sweep --param: the grid of spec keys, sized and checked before anything is built."""
+    from wormgear_cli.analysis import sweep as core
+    from wormgear_cli.analysis import sweep_limits as limits
+
+    spec = load_drive(drive)  # the keys are the drive's (stage.N.KEY by its stages' kinds)
+    axes = [core.parse_param(p, spec) for p in params]
+    limits.check_param_size(axes, fmt, k_n)
+    if plot is not None:
+        from wormgear_cli.plots.sweep import check_param_plot
+
+        check_param_plot([len(ax.values) for ax in axes])
+        _require_matplotlib()
+    total = core.param_size(axes)
+    start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
+    parameters = {"param": [[ax.key, list(ax.values)] for ax in axes], "format": fmt, "unit": unit}
+    out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
+    if not out.done():
+        _param_sweep(spec, drive, axes, fmt, unit, out, plot, k_n, jobs)
 
 
 def _range_key(r):
@@ -226,7 +247,7 @@ def _param_sweep(spec, drive, axes, fmt, unit, out: PartOutput, plot, k_n, jobs:
             return
         rows = list(report.param_table_rows(spec, axes, start, stop, unit, bar.advance, jobs))
     if fmt == "csv":
-        out.emit(csv_text(report.param_columns(axes), rows), [drive])
+        out.emit(csv_text(report.param_columns(axes, spec), rows), [drive])
     elif fmt == "json":
         out.emit(json_text(report.param_json(spec, axes, rows, unit, k_n, start, stop)), [drive])
     else:
@@ -234,5 +255,6 @@ def _param_sweep(spec, drive, axes, fmt, unit, out: PartOutput, plot, k_n, jobs:
     if plot is not None:
         from wormgear_cli.plots.sweep import plot_params
 
-        plot_params(plot, spec.drive.name, axes, report.param_columns(axes), rows, unit)
+        plot_params(plot, spec.drive.name, axes, report.param_columns(axes, spec), rows, unit,
+                    report.stage_te_column(spec))
         announce_written(plot)

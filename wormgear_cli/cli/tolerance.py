@@ -10,6 +10,7 @@ import typer
 
 from wormgear_cli.cli._app import app
 from wormgear_cli.cli.common import (
+    AngleUnit,
     DriveArgument,
     JobsOption,
     OutputOption,
@@ -37,9 +38,10 @@ _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, 
 
 LABELS = {"total_transmission_error": "total TE", "total_backlash": "backlash", "iso230_E": "ISO E",
           "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A", "budget_linear": "budget lin",
-          "budget_rss": "budget rss"}
+          "budget_statistical": "budget stat", "budget_rss": "budget rss"}
 SHORT = {"total_transmission_error": "TE", "total_backlash": "BL", "iso230_E": "E", "iso230_B": "B",
-         "iso230_M": "M", "iso230_A": "A", "budget_linear": "lin", "budget_rss": "rss"}
+         "iso230_M": "M", "iso230_A": "A", "budget_linear": "lin",
+         "budget_statistical": "stat", "budget_rss": "rss"}
 
 
 class MetricSet(str, Enum):
@@ -90,7 +92,7 @@ def tolerance(
     format: Annotated[ToleranceFormat, typer.Option(
         "--format", "-f", help="Output format: the report (table, json) or the samples (csv, or npy: the metrics "
         "as binary columns, with -o).", case_sensitive=False)] = ToleranceFormat.table,
-    unit: UnitOption = "arcsec",
+    unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "

@@ -30,14 +30,21 @@ from wormgear_cli.units import ARCSEC
 
 
 def _status(diag: Diagnosis, twins: dict) -> list[dict]:
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.analysis.accuracy import geometry as drive_geometry
+    from wormgear_cli.physics.effects import EFFECTS, geometry_absent_reason
 
     stop = diag.stop
     out = []
     named = {f.name for f in diag.found}
     twin_of = {t["name"]: (owner, t) for owner, items in twins.items() for t in items}
+    g = drive_geometry(diag.spec)
     for name in EFFECTS:
         entry = {"name": name}
+        absent = geometry_absent_reason(name, g)
+        if absent is not None:
+            entry.update(status="not_in_train", reason=f"not a candidate: {absent}")
+            out.append(entry)
+            continue
         if name in diag.spec.effects:
             entry.update(status="in_spec", reason="already in the spec (its parameters are kept as specified)")
             out.append(entry)
@@ -150,10 +157,10 @@ def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
     parameters that reproduce the named effect's fitted signature at the measured angles (least squares
     of the named signature on the twin's columns), keyed as in the catalogue."""
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     g = drive_geometry(diag.spec)
-    names = [n for n in EFFECTS if n not in diag.spec.effects]
+    names = [n for n in train_effects(g) if n not in diag.spec.effects]
     out = {}
     sig = None
     for f in diag.found:

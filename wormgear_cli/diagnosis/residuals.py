@@ -98,7 +98,7 @@ def order_tables(meas, resids, geometry) -> list[list[dict]]:
     from wormgear_cli.measurement.harmonics import fit_modes_each, physical_orders
 
     phys = physical_orders(geometry, 3)
-    bases = (1.0, float(geometry.gear_ratio), float(geometry.output_teeth), float(geometry.worm_order))
+    bases = geometry.base_orders
 
     def harmonic(o):
         return min((h for h in (1, 2, 3) for b in bases if abs(o - h * b) < 1e-9 * max(o, 1.0)), default=4)

@@ -25,7 +25,7 @@ from wormgear_cli.diagnosis.thresholds import (
 
 #: the catalogue effect whose signature a pattern of the residual scan is
 def _signature_of(item: dict, geometry) -> str | None:
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     if item["kind"] == "reversal":
         return "bearing_clearance"
@@ -33,7 +33,8 @@ def _signature_of(item: dict, geometry) -> str | None:
         return {("temperature_C", "differential"): "thermal_backlash", ("temperature_C", "common"): "thermal_drift",
                 ("load_Nm", "common"): "torsional_compliance"}.get((item["signal"], item["mode"]))
     if item["kind"] == "order" and item["mode"] == "common":
-        for name, eff in EFFECTS.items():
+        for name in train_effects(geometry):
+            eff = EFFECTS[name]
             if eff.order is not None and abs(float(eff.order(geometry)) - item["order"]) < 1e-9:
                 return name
     return None
@@ -208,14 +209,15 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
     """(the orders to test, {order added by the scan of every order: its adjusted p}, the Nyquist limit)."""
     from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
     from wormgear_cli.measurement.iso230 import group_targets
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     sig = ctx.sig
     if "targets" not in cache:
         cache["targets"] = int(group_targets(sig.theta)[1].shape[0])
     top = min(30, cache["targets"] // 2)
     orders = sorted({*map(float, range(1, top + 1)), *labels})
-    owned = sorted({float(e.order(ctx.geometry)) for e in EFFECTS.values() if e.order is not None}
+    owned = sorted({float(EFFECTS[n].order(ctx.geometry)) for n in train_effects(ctx.geometry)
+                    if EFFECTS[n].order is not None}
                    | {float(s.order) for s in ctx.sources})
     if slow is not None:
         # over a partial arc: orders too slow for it are the slow part's; orders the arc cannot tell from an
@@ -439,7 +441,7 @@ def _order_and_trend_items(plan: _Plan, ctx: ScanContext, state: ModelFit, resul
 
 def _describe_order(item: dict, what: float, plan: _Plan, ctx: ScanContext, cross, idx, full_rot, w, n: int) -> None:
     """Amplitude, label and explanation of a significant harmonic of the residual."""
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     mode = item["mode"]
     if full_rot is not None:
@@ -452,7 +454,8 @@ def _describe_order(item: dict, what: float, plan: _Plan, ctx: ScanContext, cros
     if idx.shape[0] < 2:
         item["partial"] = "only the part the fitted phases cannot take up is tested"
     labels = plan.labels
-    catalogue_orders = [float(e.order(ctx.geometry)) for e in EFFECTS.values() if e.order is not None]
+    catalogue_orders = [float(EFFECTS[n].order(ctx.geometry)) for n in train_effects(ctx.geometry)
+                        if EFFECTS[n].order is not None]
     found_by_scan = (f"; found by the scan of every order up to the Nyquist limit of the spacing "
                      f"({plan.nyquist:.4g})" if what in plan.scanned else "")
     if what in labels:
@@ -553,9 +556,9 @@ def nuisance_columns(items: list[dict], sig, geometry, state: ModelFit, info: Da
     held, so that strong content at such an order (a worm-mesh harmonic of a multi-start worm, say)
     cannot leak into a catalogue effect whose columns it partly projects onto at unevenly spaced
     targets (issue 10)."""
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
-    owned = [float(e.order(geometry)) for e in EFFECTS.values() if e.order is not None]
+    owned = [float(EFFECTS[n].order(geometry)) for n in train_effects(geometry) if EFFECTS[n].order is not None]
     basis, _ = orthonormal(np.hstack([state.lin, state.jac]), own=True)
     out = []
     for item in items:

@@ -273,7 +273,7 @@ class _Run:
 
 
 def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import train_effects
 
     s = _setup(spec, meas, opt)
     opt.say("fitting phases and offset")
@@ -281,7 +281,7 @@ def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
     before = fit_model(s.ctx, ones, opt.fit_phases)
     run = _Run(s, opt, before, before, before, ones, ones, [("the zero offset", slice(0, 1))])
     _hold_nuisance(run)
-    run.remaining = {name: candidate(name, s.sig, s.g) for name in EFFECTS if name not in spec.effects}
+    run.remaining = {name: candidate(name, s.sig, s.g) for name in train_effects(s.g) if name not in spec.effects}
     run.alias_notes = order_aliases(s.sig.theta, run.remaining, s.sources, s.g)
     _select(run)
     return _conclude(run)

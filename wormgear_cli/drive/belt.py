@@ -31,7 +31,7 @@ the belt makers' design manuals, shared by the two spans).  Tooth deflection is 
 
 from __future__ import annotations
 
-import math
+import numpy as np
 
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
 from wormgear_cli.spec.stages import record_values
@@ -62,23 +62,37 @@ def _amplitudes(stage, after: float) -> list[tuple]:
     ]
 
 
-def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:
-    """The stage's TE and backlash at the driven pulley's shaft: TE = stretch + the sum over orders of
-    the root-sum-square of the sources at one order (sources of one order add as vectors, different
-    orders peak together somewhere in a turn); backlash = clearance + 2 stretch."""
-    v = record_values(stage)
-    r = stage.output_radius
-    by_order: dict[float, float] = {}
+def periodic_size(stage, value):
+    """The periodic part of the stage's TE at the driven pulley's shaft [rad]: the sum over orders of the
+    root-sum-square of the sources at one order (sources of one order add as vectors, different orders
+    peak together somewhere in a turn), from ``value(key)`` (numbers or arrays of sampled drives)."""
+    by_order: dict[float, object] = {}
     for _, _, key, order, scale, *_ in _amplitudes(stage, 1.0):
-        amp = v[key] * scale
+        amp = value(key) * scale
         by_order[order] = by_order.get(order, 0.0) + amp * amp
-    periodic = sum(math.sqrt(s) for s in by_order.values())
+    return sum(np.sqrt(s) for s in by_order.values())
+
+
+def totals(stage, value=None) -> tuple:
+    """(TE, backlash) at the driven pulley's shaft [rad]: TE = stretch + :func:`periodic_size`;
+    backlash = clearance + 2 stretch (``value(key)``: default the stage's own values; arrays allowed)."""
+    v = value or record_values(stage).__getitem__
+    r = stage.output_radius
+    s = stretch(stage, stage.effective_tension) / r
+    return s + periodic_size(stage, v), v("backlash_mm") / r + 2.0 * s
+
+
+def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:
+    """The stage's TE and backlash at the driven pulley's shaft (:func:`totals`), with their parts."""
+    r = stage.output_radius
+    periodic = periodic_size(stage, record_values(stage).__getitem__)
     s = stretch(stage, stage.effective_tension) / r
     clearance = stage.backlash / r
+    te, bl = totals(stage)
     info = {"effective_tension_N": float(stage.effective_tension), "stretch_um": float(s * r * 1e3),
             "span_length_mm": float(stage.span_length), "centre_distance_mm": float(stage.centre_distance)}
-    return StageResult(stage.index, stage.name, "belt", stage.ratio, t.after(stage), float(s + periodic),
-                       float(clearance + 2.0 * s), {"stretch": float(s), "periodic": float(periodic)},
+    return StageResult(stage.index, stage.name, "belt", stage.ratio, t.after(stage), float(te), float(bl),
+                       {"stretch": float(s), "periodic": float(periodic)},
                        {"clearance": float(clearance), "stretch": float(2.0 * s)}, info)
 
 
@@ -97,7 +111,9 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     static = [Static("belt_stretch", result.te_parts["stretch"] / after, stage.name, stage.index, "belt",
                      origin(stage, ("effective_tension_N", "tensile_stiffness_N")),
                      (stage.paths["effective_tension_N"], stage.paths["tensile_stiffness_N"]))]
-    clear = [Clearance("belt_backlash", result.backlash_parts["clearance"] / after, stage.name, stage.index, "belt")]
+    r = stage.output_radius
+    clear = [Clearance("belt_backlash", result.backlash_parts["clearance"] / after, stage.name, stage.index, "belt",
+                       ("backlash_mm",), lambda v: v("backlash_mm") / r / after)]
     return out, static, clear
 
 

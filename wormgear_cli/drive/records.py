@@ -57,6 +57,11 @@ class Source(NamedTuple):
     ``value(stage_key)`` (numbers or arrays: the same function gives the spec's amplitude and,
     vectorised, a sampled drive's); ``tier``: 0 the model's sources (always listed), 1 the full
     budget's once-per-turn additions and 2 its mesh-order ones (listed when they have a size);
+    ``lost_size(value)`` -> (c, a, s, clipped): the source's lost motion of a sampled drive (arrays)
+    is max(c + a sin(order theta + phase), 0) s [rad at the output] (``clipped`` False: c >= |a|,
+    never negative, taken as it is) (None: no lost motion);
+    ``curve_at(value, theta, phase)`` -> [rad]: the curve of a sampled drive for a source that is
+    not a sinusoid (None: ``size(value) sin(order theta + phase)``);
     ``offset``: the mean of ``curve`` over a turn [rad] (0 for a sinusoid; the paper's spur curve
     has one: a constant shift of every position, no positioning error), so ``peak`` is the
     largest value of ``curve - offset``, the periodic part the budget counts."""
@@ -79,6 +84,8 @@ class Source(NamedTuple):
     size_keys: tuple = ()
     size: Callable | None = None
     tier: int = 0
+    lost_size: Callable | None = None
+    curve_at: Callable | None = None
     offset: float = 0.0
 
 
@@ -101,8 +108,9 @@ class Clearance(NamedTuple):
     """A constant lost motion at the output [rad] not tied to a periodic source (a belt's tooth
     clearance, the residual of an anti-backlash arrangement, a worm's thrust-bearing play, a
     thermal change of a clearance (negative: it closes), the wind-up of a friction torque;
-    ``stage_index`` 0 and ``stage`` "drive" for a drive-level term).  ``origin``: spec / default;
-    ``in_stage``: already part of the stage's backlash (its :class:`StageResult`), else an
+    ``stage_index`` 0 and ``stage`` "drive" for a drive-level term); ``size(value)`` -> [rad] the
+    amount of a sampled drive from ``value(stage_key)`` (None: not toleranced).  ``origin``: spec /
+    default; ``in_stage``: already part of the stage's backlash (its :class:`StageResult`), else an
     addition to the drive's total."""
 
     name: str
@@ -110,6 +118,8 @@ class Clearance(NamedTuple):
     stage: str
     stage_index: int
     stage_kind: str
+    size_keys: tuple = ()
+    size: Callable | None = None
     origin: str = "spec"
     in_stage: bool = True
 

@@ -102,7 +102,8 @@ def build(spec) -> Registry:
         keyed += [((0, n - s.index, 100 + k), x) for k, x in enumerate(st)]
     friction = getattr(spec.drive, "friction_torque", None)
     if friction:  # reverses with the motion: the train winds up by T_f C_out each way
-        clears.append(Clearance("friction_windup", 2.0 * friction * per_nm, "drive", 0, "drive", "spec", False))
+        clears.append(Clearance("friction_windup", 2.0 * friction * per_nm, "drive", 0, "drive", origin="spec",
+                                 in_stage=False))
     keyed.sort(key=lambda item: item[0])
     lines = _unique_names([x for _, x in keyed])
     sources = tuple(x for x in lines if isinstance(x, Source))

@@ -47,6 +47,46 @@ def base_radius(stage) -> float:
     return stage.module * stage.gear.teeth * math.cos(stage.pressure_angle) / 2.0
 
 
+def values(stage):
+    """``value(key)`` -> the stage's own value of a stage key (internal units); the eccentricity is the
+    one the kinematics uses (:attr:`~wormgear_cli.spec.stages.SpurStageSpec.model_eccentricity`)."""
+    from wormgear_cli.spec.stages import record_values
+
+    table = record_values(stage)
+    table["eccentricity_mm"] = stage.model_eccentricity
+    return table.__getitem__
+
+
+def totals(stage, deflection, value=None, te_max=None) -> tuple:
+    """(TE, backlash) at the gear shaft [rad] at tooth deflection ``deflection`` [mm], from ``value(key)``
+    (default the stage's own values; arrays of sampled drives allowed): the paper's Delta phi_cc at its
+    maximum over the pinion angle and Delta phi_ch, or the involute reading (module docstring); with a
+    split pinion the backlash is the deflection's part plus the stated residual.  ``te_max(de)``: the
+    paper's maximum as a function of Delta e alone (an interpolant for many samples; default exact)."""
+    v = value or values(stage)
+    r1, r2 = radii(stage)
+    de, alpha = v("eccentricity_mm"), stage.pressure_angle
+    if stage.kinematics == "paper":
+        te = te_max(de) if te_max is not None else model.gear_te_max_fast(r1, r2, de, alpha, deflection)[0]
+        bl = model.gear_backlash_max(stage.module, stage.gear.teeth, de, alpha, deflection)
+        bl_def = model.pitch_arc_to_angle(2.0 * deflection, stage.module, stage.gear.teeth)
+    else:
+        inv = model.involute_stage(r2, alpha, de, v("centre_distance_error_mm"), deflection,
+                                   v("gear.thickness_deviation_mm") + v("pinion.thickness_deviation_mm"))
+        te, bl, bl_def = inv.te_eccentricity + inv.te_deformation, inv.backlash, inv.backlash_deformation
+    if stage.anti_backlash != "none":
+        bl = 0.0 + bl_def + float(stage.residual_lost_motion)
+    return te, bl + shaft_windup(stage)
+
+
+def shaft_windup(stage) -> float:
+    """The gear shaft's wind-up under the gear's torque F_N r_b2, both ways [rad at the gear shaft]:
+    2 F_N r_b2 / k_s (0 without a torsional stiffness k_s)."""
+    if not stage.shaft_stiffness:
+        return 0.0
+    return 2.0 * stage.normal_force * base_radius(stage) / 1000.0 / stage.shaft_stiffness
+
+
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
     """The stage's TE and backlash at the gear shaft, with their parts."""
     r_pinion, r_gear = radii(stage)
@@ -70,13 +110,11 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
     if stage.anti_backlash == "none":
         bl_parts = {"eccentricity": float(bl - bl_def - bl_thk), "deformation": float(bl_def),
                     "thickness": float(bl_thk)}
-        backlash = float(bl)
     else:
         bl_parts = {"deformation": float(bl_def), "residual": float(stage.residual_lost_motion)}
-        backlash = sum(bl_parts.values())
     if stage.shaft_stiffness:  # the gear shaft's wind-up under the gear's torque F_N r_b2, both ways
-        bl_parts["shaft_compliance"] = 2.0 * stage.normal_force * base_radius(stage) / 1000.0 / stage.shaft_stiffness
-        backlash += bl_parts["shaft_compliance"]
+        bl_parts["shaft_compliance"] = shaft_windup(stage)
+    backlash = float(totals(stage, deflection)[1])
     info = {
         "kinematics": stage.kinematics,
         "line_load_N_per_mm": stiffness.line_load(spec, stage),
@@ -124,6 +162,13 @@ def _eccentricity_source(stage, t, origin) -> Source:
             return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
                 / after
 
+        def curve_at(v, theta, phase):  # the curve of sampled drives (Delta e an array)
+            return model.gear_kinematic_te(o_p * theta + phase, r1, r2, v("eccentricity_mm"), alpha) / after
+
+        def lost_size(v):  # Delta e tan(alpha) (1 + sin) / R2, never negative (no clipping needed)
+            c = v("eccentricity_mm") * (math.tan(alpha) / r2) / after
+            return c, c, 1.0, False
+
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
         offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
         peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset
@@ -145,9 +190,18 @@ def _eccentricity_source(stage, t, origin) -> Source:
 
         def size(v):
             return counts * v("eccentricity_mm") / r_b / after
+
+        curve_at = None
+
+        def lost_size(v):  # (2 Delta a tan(alpha) + E_sn1 + E_sn2 + e tan(alpha) (1 + sin)) / R2, clipped at 0
+            c = counts * v("eccentricity_mm") * (math.tan(alpha) / r2)
+            fixed = (2.0 * math.tan(alpha) * v("centre_distance_error_mm") + v("gear.thickness_deviation_mm")
+                     + v("pinion.thickness_deviation_mm"))
+            return (c + fixed / r2) / after, c / after, 1.0, True
     return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
                   curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
-                  stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0, offset)
+                  stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0,
+                  lost_size if lost_clear else None, curve_at, offset)
 
 
 def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:

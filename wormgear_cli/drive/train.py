@@ -92,9 +92,17 @@ class Order(NamedTuple):
     label: str
 
 
+#: words a stage's name cannot stand for it in a label (``gear of gear``): the members' and the default names
+_PLAIN_NAMES = frozenset({"worm", "wheel", "pinion", "gear", "belt", "driving pulley", "driven pulley"})
+
+
 def _of(t: Train, st) -> str:
-    """`` of NAME`` when the train has more than one stage of ``st``'s kind (names then tell them apart)."""
-    return f" of {st.name}" if sum(1 for s in t.stages if s.kind == st.kind) > 1 else ""
+    """`` of NAME`` when the train has more than one stage of ``st``'s kind (names then tell them apart;
+    `` of stage N`` for a name that is a member's word, such as ``gear``)."""
+    if sum(1 for s in t.stages if s.kind == st.kind) <= 1:
+        return ""
+    plain = st.name.rstrip("0123456789") in _PLAIN_NAMES  # gear, or a numbered default name such as gear3
+    return f" of stage {st.index}" if plain else f" of {st.name}"
 
 
 def shaft_label(t: Train, s: int) -> str:
@@ -131,9 +139,10 @@ def orders(t: Train) -> list[Order]:
 def drive_geometry(spec, t: Train | None = None):
     """The :class:`~wormgear_cli.physics.geometry.DriveGeometry` of any train, for the effect
     catalogue and the diagnosis: the output member is the last stage's (spur gear, worm wheel or
-    driven pulley), the worm the last worm stage's (without one, the motor shaft stands for the
-    worm shaft and the last stage's input shaft for the intermediate shaft).  For the legacy
-    [worm, spur] train these are the values the catalogue was written for."""
+    driven pulley), the worm the last worm stage's, the intermediate shaft the last stage's input
+    shaft (none when that is the worm shaft).  ``gear_ratio`` is that shaft's turns per output turn
+    (the last stage's ratio).  For the legacy [worm, spur] train these are the values the catalogue
+    was written for (i_c for both the intermediate shaft and the reduction after the worm)."""
     from wormgear_cli.physics.geometry import DriveGeometry
 
     t = t or of(spec)
@@ -147,11 +156,18 @@ def drive_geometry(spec, t: Train | None = None):
     else:
         r_base, teeth = r_out, last.driven.teeth
     worms = [s for s in t.stages if s.kind == "worm"]
-    labels = () if t.kinds == ("worm", "spur") else tuple((o.order, o.label) for o in orders(t))
+    legacy = t.kinds == ("worm", "spur")
+    labels = () if legacy else tuple((o.order, o.label) for o in orders(t))
+    # the intermediate shaft: the output stage's input shaft, unless it is a worm shaft (worm_runout's)
+    inter = t.turns[-2] if last.kind != "worm" else 0.0
+    extra = {} if legacy else {"kinds": t.kinds, "intermediate": inter}
     if worms:
         w = worms[-1]
         worm_diameter = w.worm.starts * w.module / math.tan(w.lead_angle)
-        return DriveGeometry(r_out, r_base, w.output_radius, t.after(w), t.before(w), teeth,
-                             w.transverse_pressure_angle, (worm_diameter + 2.0 * w.output_radius) / 2.0,
-                             w.worm.starts, labels)
-    return DriveGeometry(r_out, r_base, r_out, t.before(last), t.turns[0], teeth, 0.0, 0.0, 1, labels)
+        if not legacy:
+            extra["worm_after"] = t.after(w)
+        return DriveGeometry(r_out, r_base, w.output_radius, t.after(w) if legacy else t.turns[-2], t.before(w),
+                             teeth, w.transverse_pressure_angle, (worm_diameter + 2.0 * w.output_radius) / 2.0,
+                             w.worm.starts, labels, **extra)
+    return DriveGeometry(r_out, r_base, r_out, t.turns[-2], t.turns[0], teeth, 0.0, 0.0, 1, labels,
+                         worm_after=0.0, **extra)

@@ -118,6 +118,25 @@ def additions(spec, stage) -> tuple[dict, dict]:
     return bl, te
 
 
+def totals(stage, deflection, value=None, spec=None) -> tuple:
+    """(TE, backlash) at the wheel shaft [rad] of the stage at tooth deflection ``deflection`` [mm], from
+    ``value(key)`` (default the stage's own values; arrays of sampled drives allowed): the paper's
+    Delta phi_wc and Delta phi_wh, or with a duplex worm the deflection's part of Delta phi_wh plus the
+    stated residual lost motion (what ``analyze`` reports and ``tolerance`` samples).  With ``spec``
+    (the drive-level settings) the stage's additions beyond the paper (:func:`additions`, not
+    sampled) are added; the backlash never below zero (a mesh warmed shut binds)."""
+    p = paper(stage, deflection, value)
+    if stage.anti_backlash == "none":
+        te, bl = p.transmission_error, p.backlash
+    else:
+        arc = pitch_arc_to_angle(p.backlash_deformation, stage.module, stage.wheel.teeth)
+        te, bl = p.transmission_error, 0.0 + arc + float(stage.residual_lost_motion)
+    if spec is None:
+        return te, bl
+    extra_bl, extra_te = additions(spec, stage)
+    return te + sum(extra_te.values()), np.maximum(bl + sum(extra_bl.values()), 0.0)
+
+
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
     """The stage's TE and backlash at the wheel shaft, with their parts (``spec``: the drive-level
     settings; ``t``: the train); the parts beyond the paper (:func:`additions`) only when given."""
@@ -131,12 +150,10 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
     if stage.anti_backlash == "none":
         bl_parts = {"deformation": arc(p.backlash_deformation), "profile": arc(p.backlash_profile),
                     "thickness": arc(p.backlash_thickness), "envelope": arc(p.backlash_halfwidth), **extra_bl}
-        backlash = float(p.backlash) + sum(extra_bl.values())
     else:
         bl_parts = {"deformation": arc(p.backlash_deformation), "residual": float(stage.residual_lost_motion),
                     **extra_bl}
-        backlash = sum(bl_parts.values())
-    backlash = max(backlash, 0.0)  # a mesh warmed shut has no clearance (it binds), not a negative one
+    backlash = float(totals(stage, deflection, spec=spec)[1])  # never negative: a mesh warmed shut binds
     info = {"deflection_um": float(deflection * 1e3), "line_load_N_per_mm": stiffness.line_load(spec, stage),
             "normal_force_N": float(stage.normal_force), "anti_backlash": stage.anti_backlash,
             "starts": stage.worm.starts}
@@ -164,13 +181,19 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
     ident = {"stage_index": stage.index, "stage_kind": "worm"}
     own = values(stage)
 
-    def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None):
+    def src(name, key_phase, order, size, keys, part, phase, tier=0, lost=None, lost_size=None):
         amp = float(size(own))
         return sine_source(name, stage.paths[key_phase], order, amp, phase, stage.name, "shaft",
                            tuple(stage.paths[k] for k in keys), lost, part=part, origin=origin(stage, keys),
-                           size_keys=keys, size=size, tier=tier, **ident)
+                           size_keys=keys, size=size, tier=tier, lost_size=lost_size, **ident)
 
-    lost = _lost_motion(stage, after, to_out, own) if stage.anti_backlash == "none" else None
+    clears = stage.anti_backlash == "none"
+    lost = _lost_motion(stage, after, to_out, own) if clears else None
+
+    def lost_size(v):  # constant where its causes are, varying with F_i (:func:`lost_motion_terms`)
+        constant, amplitude = lost_motion_terms(stage, paper(stage, 0.0, v), v)
+        return constant, amplitude, to_out, True
+
     out = [
         src("worm_lead_error", "lead_error_phase_deg", n_w, lambda v: v("lead_error_mm") * (0.5 * to_out),
             ("lead_error_mm",), "worm", stage.lead_error_phase),
@@ -179,7 +202,7 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
             ("worm.runout_mm", "worm.bearing_clearance_mm"), "worm", stage.worm.runout_phase),
         src("wheel_radial_composite", "wheel.radial_composite_phase_deg", after,
             lambda v: v("wheel.radial_composite_error_mm") * (0.5 * to_out), ("wheel.radial_composite_error_mm",),
-            "wheel", stage.wheel.radial_composite_phase, lost=lost),
+            "wheel", stage.wheel.radial_composite_phase, lost=lost, lost_size=lost_size if clears else None),
         src("wheel_eccentricity", "wheel.runout_phase_deg", after,
             lambda v: _runout(v("wheel.runout_mm"), v("wheel.bearing_clearance_mm"), a2) * (0.5 * to_out),
             ("wheel.runout_mm", "wheel.bearing_clearance_mm"), "wheel", stage.wheel.runout_phase),

@@ -125,6 +125,7 @@ def ratio_distance_json(sw, data: dict, unit: str, shard, start: int, stop: int)
         "drive": sw.spec.drive.name,
         "unit": unit,
         "hold": sw.hold,
+        "stage": sw.stage.index,
         "module_mm": sw.module,
         "min_pinion_teeth": sw.min_teeth,
         "grid": {"i": sw.i_values.tolist(), "l_mm": sw.l_values.tolist()},
@@ -211,9 +212,11 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
     cols, k_l = every_kth(sw.l_values.size, TABLE_COLS)
     hold = "normal forces held" if sw.hold == "force" else "output torque held"
     snap = f", snapped to whole teeth at m = {sw.module:g} mm (min {sw.min_teeth} teeth)" if sw.module else ""
-    involute = sw.spec.gear_pair.kinematics == "involute"
+    involute = sw.stage.kinematics == "involute"
     stage = "involute stage" if involute else "paper's Delta phi_cc"
-    g = _heat_table(sw, data, "gear_transmission_error", f"{sw.spec.drive.name}: gear TE ({stage})",
+    which = "gear TE" if sw.spec.form == "legacy" or len(sw.spec.stages) == 2 and sw.stage.index == 2 else \
+        f"TE of stage {sw.stage.index} ({sw.stage.name})"
+    g = _heat_table(sw, data, "gear_transmission_error", f"{sw.spec.drive.name}: {which} ({stage})",
                     unit, rows, cols)
     shown = []
     if rows.size < sw.i_values.size:
@@ -257,11 +260,28 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
 # --- --param sweeps --------------------------------------------------------------------------
 
 
-def param_columns(axes) -> list:
-    """CSV/JSON columns of a --param sweep: the keys, then every analyze metric."""
+def param_columns(axes, spec=None) -> list:
+    """CSV/JSON columns of a --param sweep: the keys, then every analyze metric of ``spec``'s train (its
+    CSV columns: :attr:`~wormgear_cli.analysis.accuracy.Analysis.columns`; without ``spec``, a worm +
+    spur drive's), then the sign-off figures (:data:`~wormgear_cli.analysis.figures.FIGURE_COLUMNS`:
+    the budget's totals and the ISO 230-2 figures, as analyze's CSV)."""
     from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.figures import FIGURE_COLUMNS
 
-    return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
+    if spec is None or tuple(s.kind for s in spec.stages) == ("worm", "spur"):
+        return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS) + list(FIGURE_COLUMNS)
+    from wormgear_cli.analysis.accuracy import analyze
+
+    angle, info = analyze(spec).columns  # names of the stages' parts: the same at every point of the grid
+    return [ax.key for ax in axes] + list(angle) + list(info) + list(FIGURE_COLUMNS)
+
+
+def stage_te_column(spec) -> str:
+    """The column of the output stage's own TE: ``gear_transmission_error`` for a worm + spur drive,
+    else ``NAME_transmission_error`` of the last stage."""
+    if tuple(s.kind for s in spec.stages) == ("worm", "spur"):
+        return "gear_transmission_error"
+    return f"{spec.stages[-1].name}_transmission_error"
 
 
 def _param_batch(state, span: tuple[int, int]) -> list:
@@ -281,10 +301,16 @@ def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Pro
                 progress(b - a)
             yield from rows
         return
-    columns = param_columns(axes)
+    from wormgear_cli.analysis.figures import figures
+    from wormgear_cli.spec.loader import with_values
+
+    columns = param_columns(axes, spec)
     n = len(axes)
+    keys = [ax.key for ax in axes]
     for values, result in core.param_rows(spec, axes, start, stop, progress=progress):
         m = result.metrics(unit)
+        m.update({k: float(to_unit(v, unit)) for k, v in figures(with_values(spec, dict(zip(keys, values))),
+                                                                result).items()})
         yield list(values) + [m[c] for c in columns[n:]]
 
 
@@ -292,7 +318,7 @@ def param_csv(spec, axes, start: int, stop: int, unit: str, progress: Progress =
               jobs: int = 1) -> Iterator[str]:
     """CSV text of points [start, stop): the header, then batches of :data:`CSV_PARAM_BATCH`
     rows as they are computed (no rows held)."""
-    columns = param_columns(axes)
+    columns = param_columns(axes, spec)
     yield csv_text(columns, [])
     batch = []
     for row in param_table_rows(spec, axes, start, stop, unit, progress, jobs):
@@ -303,14 +329,21 @@ def param_csv(spec, axes, start: int, stop: int, unit: str, progress: Progress =
     yield csv_text(columns, batch, header=False)
 
 
-def _best_row(columns, rows) -> int:
-    j = columns.index("total_transmission_error")
+def _lowest(rows, j: int, unit: str, where: str) -> str:
+    """A summary cell: the lowest value of column ``j`` and where, or that every point gives it."""
+    low = rows[min(range(len(rows)), key=lambda q: rows[q][j])][j]
+    same = len(rows) > 1 and all(fmt_angle(r[j], unit) == fmt_angle(low, unit) for r in rows)
+    return f"{fmt_angle(low, unit)} {unit} at {'every point' if same else where}"
+
+
+def _best_row(columns, rows, column: str = "total_transmission_error") -> int:
+    j = columns.index(column)
     return min(range(len(rows)), key=lambda q: rows[q][j])
 
 
 def param_json(spec, axes, rows: list, unit: str, shard, start: int, stop: int) -> dict:
     """The JSON document of a --param sweep's rows [start, stop)."""
-    columns = param_columns(axes)
+    columns = param_columns(axes, spec)
     doc = {"drive": spec.drive.name, "unit": unit,
            "params": [{"key": ax.key, "values": list(ax.values)} for ax in axes],
            "columns": columns, "points": [dict(zip(columns, r)) for r in rows]}
@@ -318,19 +351,22 @@ def param_json(spec, axes, rows: list, unit: str, shard, start: int, stop: int) 
         doc["shard"] = _shard_doc(shard, start, stop, core.param_size(axes))
     elif rows:
         doc["summary"] = {"points": len(rows),
-                          "best": {"total_transmission_error": dict(zip(columns, rows[_best_row(columns, rows)]))}}
+                          "best": {c: dict(zip(columns, rows[_best_row(columns, rows, c)]))
+                                   for c in ("total_transmission_error", "budget_amplitude_statistical", "iso230_A")}}
     return doc
 
 
 def param_tables(spec, axes, rows: list, unit: str) -> list:
     """Up to :data:`TABLE_PARAM_ROWS` points with TE and backlash, and the best point."""
     keys = [ax.key for ax in axes]
-    columns = param_columns(axes)
-    idx = [columns.index(c) for c in ("gear_transmission_error", "total_transmission_error", "total_backlash")]
+    columns = param_columns(axes, spec)
+    te_col = stage_te_column(spec)
+    idx = [columns.index(c) for c in (te_col, "total_transmission_error", "total_backlash")]
     picks = subsample(len(rows), TABLE_PARAM_ROWS) if rows else []
     t = Table(f"{spec.drive.name}: sweep of {', '.join(keys)} [{unit}]",
               [Column(k, "right") for k in keys] + [Column(c, "right")
-                                                   for c in ("gear TE", "total TE", "total backlash")])
+                                                   for c in (te_col.removesuffix("_transmission_error") + " TE",
+                                                             "total TE", "total backlash")])
     for p in picks:
         r = rows[p]
         t.add_row(*(f"{v:g}" for v in r[:len(keys)]), *(fmt_angle(r[j], unit) for j in idx))
@@ -343,6 +379,10 @@ def param_tables(spec, axes, rows: list, unit: str) -> list:
         best = ", ".join(f"{key} = {rows[k][n]:g}" for n, key in enumerate(keys))
         b = Table("summary", [Column("what"), Column("value")], show_header=False)
         b.add_row("points", str(len(rows)))
-        b.add_row("lowest total TE", f"{fmt_angle(rows[k][j], unit)} {unit} at {best}")
+        b.add_row("lowest total TE", _lowest(rows, j, unit, best))
+        for what, col in (("lowest budget TE", "budget_amplitude_statistical"), ("lowest ISO A", "iso230_A")):
+            k, j = _best_row(columns, rows, col), columns.index(col)
+            where = ", ".join(f"{key} = {rows[k][q]:g}" for q, key in enumerate(keys))
+            b.add_row(what, _lowest(rows, j, unit, where))
         out.append(b)
     return out

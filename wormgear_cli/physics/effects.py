@@ -91,12 +91,18 @@ def output_gear_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
 
     The involute rule (docs/budget.md, ``gear_pair.kinematics = "involute"``): an
     eccentric gear moves its base circle by e sin(theta) along the line of action,
-    a TE of e / r_b at its own shaft."""
+    a TE of e / r_b at its own shaft.  In any train the output member: the output stage's
+    spur gear, worm wheel (e / r_b,wheel, the same size as the worm stage's wheel runout
+    S2 = 2 e: S2 / (2 cos(alpha_2)) on its pitch circle) or driven pulley (e / R)."""
     return eccentricity / g.output_base_radius * np.sin(s.theta + phase)
 
 
 def intermediate_shaft_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
     """(e / r_b1) sin(i_c theta + psi)  [rad]: eccentricity e [mm] of the pinion, order i_c.
+
+    In any train: the output stage's input member (its pinion or driving pulley), at its shaft's
+    order; a train whose output stage is a worm has no such shaft apart from the worm shaft
+    (:func:`worm_runout`).
 
     By the involute rule the pinion's eccentricity gives e / r_b2 at the pinion,
     i.e. e / (r_b2 i_c) = e / r_b1 at the output (r_b2 i_c = r_b1).  The worm wheel
@@ -106,18 +112,20 @@ def intermediate_shaft_runout(s: Signals, g: DriveGeometry, eccentricity, phase)
     runout S2 (``wheel.runout_mm``, legacy ``assembly.wheel_eccentricity_mm``) is a total
     indicator reading, S2 = 2 e_w: the paper's S2 / (2 cos(alpha_2)) on the wheel's pitch
     circle is this same e_w / r_b,wheel (docs/models.md, "Runout and eccentricity")."""
-    return eccentricity / g.output_base_radius * np.sin(g.gear_ratio * s.theta + phase)
+    return eccentricity / g.output_base_radius * np.sin(g.intermediate_order * s.theta + phase)
 
 
 def worm_runout(s: Signals, g: DriveGeometry, amplitude, phase):
     """(a / r_wheel) / i_c sin(n_w theta + psi)  [rad]: worm once-per-turn error
-    a [mm] at the wheel pitch circle, reduced by the spur stage."""
-    return amplitude / g.wheel_pitch_radius / g.gear_ratio * np.sin(g.worm_order * s.theta + phase)
+    a [mm] at the wheel pitch circle, reduced by the spur stage (in any train: by the
+    product of the ratios after the worm stage)."""
+    return amplitude / g.wheel_pitch_radius / g.worm_reduction * np.sin(g.worm_order * s.theta + phase)
 
 
 def gear_mesh_error(s: Signals, g: DriveGeometry, amplitude, phase):
     """(a / r_1) sin(z1 theta + psi)  [rad]: tooth-mesh error a [mm] of the output
-    gear at its pitch radius r_1."""
+    gear at its pitch radius r_1 (in any train: the output stage's mesh, z1 the teeth of its
+    output member)."""
     return amplitude / g.output_pitch_radius * np.sin(g.output_teeth * s.theta + phase)
 
 
@@ -127,7 +135,7 @@ def thermal_backlash(s: Signals, g: DriveGeometry, coefficient, reference_temper
     k [mm/K] is the growth of the worm centre distance per kelvin; a growing
     centre distance opens the backlash (lost motion grows)."""
     db = 2.0 * coefficient * (s.temperature - reference_temperature) * np.tan(g.axial_pressure_angle)
-    db = db / g.wheel_pitch_radius / g.gear_ratio
+    db = db / g.wheel_pitch_radius / g.worm_reduction
     return -s.direction * db / 2.0
 
 
@@ -167,7 +175,7 @@ EFFECTS: dict[str, Effect] = {
                (Param("eccentricity_um", "eccentricity", "um", UM, 0.0, 500.0, None,
                       "pinion/wheel shaft eccentricity"), _phase()),
                "eccentricity", "runout of the intermediate (pinion + wheel) shaft, order i_c",
-               order=lambda g: g.gear_ratio, phase="phase"),
+               order=lambda g: g.intermediate_order, phase="phase"),
         Effect("worm_runout", worm_runout,
                (Param("amplitude_um", "amplitude", "um", UM, 0.0, 500.0, None,
                       "once-per-worm-turn error at the wheel pitch circle"), _phase()),
@@ -198,6 +206,36 @@ EFFECTS: dict[str, Effect] = {
                "clearance", "extra lost motion (differential mode)", needs="direction"),
     )
 }
+
+
+def absent_reason(name: str, kinds: tuple, single_start_worm_last: bool = False) -> str | None:
+    """Why catalogue effect ``name`` does not exist in a train of stage ``kinds`` (motor -> output;
+    empty: the legacy [worm, spur]), or None when it does: the worm's effects need a worm stage; the
+    intermediate shaft is the output stage's input shaft, which in a train ending in a worm stage is
+    the worm shaft (``worm_runout``); a single-start worm as the output stage puts its wheel's mesh
+    order on the worm shaft's (``worm_runout`` stands for both).  The one rule that the spec loader,
+    ``synth --effect`` and ``diagnose``'s candidates follow."""
+    kinds = tuple(kinds) or ("worm", "spur")
+    shown = " + ".join(kinds)
+    if name in ("worm_runout", "thermal_backlash") and "worm" not in kinds:
+        return f"this drive ({shown}) has no worm stage"
+    if name == "intermediate_shaft_runout" and kinds[-1] == "worm":
+        return (f"the output stage of this drive ({shown}) is a worm stage: its input shaft is the worm shaft, whose "
+                "runout is worm_runout")
+    if name == "gear_mesh_error" and kinds[-1] == "worm" and single_start_worm_last:
+        return ("the output stage is a single-start worm: its wheel's mesh order is the worm shaft's, whose "
+                "error is worm_runout")
+    return None
+
+
+def geometry_absent_reason(name: str, g: DriveGeometry) -> str | None:
+    """:func:`absent_reason` for a drive's geometry (its ``kinds`` and worm starts)."""
+    return absent_reason(name, g.kinds, g.worm_starts == 1)
+
+
+def train_effects(g: DriveGeometry) -> list[str]:
+    """The catalogue effects that exist in the train of ``g``, in catalogue order."""
+    return [name for name in EFFECTS if geometry_absent_reason(name, g) is None]
 
 
 def effect_error(name: str, signals: Signals, geometry: DriveGeometry, params: dict) -> np.ndarray:

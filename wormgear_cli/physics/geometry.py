@@ -21,7 +21,15 @@ class DriveGeometry(NamedTuple):
     ``axial_pressure_angle`` alpha_x [rad], ``worm_centre_distance`` a [mm],
     ``worm_starts`` z_worm (the worm mesh is at z_worm n_w; 1: worm shaft and mesh coincide),
     ``labels``: ((order, label), ...) of every shaft and mesh of a drive other than the legacy
-    worm + spur one, from its train (empty: the legacy drive's named orders).
+    worm + spur one, from its train (empty: the legacy drive's named orders);
+    ``kinds``: the stage kinds from the motor to the output (empty: the legacy [worm, spur]);
+    ``intermediate``: the order of the intermediate shaft, the output stage's input shaft (0:
+    none apart from a worm shaft); ``worm_after``: the product of the ratios after the worm stage
+    (0: no worm stage); both None for the legacy drive, where they are i_c (``gear_ratio``).
+
+    For any train (:func:`wormgear_cli.drive.train.drive_geometry`): r_1, r_b1 and z1 are the
+    output stage's output member's (spur gear, worm wheel or driven pulley), the worm values the
+    last worm stage's.
     """
 
     output_pitch_radius: float
@@ -34,3 +42,23 @@ class DriveGeometry(NamedTuple):
     worm_centre_distance: float
     worm_starts: int = 1
     labels: tuple = ()
+    kinds: tuple = ()
+    intermediate: float | None = None
+    worm_after: float | None = None
+
+    @property
+    def intermediate_order(self) -> float:
+        """Turns of the intermediate shaft per output turn (0: no such shaft apart from a worm shaft)."""
+        return self.gear_ratio if self.intermediate is None else self.intermediate
+
+    @property
+    def worm_reduction(self) -> float:
+        """The product of the ratios after the worm stage (i_c for the legacy drive; 0: no worm stage)."""
+        return self.gear_ratio if self.worm_after is None else self.worm_after
+
+    @property
+    def base_orders(self) -> tuple:
+        """The drive's shaft and mesh orders (its labels' orders; the legacy drive's 1, i_c, z1, n_w)."""
+        if self.labels:
+            return tuple(float(o) for o, _ in self.labels)
+        return (1.0, float(self.gear_ratio), float(self.output_teeth), float(self.worm_order))

@@ -104,7 +104,8 @@ def plot_ratio_distance(path: Path, sweep, data: dict, unit: str) -> None:
     plt.close(fig)
 
 
-def plot_params(path: Path, drive: str, axes: list, columns: list, rows: list, unit: str) -> None:
+def plot_params(path: Path, drive: str, axes: list, columns: list, rows: list, unit: str,
+                stage_column: str = "gear_transmission_error") -> None:
     """One key: gear TE, total TE and total backlash against it.  Two keys: contour map of the
     total TE over both, with cuts of the total TE against the first key."""
     from wormgear_cli.errors import UsageError
@@ -120,7 +121,9 @@ def plot_params(path: Path, drive: str, axes: list, columns: list, rows: list, u
             key = axes[0].key
             fig, (ax_te, ax_bl) = plt.subplots(1, 2, figsize=(10, 4.2))
             x = data[:, 0]
-            ax_te.plot(x, data[:, col["gear_transmission_error"]], lw=1.2, label="gear stage")
+            ax_te.plot(x, data[:, col[stage_column]], lw=1.2,
+                       label="gear stage" if stage_column == "gear_transmission_error" else
+                       stage_column.removesuffix("_transmission_error") + " stage")
             ax_te.plot(x, data[:, col["total_transmission_error"]], lw=1.2, label="total at the output")
             ax_te.set_ylabel(f"transmission error [{unit}]")
             ax_bl.plot(x, data[:, col["gear_backlash"]], lw=1.2, label="gear stage")

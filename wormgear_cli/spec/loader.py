@@ -772,6 +772,7 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     v["drive.name"] = default_name if v["drive.name"] is MISSING else v["drive.name"]
     v["stiffness.contact_ratio"] = None if v["stiffness.contact_ratio"] is MISSING else v["stiffness.contact_ratio"]
     stages = _stages.build_stages(checked, source, problems, v["stiffness.model"], _torque(v))
+    _effects_in_train(effects, stages, source, problems)
     if problems:
         raise SpecError(problems)
     top = _STAGE_FORM.records(v)
@@ -782,6 +783,21 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
                           requirements=requirements, test_plan=top["test_plan"],
                           **{t: (legacy or {}).get(t) for t in LEGACY_TABLES}, effects=MappingProxyType(effects),
                           source=source, raw=_freeze(data), stages=stages, form="stages"))
+
+
+def _effects_in_train(effects: dict, stages: tuple, source: str, problems: list[str]) -> None:
+    """An ``[effects.NAME]`` table of an effect this train does not have is a problem (the catalogue's
+    rule, :func:`wormgear_cli.physics.effects.absent_reason`)."""
+    if not effects or not stages:
+        return
+    from wormgear_cli.physics.effects import absent_reason
+
+    kinds = tuple(s.kind for s in stages)
+    single = kinds[-1] == "worm" and stages[-1].worm.starts == 1
+    for name in effects:
+        why = absent_reason(name, kinds, single)
+        if why is not None:
+            problems.append(f"{source}: effects.{name}: not an effect of this drive: {why}; remove the table")
 
 
 def _torque(v: dict) -> float | None:

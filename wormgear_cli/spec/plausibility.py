@@ -78,8 +78,9 @@ RULES = (
 
 #: teeth of a spur gear or worm wheel at or below which it cannot work (pointed, undercut away)
 FEWEST_TEETH = 3
-#: fewer teeth than this on a spur gear without profile shift: undercut (a warning)
-UNDERCUT_TEETH = 10
+#: fewer teeth than this on a spur gear: a warning (a standard 20 deg gear is undercut below 17 teeth;
+#: motor pinions down to 9 teeth are made with a positive profile shift, e.g. the HEQ5's 9-tooth motor gear)
+UNDERCUT_TEETH = 9
 #: plausible ranges of shape ratios (warnings): (lo, hi, what, the usual range in words)
 SHAPES = {
     "diameter_quotient": (4.0, 40.0, "the worm's diameter quotient q = d1 / m", "6 to 20 are usual (DIN 3975)"),
@@ -185,8 +186,8 @@ def _teeth(source, stage, problems: list, warnings: list) -> None:
                             "would be pointed and undercut away); check the tooth counts")
         elif z < UNDERCUT_TEETH and stage.kind == "spur":
             warnings.append(f"{source}: {path} = {z}: fewer than {UNDERCUT_TEETH} teeth; a standard 20 deg "
-                            "spur gear is undercut below 17 teeth (14 with slight undercut), and the model has no "
-                            "profile shift; check the tooth count")
+                            "spur gear is undercut below 17 teeth (14 with slight undercut), pinions of 9 and more are "
+                            "made with a profile shift, which the model does not represent; check the tooth count")
 
 
 def _shapes(source, stage, warnings: list) -> None:

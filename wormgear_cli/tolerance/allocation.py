@@ -31,7 +31,7 @@ GRADE_TOLERANCE = {"cumulative_pitch_deviation_mm": "F_pT", "single_pitch_deviat
 def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     """The tolerance [mm] of ``path`` one ISO 1328-1:2013 class finer than the spec's, and the two classes.
 
-    Only for a spur-gear key the part's ``accuracy_grade`` sets (the value comes from the
+    Only for a spur-gear key (of any spur stage) the part's ``accuracy_grade`` sets (the value comes from the
     grade, not written in the spec: :func:`wormgear_cli.spec.loader.value_origin` is "grade"), with
     the standard's formulas (eq. 5 F_pT... eq. 6; rounding 5.2.3) at the gear's module,
     reference diameter m z and face width.  None otherwise (no grade, an explicit value,
@@ -39,19 +39,20 @@ def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     """
     from wormgear_cli.spec.loader import value_origin
 
-    section, _, key = path.rpartition(".")
-    if key not in GRADE_TOLERANCE or section not in ("gear_pair.output_gear", "gear_pair.pinion"):
+    found = [(s, k) for s in spec.stages for k, p in s.paths.items() if p == path and s.kind == "spur"]
+    if not found:
         return None
-    if value_origin(spec, path) != "grade":
+    stage, stage_key = found[0]
+    member, _, key = stage_key.partition(".")
+    if key not in GRADE_TOLERANCE or member not in ("gear", "pinion") or value_origin(spec, path) != "grade":
         return None
-    gp = spec.gear_pair
-    part = gp.output_gear if section.endswith("output_gear") else gp.pinion
+    part = getattr(stage, member)
     grade = part.accuracy_grade
     if grade is None or grade <= 1:
         return None
     from wormgear_cli.physics.iso1328 import flank_tolerances
 
-    tol = flank_tolerances(grade - 1, gp.module, gp.module * part.teeth, gp.face_width, part.teeth)
+    tol = flank_tolerances(grade - 1, stage.module, stage.module * part.teeth, stage.face_width, part.teeth)
     return getattr(tol, GRADE_TOLERANCE[key]) * 1e-3, int(grade), int(grade) - 1
 
 
@@ -96,14 +97,19 @@ class Step:
 
 #: owners of a key, as a sentence names them (the TOML section's last part)
 _OWNERS = {"output_gear": "the output gear's", "pinion": "the pinion's", "worm": "the worm's",
-           "wheel": "the wheel's", "worm_pair": "the worm pair's", "gear_pair": "the gear pair's"}
+           "wheel": "the wheel's", "worm_pair": "the worm pair's", "gear_pair": "the gear pair's",
+           "gear": "the gear's", "driver": "the driving pulley's", "driven": "the driven pulley's"}
 
 
 def describe(path: str) -> str:
     """A toleranced key in words: worm_pair.wheel.radial_composite_error_mm -> "the wheel's radial
-    composite error"; assembly.wheel_eccentricity_mm -> "the wheel eccentricity"."""
+    composite error"; assembly.wheel_eccentricity_mm -> "the wheel eccentricity"; a stage key names its
+    stage: stage.2.wheel.runout_mm -> "the wheel's runout (stage 2)"."""
     parts = path.split(".")
     words = parts[-1].removesuffix("_mm").replace("_", " ")
+    if len(parts) > 2 and parts[0] == "stage" and parts[1].isdigit():
+        owner = _OWNERS.get(parts[2], "the") if len(parts) > 3 else "the"
+        return f"{owner} {words} (stage {parts[1]})"
     owner = _OWNERS.get(parts[-2], "the") if len(parts) > 1 else "the"
     return f"{owner} {words}"
 

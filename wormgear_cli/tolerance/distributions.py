@@ -22,6 +22,7 @@ class Kind(str, Enum):
     radial = "radial"
     signed = "signed"
     unknown = "unknown"
+    allowance = "allowance"
 
 
 def _normal_params(low: float, high: float, cp: float | None, cpk: float | None) -> tuple[float, float]:
@@ -71,11 +72,13 @@ class Distribution:
 
 DISTRIBUTIONS: dict[str, Distribution] = {
     d.name: d for d in (
-        Distribution("normal", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), True, _normal_ppf,
+        Distribution("normal", (Kind.signed.value, Kind.radial.value, Kind.unknown.value, Kind.allowance.value), True,
+                     _normal_ppf,
                      "normal, T at 3 sigma (cp = 1), mean shifted towards the upper limit by cpk < cp"),
         Distribution("rayleigh", (Kind.radial.value, Kind.unknown.value), True, _rayleigh_ppf,
                      "magnitude of a 2-D normal offset, sigma per axis = T / (3 c)"),
-        Distribution("uniform", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), False, _uniform_ppf,
+        Distribution("uniform", (Kind.signed.value, Kind.radial.value, Kind.unknown.value, Kind.allowance.value),
+                     False, _uniform_ppf,
                      "every value in the interval equally likely"),
     )
 }

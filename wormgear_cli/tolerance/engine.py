@@ -24,17 +24,19 @@ from wormgear_cli.batch.pool import MAX_JOBS, ordered_map
 from wormgear_cli.errors import UsageError
 from wormgear_cli.tolerance import metrics as metrics_mod
 from wormgear_cli.tolerance import statistics as stats
-from wormgear_cli.tolerance.quantities import PHASE_SIZE, PHASES, Varied, varied_quantities
+from wormgear_cli.tolerance.quantities import Varied, layout, varied_quantities
 from wormgear_cli.tolerance.sampling import BLOCK, draw
 from wormgear_cli.units import RAD_PER_UNIT, to_unit
 
 PLANS = ("iso", "dense")
 #: most samples of one run (or one shard)
 MAX_SAMPLES = 10**10
-#: requirement attribute -> metric it limits (the paper's totals and the full budget's linear and rss
-#: totals); the other limits are not sampled (:data:`NOT_SAMPLED`)
+#: requirement attribute -> metric it limits (the paper's totals and the full budget's linear and
+#: statistical totals; ``max_budget_rss``, deprecated, is judged against the statistical total as
+#: ``check`` judges it); the other limits are not sampled (:data:`NOT_SAMPLED`)
 YIELD_REQUIREMENTS = {"max_transmission_error": "total_transmission_error", "max_backlash": "total_backlash",
-                      "max_budget_linear": "budget_linear", "max_budget_rss": "budget_rss"}
+                      "max_budget_linear": "budget_linear", "max_budget_statistical": "budget_statistical",
+                      "max_budget_rss": "budget_statistical"}
 #: requirement attribute -> why its yield is not estimated
 NOT_SAMPLED = {
     "max_budget_peak": "the peak rule searches one output turn per sample; its yield is not estimated "
@@ -42,6 +44,8 @@ NOT_SAMPLED = {
     **{f"max_{stage}_{what}": "stage limits are checked by wormgear check, not sampled"
        for stage in ("gear", "worm") for what in ("transmission_error", "backlash")},
 }
+#: a stage's own limits (its keys), not sampled
+STAGE_LIMITS = ("max_transmission_error_arcsec", "max_backlash_arcsec")
 
 
 @dataclass(frozen=True)
@@ -126,6 +130,7 @@ class Setup:
     stop: int
     targets_deg: np.ndarray
     context: object = field(repr=False)
+    layout: object = field(default=None, repr=False)
 
 
 def setup(spec, options: Options, varied: tuple[Varied, ...] | None = None) -> Setup:
@@ -139,18 +144,18 @@ def setup(spec, options: Options, varied: tuple[Varied, ...] | None = None) -> S
                 columns.append(col)
                 bounds[col] = v.bounds(e)
     sized = {v.path for v in varied if any(t > 0 for t in v.tolerance)}
-    for p in PHASES:
-        if p in PHASE_SIZE and PHASE_SIZE[p] not in sized:
+    targets = plan_targets(options)
+    dwell = 10.0 if options.plan == "iso" else 0.5
+    ctx = metrics_mod.context(spec, varied, np.radians(targets), dwell)
+    lay = layout(spec, ctx.registry)
+    for p in lay.phases:
+        if p in lay.phase_size and not sized.intersection(lay.phase_size[p]):
             continue  # the source has no size in this spec: its phase is drawn but not an output column
         columns.append(p)
         bounds[p] = (0.0, 360.0)
-    targets = plan_targets(options)
-    de_tol = next(v for v in varied if v.path == "assembly.gear_eccentricity_mm").tolerance[0]
-    dwell = 10.0 if options.plan == "iso" else 0.5
-    ctx = metrics_mod.context(spec, de_tol, np.radians(targets), dwell)
     start, stop = shard_range(int(options.samples), options.shard)
     return Setup(spec, options, tuple(varied), tuple(columns), bounds, metrics_mod.METRIC_SETS[options.metrics],
-                 start, stop, targets, ctx)
+                 start, stop, targets, ctx, lay)
 
 
 @dataclass(frozen=True)
@@ -172,13 +177,13 @@ def _columns(s: Setup, d) -> dict:
 def drawn_columns(s: Setup, start: int, stop: int) -> dict:
     """The varied columns of samples [start, stop) as the run draws them (no metric evaluated):
     the compact samples file keeps only the metrics, these come again from the seed."""
-    return _columns(s, draw(s.varied, s.options.seed, start, stop))
+    return _columns(s, draw(s.varied, s.options.seed, start, stop, s.layout))
 
 
 def block(s: Setup, b: int) -> Block:
     """Random-stream block ``b`` of the run (the part of it in the run's samples), drawn and evaluated."""
     lo, hi = max(s.start, b * BLOCK), min(s.stop, (b + 1) * BLOCK)
-    d = draw(s.varied, s.options.seed, lo, hi)
+    d = draw(s.varied, s.options.seed, lo, hi, s.layout)
     m = metrics_mod.evaluate(s.context, d.values, d.phases, s.metrics)
     return Block(lo, hi, _columns(s, d), {k: to_unit(v, s.options.unit) for k, v in m.items()})
 
@@ -347,14 +352,13 @@ def run(s: Setup, on_block: Callable | None = None, progress: Callable[[int], No
 # --- corner case and root-sum-square estimate ------------------------------------------------
 
 
-def _aligned(spec, quantity: str) -> dict[str, np.ndarray]:
-    from wormgear_cli.analysis.simulate import aligned_phases, periodic_sources
-    from wormgear_cli.spec.stages import legacy_path
+def _aligned(spec, quantity: str, registry=None) -> dict[str, np.ndarray]:
+    from wormgear_cli.drive.registry import aligned_phases, build
 
-    a = aligned_phases(spec, quantity)  # sources without a size are left out there: 90 deg, as the sinusoids
-    # keyed by the sampled phases' (legacy) paths, also for a worm + spur drive of the stage form
-    return {legacy_path(spec.stages, src.phase_path): np.array([a.get(src.name, 0.5 * math.pi)])
-            for src in periodic_sources(spec, all_budget_sources=True)}
+    reg = registry if registry is not None else build(spec)
+    a = aligned_phases(spec, quantity, reg)  # sources without a size are left out there: 90 deg, as the sinusoids
+    # keyed by the sampled phases' paths (the file's form)
+    return {src.phase_path: np.array([a.get(src.name, 0.5 * math.pi)]) for src in reg.periodic(True)}
 
 
 def _values_at(varied, which: str | None) -> dict[str, np.ndarray]:
@@ -387,7 +391,7 @@ def reference_values(s: Setup) -> tuple[dict, dict]:
     groups = [None] + [v.path for v in s.varied if any(t > 0 for t in v.tolerance)]
     for metric in s.metrics:
         quantity = "reversal" if metric == "iso230_B" else "error"
-        ph = _aligned(s.spec, quantity)
+        ph = _aligned(s.spec, quantity, s.context.registry)
 
         def f(which):
             return float(metrics_mod.evaluate(s.context, _values_at(s.varied, which), ph, (metric,))[metric][0])  # noqa: B023
@@ -437,9 +441,15 @@ def metrics_for_limits(spec) -> str | None:
 
 
 def not_sampled(spec) -> dict[str, str]:
-    """Requirement key -> why the spec's limit gets no yield estimate (:data:`NOT_SAMPLED`)."""
-    return {f"requirements.{a}_arcsec": why for a, why in NOT_SAMPLED.items()
-            if getattr(spec.requirements, a) is not None}
+    """Requirement key -> why the spec's limit gets no yield estimate (:data:`NOT_SAMPLED`): the budget's
+    peak rule, and each stage's own limits (by their paths in the file, output -> motor)."""
+    out = {f"requirements.{a}_arcsec": why for a, why in NOT_SAMPLED.items()
+           if a == "max_budget_peak" and getattr(spec.requirements, a) is not None}
+    for stage in spec.stages[::-1]:
+        for key, attr in zip(STAGE_LIMITS, ("max_transmission_error", "max_backlash")):
+            if getattr(stage, attr) is not None:
+                out[stage.paths[key]] = NOT_SAMPLED["max_gear_backlash"]
+    return out
 
 
 #: the limits a yield is counted against, for messages

@@ -12,11 +12,12 @@
   M = max_i x_i(bi) - min_i x_i(bi) with x_i(bi) = (x_i(up) + x_i(down)) / 2;
   A = max(x + 2 s) - min(x - 2 s) with s = 0.
 
-* ``budget_linear``, ``budget_rss``: the full error budget's TE at the output
-  (:mod:`wormgear_cli.analysis.budget`, the lines of ``simulation.periodic_sources`` with
-  every budget source plus the two static deflection lines) under the linear
-  rule (sum of every line's maximum) and the rss rule (static lines + root-sum-
-  square of the periodic ones); phases do not enter them.  The peak rule (a
+* ``budget_linear``, ``budget_statistical``, ``budget_rss``: the full error budget's TE amplitude
+  at the output (:mod:`wormgear_cli.analysis.budget`, the registry's periodic lines with every
+  budget source plus the static lines) under the linear rule (sum of every line's maximum), the
+  statistical rule (static lines + root-sum-square within an order, summed across orders:
+  :func:`wormgear_cli.analysis.budget.statistical_total`) and the deprecated rss rule (static
+  lines + root-sum-square of every periodic one); phases do not enter them.  The peak rule (a
   search over one output turn per sample) is not sampled.
 
 Both gear-stage kinematics are followed (``gear_pair.kinematics``): ``paper``
@@ -40,21 +41,22 @@ clipped at 0 as a clearance, which matters only for sampled negative deviations)
 the sinusoids the worm-stage sources (orders n_w and i_c) and the pitch deviations
 (orders 1, i_c, z1), c_w + v_w sin the worm stage's clearance (constant where its causes are,
 varying with F_i: :func:`wormgear_cli.drive.worm.lost_motion_terms`) and fixed = tooth-deflection
-lag and the spec's effects (not varied).
+lag and the spec's effects (not varied); the registry's constant clearances are added to the
+lost motion.
 All angles [rad], lengths [mm].
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from wormgear_cli.physics import spur as gear_model
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
-BUDGET_METRICS = ("budget_linear", "budget_rss")
+BUDGET_METRICS = ("budget_linear", "budget_statistical", "budget_rss")
 ISO_METRICS = ("iso230_E", "iso230_B", "iso230_M", "iso230_A")
 #: metric sets of ``--metrics`` ("paper+budget": the cheapest set for limits on both)
 METRIC_SETS = {"paper": PAPER_METRICS, "budget": BUDGET_METRICS, "paper+budget": PAPER_METRICS + BUDGET_METRICS,
@@ -68,19 +70,21 @@ _ISO_CELLS = 2_097_152
 
 
 class GearTeMax:
-    """max over phi of the paper's Delta phi_cc as a function of Delta e alone (the other
-    inputs are fixed by the spec).  Evaluated with a Chebyshev interpolant on [0, T]
+    """max over phi of the paper's Delta phi_cc of a spur stage as a function of Delta e alone (the
+    other inputs are fixed by the spec).  Evaluated with a Chebyshev interpolant on [0, T]
     of :func:`wormgear_cli.physics.spur.gear_te_max_fast` (degree 48, checked against
     the exact maximiser between the nodes to 1e-11 relative; the exact maximiser
     is used when the check fails).  Capped at the value at T (the maximum grows
     with Delta e), so no sample exceeds the corner case.  ``part="deformation"``:
     instead the deformation part of that maximum (analyze's ``gear_te_deformation``:
-    the maximum less the kinematic curve at its angle), not capped."""
+    the maximum less the kinematic curve at its angle), not capped.  ``stage``: the spur
+    stage record (a spec of a [worm, spur] drive: its spur stage)."""
 
-    def __init__(self, spec, tolerance: float, deflection: float, part: str = "max"):
-        gp = spec.gear_pair
-        self.args = (gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0)
-        self.alpha, self.d1, self.t, self.part = gp.pressure_angle, deflection, float(tolerance), part
+    def __init__(self, stage, tolerance: float, deflection: float, part: str = "max"):
+        if getattr(stage, "kind", None) != "spur":  # a spec: its (one) spur stage
+            stage = [s for s in stage.stages if s.kind == "spur"][-1]
+        self.args = (stage.module * stage.pinion.teeth / 2.0, stage.module * stage.gear.teeth / 2.0)
+        self.alpha, self.d1, self.t, self.part = stage.pressure_angle, deflection, float(tolerance), part
         self.at_t = float(self.exact(np.array([self.t]))[0])
         self.coef = None
         if self.t > 0:
@@ -113,32 +117,73 @@ class GearTeMax:
         return np.minimum(value, self.at_t) if self.part == "max" else value
 
 
+class StageContext(NamedTuple):
+    """What the metrics need of one stage: its ``stage`` record, tooth ``deflection`` [mm], ``columns``
+    (stage key -> the sample column, a tuple of columns for an array key), ``own(key)`` its values
+    where no column varies, and for a spur stage of the paper's kinematics the interpolants of
+    Delta phi_cc's maximum (``te_max``), of its kinematic maximum (``kin_max``, the budget's line) and
+    of the deformation part (``def_part``, the budget's static line)."""
+
+    stage: object
+    deflection: float
+    columns: dict
+    own: object
+    te_max: object = None
+    kin_max: object = None
+    def_part: object = None
+
+
 @dataclass(frozen=True)
 class Context:
     """Everything the metrics need that the samples do not vary (built once per run)."""
 
     spec: object
-    deflection_gear: float
-    deflection_worm: float
-    gear_te: GearTeMax
-    gear_kin: GearTeMax  # kinematic maximum alone (deflection 0): the budget's gear line
-    gear_def: GearTeMax  # deformation part of gear_te (the budget's static gear line)
+    stages: tuple  # StageContext per stage, motor -> output
     theta: np.ndarray  # test targets [rad]
     fixed_up: np.ndarray  # deflection lag + effects, forward [rad]
     fixed_down: np.ndarray
     registry: object = None  # the drive's registry (wormgear_cli.drive.registry), built once per run
 
 
-def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, dwell_s: float = 10.0) -> Context:
+def _own_values(stage):
+    from wormgear_cli.drive import spur
+
+    if stage.kind == "spur":
+        return spur.values(stage)
+    from wormgear_cli.spec.stages import record_values
+
+    return record_values(stage).__getitem__
+
+
+def _stage_context(stage, deflection: float, quantities, tolerance: dict) -> StageContext:
+    cols = {q.key: (q.columns() if q.length > 1 else q.path) for q in quantities if q.stage == stage.index}
+    own = _own_values(stage)
+    if stage.kind != "spur" or stage.kinematics != "paper":
+        return StageContext(stage, deflection, cols, own)
+    t = tolerance.get(stage.index, 0.0)
+    return StageContext(stage, deflection, cols, own, GearTeMax(stage, t, deflection), GearTeMax(stage, t, 0.0),
+                        GearTeMax(stage, t, deflection, "deformation"))
+
+
+def context(spec, tolerances, targets_rad: np.ndarray, dwell_s: float = 10.0) -> Context:
     """Build the :class:`Context` of ``spec`` for test targets ``targets_rad`` [rad] (one
-    run, forward pass then reverse pass, ``dwell_s`` [s] per point as ``synth``)."""
-    from wormgear_cli.analysis.accuracy import deflections
+    run, forward pass then reverse pass, ``dwell_s`` [s] per point as ``synth``).
+    ``tolerances``: the varied quantities (:func:`~wormgear_cli.tolerance.quantities.varied_quantities`,
+    which set each paper-kinematics spur stage's interpolation interval [0, T] of Delta e), or a
+    number, the eccentricity tolerance of the drive's spur stage."""
     from wormgear_cli.analysis.simulate import components
     from wormgear_cli.drive.registry import build
     from wormgear_cli.physics.effects import Signals
+    from wormgear_cli.tolerance.quantities import train_quantities
 
-    d = deflections(spec)  # a [worm, spur] drive (the thin adapter: docs/tolerance.md)
     reg = build(spec)
+    if isinstance(tolerances, (int, float)):
+        spurs = [s.index for s in spec.stages if s.kind == "spur"]
+        tol = {spurs[-1]: float(tolerances)} if spurs else {}
+        quantities = train_quantities(spec)
+    else:
+        tol = {v.quantity.stage: v.tolerance[0] for v in tolerances if v.quantity.key == "eccentricity_mm"}
+        quantities = tuple(v.quantity for v in tolerances)
     theta = np.asarray(targets_rad, dtype=float)
     n = theta.size
     fixed = {}
@@ -146,87 +191,87 @@ def context(spec, gear_eccentricity_tolerance: float, targets_rad: np.ndarray, d
         parts = components(spec, Signals.make(theta, sign, 0.0, 20.0, times), registry=reg)
         fixed[sign] = sum((v for k, v in parts.items() if k == "deformation" or k.startswith("effect:")),
                           np.zeros(n))
-        # the registry's constant clearances (an anti-backlash residual, a thrust bearing's play, a thermal
-        # change of the backlash, a friction torque's wind-up): not varied, -d C / 2
-        fixed[sign] = fixed[sign] - sign * sum(c.amount for c in reg.clearances) / 2.0
-    paper = spec.gear_pair.kinematics == "paper"
-    t = gear_eccentricity_tolerance if paper else 0.0  # the involute stage needs no interpolant
-    return Context(spec, float(d.gear), float(d.worm), GearTeMax(spec, t, d.gear), GearTeMax(spec, t, 0.0),
-                   GearTeMax(spec, t, d.gear, "deformation"), theta, np.broadcast_to(fixed[1.0], (n,)).copy(),
+    stages = tuple(_stage_context(s, d, quantities, tol) for s, d in zip(spec.stages, reg.deflections))
+    return Context(spec, stages, theta, np.broadcast_to(fixed[1.0], (n,)).copy(),
                    np.broadcast_to(fixed[-1.0], (n,)).copy(), reg)
 
 
 def stage_value(ctx: Context, v: dict, stage):
     """``value(stage key)`` -> the sampled values of a stage's key (arrays), from the sample columns
-    ``v`` (keyed by legacy path: the varied quantities of a [worm, spur] drive), else the stage's own
-    value: how the registry's vectorised size functions and stage models read a sampled drive."""
-    from wormgear_cli.spec.stages import STAGE_TO_LEGACY, record_values
-
-    own = record_values(stage)
+    ``v`` (keyed by the quantities' paths), else the stage's own value: how the registry's
+    vectorised size functions and the stage models read a sampled drive."""
+    sc = ctx.stages[stage.index - 1]
+    cols, own = sc.columns, sc.own
 
     def value(key):
-        if key == "alignment_errors_mm":
-            return tuple(np.asarray(v.get(f"assembly.worm_pair_errors_mm[{i}]", own[key][i]), dtype=float)
-                         for i in range(6))
-        path = STAGE_TO_LEGACY.get((stage.kind, key))
-        return np.asarray(v[path] if path in v else own[key], dtype=float)
+        col = cols.get(key)
+        if isinstance(col, tuple):
+            return tuple(np.asarray(v.get(c, own(key)[i]), dtype=float) for i, c in enumerate(col))
+        return np.asarray(v[col] if col in v else own(key), dtype=float)
 
     return value
 
 
-def _gear_stage(ctx: Context, v: dict):
-    """Gear-stage TE and backlash [rad at the output] per sample, as analyze (both kinematics)."""
-    gp = ctx.spec.gear_pair
-    de = v["assembly.gear_eccentricity_mm"]
-    if gp.kinematics == "paper":
-        return ctx.gear_te(de), gear_model.gear_backlash_max(gp.module, gp.output_gear.teeth, de, gp.pressure_angle,
-                                                             ctx.deflection_gear)
-    inv = gear_model.involute_stage(gp.module * gp.output_gear.teeth / 2.0, gp.pressure_angle, de,
-                                    v["assembly.gear_centre_distance_error_mm"], ctx.deflection_gear,
-                                    v["gear_pair.output_gear.thickness_deviation_mm"]
-                                    + v["gear_pair.pinion.thickness_deviation_mm"])
-    return inv.te_eccentricity + inv.te_deformation, inv.backlash
+def _stage_totals(sc: StageContext, value, spec) -> tuple:
+    """(TE, backlash) [rad] at the stage's own output shaft per sample, by its kind's model (a worm
+    stage with its additions beyond the paper, which are not sampled)."""
+    from wormgear_cli.drive import belt, spur, worm
+
+    st = sc.stage
+    if st.kind == "worm":
+        return worm.totals(st, sc.deflection, value, spec)  # the worm stage's one definition
+    if st.kind == "spur":
+        return spur.totals(st, sc.deflection, value, sc.te_max)
+    return belt.totals(st, value)
 
 
 def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     """Total TE and total backlash [rad] per sample, as :func:`analyze` computes them.
 
     ``values``: column -> values [mm] (see :func:`wormgear_cli.tolerance.sampling.draw`).
-    Source: the paper's Delta phi_c = Delta phi_cc + Delta phi_wc / i_c and
-    Delta phi_h = Delta phi_ch + Delta phi_wh / i_c (module doc of analysis); the gear
-    stage by the spec's kinematics (paper or involute).
+    Source: the paper's Delta phi = sum_h Delta phi_h / O_h (O_h the product of the ratios after
+    stage h; for its two stages Delta phi_cc + Delta phi_wc / i_c), each stage by its kind's model
+    (:mod:`wormgear_cli.drive`; a spur stage by its kinematics, paper or involute), added from
+    the output back as :meth:`~wormgear_cli.drive.registry.Registry.totals`.
     """
-    spec = ctx.spec
-    gp = spec.gear_pair
-    z1, z2 = gp.output_gear.teeth, gp.pinion.teeth
-    i_c = z1 / z2
-    v = values
-    te_gear, bl_gear = _gear_stage(ctx, v)
-    from wormgear_cli.drive.worm import paper
-
-    worm = ctx.registry.train.stages[0]
-    ws = paper(worm, ctx.deflection_worm, stage_value(ctx, v, worm))  # the worm stage's one definition
-    wte, wbl = ws.transmission_error, ws.backlash
-    return {"total_transmission_error": te_gear + wte / i_c, "total_backlash": bl_gear + wbl / i_c}
+    te = bl = 0.0
+    for sc, r in zip(reversed(ctx.stages), reversed(ctx.registry.results)):
+        t, b = _stage_totals(sc, stage_value(ctx, values, sc.stage), ctx.spec)
+        te = te + t / r.after
+        bl = bl + b / r.after
+    bl = bl + sum(ctx.registry.backlash_additions().values())  # a friction torque's wind-up (not sampled)
+    return {"total_transmission_error": te, "total_backlash": bl}
 
 
 def _sinusoids(ctx: Context, v: dict) -> list:
     """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order, the spec's
-    phase [rad]), the
+    phase [rad]: kept where the layout samples no phase, e.g. the worm's axial runout in a legacy file), the
     registry's sources in their order (all of them: the budget's too) with their sizes evaluated on
-    the samples (:attr:`wormgear_cli.drive.records.Source.size`); the paper kinematics' gear curve,
-    not a sinusoid, is left out (the gear eccentricity is one only under the involute kinematics)."""
-    from wormgear_cli.spec.stages import legacy_path
-
+    the samples (:attr:`wormgear_cli.drive.records.Source.size`); a source that is not a sinusoid
+    (the paper kinematics' spur curve) is left out."""
     reg = ctx.registry
     stages = reg.train.stages
     out = []
     for src in reg.periodic(all_budget_sources=True):
         if getattr(src.curve, "sine", None) is None:
             continue
-        stage = stages[src.stage_index - 1]
-        out.append((src.size(stage_value(ctx, v, stage)), legacy_path(stages, src.phase_path), src.order, src.phase))
+        out.append((src.size(stage_value(ctx, v, stages[src.stage_index - 1])), src.phase_path, src.order,
+                    src.phase))
     return out
+
+
+def _static(ctx: Context, x, value):
+    """A static line [rad at the output] per sample: a paper-kinematics spur stage's deformation part
+    (it depends on Delta e), an involute spur stage's delta / r_b2, else the registry's constant."""
+    sc = ctx.stages[x.stage_index - 1]
+    st = sc.stage
+    if st.kind == "spur":
+        from wormgear_cli.drive.spur import base_radius
+
+        part = sc.def_part(value("eccentricity_mm")) if sc.def_part is not None else \
+            sc.deflection / base_radius(st)
+        return part / ctx.registry.train.after(st)
+    return x.amplitude
 
 
 def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
@@ -234,28 +279,35 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     :func:`wormgear_cli.analysis.budget.budget` combines its lines (module doc there):
     linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
 
-    Lines: the gear eccentricity (paper: the kinematic maximum of Delta phi_cc at no
-    load less the curve's mean, its periodic part; involute: e/r_b1), the sinusoids
-    (:func:`_sinusoids`), and the static tooth
-    deflections (gear: analyze's gear_te_deformation, which under the paper's
-    kinematics depends on Delta e; worm: delta2 on the wheel pitch circle / i_c).
+    Lines: the registry's periodic sources with their sizes on the samples (a paper-kinematics spur
+    stage's eccentricity: the kinematic maximum of Delta phi_cc at no load, by its interpolant, less
+    the curve's mean: its periodic part), and its static lines (:func:`_static`).
     """
-    spec = ctx.spec
-    gp = spec.gear_pair
-    worm_static = next(x.amplitude for x in ctx.registry.statics if x.stage_kind == "worm")  # not sampled
-    periodic = [np.asarray(a, dtype=float) for a, *_ in _sinusoids(ctx, values)]
-    if gp.kinematics == "paper":
-        de = values["assembly.gear_eccentricity_mm"]
-        r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-        mean = gear_model.gear_kinematic_mean(r1, r2, de, gp.pressure_angle)  # a constant: no budget line's part
-        periodic.insert(0, np.asarray(ctx.gear_kin(de), dtype=float) - mean)
-        static = ctx.gear_def(de) + worm_static
-    else:
-        r_b1 = gp.module * gp.output_gear.teeth * math.cos(gp.pressure_angle) / 2.0
-        static = ctx.deflection_gear / r_b1 + worm_static
+    from wormgear_cli.analysis.budget import statistical_total
+
+    reg = ctx.registry
+    stages = reg.train.stages
+    periodic = []
+    for src in reg.periodic(all_budget_sources=True):
+        sc = ctx.stages[src.stage_index - 1]
+        value = stage_value(ctx, values, stages[src.stage_index - 1])
+        if src.curve_at is not None and sc.kin_max is not None:
+            st, de = sc.stage, value("eccentricity_mm")
+            mean = gear_model.gear_kinematic_mean(st.module * st.pinion.teeth / 2.0, st.module * st.gear.teeth / 2.0,
+                                                  de, st.pressure_angle)  # a constant shift: no line's part
+            periodic.append(np.asarray((sc.kin_max(de) - mean) / reg.train.after(st), dtype=float))
+        else:
+            periodic.append(np.asarray(src.size(value), dtype=float))
+    static = None
+    for x in reg.statics:
+        part = _static(ctx, x, stage_value(ctx, values, stages[x.stage_index - 1]))
+        static = part if static is None else static + part
+    static = 0.0 if static is None else static
     lin = sum(periodic)
     sq = sum(a * a for a in periodic)
-    return {"budget_linear": static + lin, "budget_rss": static + np.sqrt(sq)}
+    orders = [src.order for src in reg.periodic(all_budget_sources=True)]
+    return {"budget_linear": static + lin, "budget_rss": static + np.sqrt(sq),
+            "budget_statistical": statistical_total(periodic, orders, static)}
 
 
 def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarray]:
@@ -276,65 +328,55 @@ def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarra
 
 
 def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
-    from wormgear_cli.analysis.accuracy import geometry
-
-    spec = ctx.spec
-    g = geometry(spec)
-    gp = spec.gear_pair
-    r1, r2 = gp.module * gp.pinion.teeth / 2.0, gp.module * gp.output_gear.teeth / 2.0
-    alpha, i_c = gp.pressure_angle, g.gear_ratio
-    to_out = 1.0 / (g.wheel_pitch_radius * i_c)
-    paper = gp.kinematics == "paper"
-    theta = ctx.theta[None, :]
-    col = lambda a: np.asarray(a, dtype=float)[:, None]  # noqa: E731
-
-    de, psi_e = col(v["assembly.gear_eccentricity_mm"]), col(ph["assembly.gear_eccentricity_phase_deg"])
+    reg = ctx.registry
+    stages = reg.train.stages
+    sources = reg.periodic(all_budget_sources=True)
+    value = {s.index: stage_value(ctx, v, s) for s in stages}
+    n = len(next(iter(v.values())))
     # sources without a size in this chunk (a tolerance of 0: the budget's pitch deviations of most specs)
     # are left out, and with them their orders
-    # a source whose phase is not sampled (a key beyond the legacy form's, e.g. the worm's axial runout) keeps
-    # the spec's phase
+    # a source whose phase is not sampled (a key beyond the legacy form's, e.g. the worm's axial runout)
+    # keeps the spec's phase
     sines = [(a, ph[k] if k in ph else np.full(np.shape(a), fixed), o)
              for a, k, o, fixed in _sinusoids(ctx, v) if np.any(a)]
-    # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term
-    orders = list(dict.fromkeys([i_c] + [o for _, _, o in sines]))  # i_c always: the lost motion's order
+    losing = [src for src in sources if src.lost_size is not None]
+    # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term; the
+    # lost-motion orders first
+    orders = list(dict.fromkeys([src.order for src in losing] + [o for _, _, o in sines]))
     th = ctx.theta
     basis = np.stack([f(o * th) for o in orders for f in (np.sin, np.cos)] + [np.ones_like(th)])
     where = {o: 2 * k for k, o in enumerate(orders)}
-    j_ic = where[i_c]
-    coef = np.zeros((de.shape[0], basis.shape[0]))
+    coef = np.zeros((n, basis.shape[0]))
     for a, psi, o in sines:
         j = where[o]
         amp = np.asarray(a, dtype=float)
         coef[:, j] += amp * np.cos(psi)
         coef[:, j + 1] += amp * np.sin(psi)
     common = coef @ basis
-    if paper:
-        common += gear_model.gear_kinematic_te(i_c * theta + psi_e, r1, r2, de, alpha)
-    # lost motion (never negative): the gear part and the worm stage's (drive.worm.lost_motion_terms: the
-    # paper's Delta j without load, constant where its causes are, varying with F_i at the wheel's order)
-    from wormgear_cli.drive.worm import lost_motion_terms
-    from wormgear_cli.drive.worm import paper as worm_paper
+    theta = ctx.theta[None, :]
+    for src in sources:
+        if src.curve_at is not None:  # the paper's spur curve (not a sinusoid), per sample
+            col = value[src.stage_index]
+            common += src.curve_at(lambda key: np.asarray(col(key))[:, None], theta,  # noqa: B023
+                                   np.asarray(ph[src.phase_path], dtype=float)[:, None])
 
-    worm = ctx.registry.train.stages[0]
-    wv = stage_value(ctx, v, worm)
-    worm_constant, worm_amplitude = lost_motion_terms(worm, worm_paper(worm, 0.0, wv), wv)
-    psi_f = np.asarray(ph["worm_pair.wheel.radial_composite_phase_deg"], dtype=float)
-    n = de.shape[0]
-
-    def at_ic(amplitude, phase, constant):
+    def at(order, amplitude, phase, constant):
         c = np.zeros((n, basis.shape[0]))
-        c[:, j_ic], c[:, j_ic + 1], c[:, -1] = amplitude * np.cos(phase), amplitude * np.sin(phase), constant
+        j = where[order]
+        c[:, j], c[:, j + 1], c[:, -1] = amplitude * np.cos(phase), amplitude * np.sin(phase), constant
         return c @ basis
 
-    c_gear = de[:, 0] * (math.tan(alpha) / r2)
-    if paper:
-        gear_lost = at_ic(c_gear, psi_e[:, 0], c_gear)
-    else:  # simulation's involute gear_lost: (static + e tan(alpha) (1 + sin)) / R2, clipped at 0
-        static = (2.0 * math.tan(alpha) * np.asarray(v["assembly.gear_centre_distance_error_mm"], dtype=float)
-                  + v["gear_pair.output_gear.thickness_deviation_mm"] + v["gear_pair.pinion.thickness_deviation_mm"])
-        gear_lost = np.maximum(at_ic(c_gear, psi_e[:, 0], c_gear + np.asarray(static) / r2), 0.0)
-    worm_inner = at_ic(worm_amplitude, psi_f, np.broadcast_to(worm_constant, c_gear.shape))
-    lost = gear_lost + np.maximum(worm_inner, 0.0) * to_out
+    # lost motion (never negative): each source's (clipped where it can turn negative), then the clearances
+    lost = None
+    for src in losing:
+        c, a, scale, clipped = src.lost_size(value[src.stage_index])
+        part = at(src.order, a, np.asarray(ph[src.phase_path], dtype=float), np.broadcast_to(c, (n,)))
+        part = np.maximum(part, 0.0) * scale if clipped else part * scale
+        lost = part if lost is None else lost + part
+    for cl in reg.clearances:
+        amount = cl.size(value[cl.stage_index])[:, None] if cl.size is not None else cl.amount
+        lost = amount if lost is None else lost + amount
+    lost = 0.0 if lost is None else lost
     up = common - 0.5 * lost + ctx.fixed_up[None, :]
     down = common + 0.5 * lost + ctx.fixed_down[None, :]
     e = np.maximum(up.max(axis=1), down.max(axis=1)) - np.minimum(up.min(axis=1), down.min(axis=1))
@@ -345,7 +387,15 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
 
 
 def evaluate(ctx: Context, values: dict, phases: dict, metrics: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The chosen ``metrics`` [rad] per sample (see the module doc)."""
+    """The chosen ``metrics`` [rad] per sample (see the module doc); a metric no sample varies (a duplex
+    worm's backlash) is repeated per sample."""
+    out = _evaluate(ctx, values, phases, metrics)
+    n = len(next(iter(values.values())))
+    return {m: (v if np.shape(v) == (n,) else np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy())
+            for m, v in out.items()}
+
+
+def _evaluate(ctx: Context, values: dict, phases: dict, metrics: tuple[str, ...]) -> dict[str, np.ndarray]:
     out = {}
     if any(m in PAPER_METRICS for m in metrics):
         out.update(paper_totals(ctx, values))

@@ -320,9 +320,13 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
 
 def short_key(column: str) -> str:
     """A varied column shortened to fit 80 columns: without the top section and the unit suffix
-    (assembly.wheel_eccentricity_mm -> wheel_eccentricity); the JSON keeps the full TOML path."""
+    (assembly.wheel_eccentricity_mm -> wheel_eccentricity; a stage key as sN.KEY:
+    stage.2.wheel.runout_mm -> s2.wheel.runout); the JSON keeps the full TOML path."""
     head, _, rest = column.partition(".")
-    name = rest if head in ("gear_pair", "worm_pair", "assembly") and rest else column
+    number, _, key = rest.partition(".")
+    if head == "stage" and number.isdigit() and key:
+        rest, head = f"s{number}.{key}", "stage"
+    name = rest if head in ("gear_pair", "worm_pair", "assembly", "stage") and rest else column
     return name.replace("_mm[", "[").removesuffix("_mm")
 
 

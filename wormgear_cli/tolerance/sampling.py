@@ -21,11 +21,13 @@ inspection, so no value lies beyond its tolerance):
 
 Random streams: sample j belongs to block b = j // :data:`BLOCK`; each block
 has its own PCG64 generator keyed by ``SeedSequence(seed, spawn_key=(b,))``
-and draws a (:data:`STREAM_COLUMNS`, BLOCK) matrix of uniforms (row-major, so
-a longer matrix starts with the same numbers): one row per phase and per
-registry column, in the append-only order of
-:data:`~wormgear_cli.tolerance.quantities.STREAM_ROWS`.  So sample j is the same
-whatever the block size used for the computation or the shard it falls in.
+and draws a (rows, BLOCK) matrix of uniforms (row-major, so a longer matrix
+starts with the same numbers): one row per phase and per column of the drive's
+quantities, in the append-only order of its
+:class:`~wormgear_cli.tolerance.quantities.Layout` (for the legacy [worm, spur]
+train :data:`~wormgear_cli.tolerance.quantities.STREAM_ROWS`, :data:`STREAM_COLUMNS`
+rows).  So sample j is the same whatever the block size used for the computation
+or the shard it falls in.
 """
 
 from __future__ import annotations
@@ -58,10 +60,11 @@ def sample_values(varied: Varied, u: np.ndarray, element: int = 0) -> np.ndarray
     return np.clip(x, low, high)
 
 
-def block_uniforms(seed: int, block: int) -> np.ndarray:
-    """The (:data:`STREAM_COLUMNS`, :data:`BLOCK`) uniforms in [0, 1) of block ``block``."""
+def block_uniforms(seed: int, block: int, rows: int | None = None) -> np.ndarray:
+    """The (``rows``, :data:`BLOCK`) uniforms in [0, 1) of block ``block`` (default
+    :data:`STREAM_COLUMNS` rows, the legacy train's)."""
     ss = np.random.SeedSequence(int(seed), spawn_key=(int(block),))
-    return np.random.Generator(np.random.PCG64(ss)).random((STREAM_COLUMNS, BLOCK))
+    return np.random.Generator(np.random.PCG64(ss)).random((STREAM_COLUMNS if rows is None else rows, BLOCK))
 
 
 @dataclass(frozen=True)
@@ -75,20 +78,25 @@ class Draw:
     phases: dict
 
 
-def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int) -> Draw:
-    """Draw samples ``start`` .. ``stop - 1`` (whatever blocks they span)."""
+def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int, layout=None) -> Draw:
+    """Draw samples ``start`` .. ``stop - 1`` (whatever blocks they span).  ``layout``: the drive's
+    :class:`~wormgear_cli.tolerance.quantities.Layout` (its rows and phases); None: the legacy
+    train's (:data:`~wormgear_cli.tolerance.quantities.STREAM_ROWS`, keyed by legacy paths)."""
     first, last = start // BLOCK, (stop - 1) // BLOCK
     parts = []
     for b in range(first, last + 1):
-        u = block_uniforms(seed, b)
+        u = block_uniforms(seed, b, None if layout is None else layout.row_count)
         lo = max(start - b * BLOCK, 0)
         hi = min(stop - b * BLOCK, BLOCK)
         parts.append(u[:, lo:hi])
     u = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
     # rows in the append-only order of quantities.STREAM_ROWS: growing the registry adds rows at the
     # end and leaves every existing sample unchanged
-    row = {name: k for k, name in enumerate(quantities.STREAM_ROWS)}
-    phases = {p: 2.0 * math.pi * u[row[p]] for p in PHASES}
+    if layout is None:
+        row, phase_paths = {name: k for k, name in enumerate(quantities.STREAM_ROWS)}, PHASES
+    else:
+        row, phase_paths = layout.rows, layout.phases
+    phases = {p: 2.0 * math.pi * u[row[p]] for p in phase_paths}
     values = {}
     for v in varied:
         for e, col in enumerate(v.quantity.columns()):

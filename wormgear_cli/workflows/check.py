@@ -156,6 +156,5 @@ def _iso_setup(spec, samples: int, seed: int):
 
     s = engine.setup(spec, engine.Options(samples=samples, seed=seed, metrics="all"))
     targets = plan_targets(spec.test_plan)
-    de_tol = next(v for v in s.varied if v.path == "assembly.gear_eccentricity_mm").tolerance[0]
     return dataclasses.replace(s, targets_deg=np.degrees(targets),
-                               context=metrics_mod.context(spec, de_tol, targets, DWELL_S))
+                               context=metrics_mod.context(spec, s.varied, targets, DWELL_S))

@@ -1,0 +1,142 @@
+"""``wormgear compensate``: exit codes, where the file and the messages go, format inference, report."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tests.support import compensation_data as data
+from tests.support.paths import CONFIGS
+from wormgear_cli.cli import app
+
+MOUNT = CONFIGS / "telescope-mount.toml"
+
+
+@pytest.fixture(scope="module")
+def test_csv(tmp_path_factory):
+    path = tmp_path_factory.mktemp("comp") / "test.csv"
+    path.write_text(data.rows_csv(*data.iso_rows(seed=1)))
+    return path
+
+
+def run(runner, *args):
+    return runner.invoke(app, ["compensate", *map(str, args)])
+
+
+def test_table_to_stdout_and_how_to_load_it_on_stderr(runner, test_csv):
+    r = run(runner, test_csv, "--format", "linuxcnc", "--orders", "1,2,9")
+    assert r.exit_code == 0, r.stderr
+    assert len(r.stdout.splitlines()) == 256 and r.stdout.startswith("0.000000 ")
+    assert "load: COMP_FILE = FILE" in r.stderr and "load: COMP_FILE_TYPE = 1" in r.stderr
+    assert "predicted after correction (a repeat of this test, cross-validated over 5 runs; 5-95 %):" in r.stderr
+    assert "wrote" not in r.stderr
+
+
+def test_format_from_the_file_ending_and_report(runner, test_csv, tmp_path):
+    out, rep = tmp_path / "a.tbl", tmp_path / "a.json"
+    r = run(runner, test_csv, "-o", out, "--orders", "1,2,9", "--type", "0", "--report", rep, "--unit", "urad")
+    assert r.exit_code == 0, r.stderr
+    assert f"load: COMP_FILE = {out}" in r.stderr and "COMP_FILE_TYPE = 0" in r.stderr
+    assert r.stderr.endswith(f"wrote {out}\nwrote {rep}\n")
+    doc = json.loads(rep.read_text())
+    assert doc["format"] == "linuxcnc" and doc["unit"] == "urad" and doc["kind"] == "correction table"
+    assert doc["orders"] == {"source": "--orders", "requested": [1.0, 2.0, 9.0]}
+    assert doc["prediction"]["method"] == "cross-validated" and doc["prediction"]["runs_left_out"] == 5
+    after, before = doc["prediction"]["after"]["E"], doc["prediction"]["before"]["E"]
+    assert after["low_5pct"] < after["median"] < after["high_95pct"] < before / 10
+    assert doc["load"] == ["[JOINT_n]    (the rotary joint's section)", f"COMP_FILE = {out}", "COMP_FILE_TYPE = 0"]
+
+
+def test_csv_in_the_unit_asked(runner, test_csv):
+    r = run(runner, test_csv, "-f", "csv", "--orders", "1,2,9", "--points", "37", "-u", "arcmin")
+    assert r.exit_code == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "angle_deg,correction_forward_arcmin,correction_reverse_arcmin" and len(lines) == 38
+
+
+def test_a_correction_beyond_the_limit_is_exit_1_with_the_file_written(runner, test_csv, tmp_path):
+    out = tmp_path / "t.comp"
+    r = run(runner, test_csv, "-o", out, "--orders", "1,2,9", "--max-correction", "20")
+    assert r.exit_code == 1
+    assert "warning: the largest correction, 37.7" in r.stderr and "exceeds --max-correction 20 arcsec" in r.stderr
+    assert out.exists()
+
+
+def test_eqmod_from_a_tracking_record(runner, tmp_path):
+    rec = tmp_path / "track.csv"
+    rec.write_text(data.tracking_csv(*data.tracking_rows(seed=5)))
+    r = run(runner, rec, "-o", tmp_path / "mount.pec", "--drive", MOUNT, "--steps-per-worm", "50133")
+    assert r.exit_code == 0, r.stderr
+    assert "worm order 180: period 478.689 s, 479 rows" in r.stderr
+    assert "PE peak-to-peak: 15.8 arcsec as measured" in r.stderr
+    assert (tmp_path / "mount.pec").read_text().splitlines()[1:3] == ["!WormPeriod=479", "!StepsPerWorm=50133"]
+
+
+def test_a_record_shorter_than_a_worm_period_is_refused(runner, tmp_path):
+    rec = tmp_path / "short.csv"
+    rec.write_text(data.tracking_csv(*data.tracking_rows(seed=5, duration_s=300.0)))
+    r = run(runner, rec, "-f", "eqmod", "--drive", MOUNT)
+    assert r.exit_code == 2
+    assert r.stderr == (f"error: {rec}: the record covers 298 s of tracking, less than one worm period "
+                        "(478.7 s, order 180): no PEC curve can be made from it\n")
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--format", "bogus"], "error: Invalid value for '--format' / '-f': 'bogus' is not one of 'linuxcnc', 'eqmod', 'csv'; see 'wormgear compensate --help'\n"),
+    (["-o", "x.txt"], "error: --format: give one of linuxcnc, eqmod, csv (or an -o file ending in .comp (linuxcnc), "
+                      ".tbl (linuxcnc), .pec (eqmod), .csv (csv))\n"),
+    (["-f", "linuxcnc", "--points", "300"], "error: --points: expected an integer in [2, 256], got 300\n"),
+    (["-f", "csv", "--range", "0-360"], "error: --range: expected START:END in deg, e.g. 0:360, got '0-360'\n"),
+    (["-f", "linuxcnc", "--type", "2"], "error: --type: expected 0 or 1 (LinuxCNC COMP_FILE_TYPE), got 2\n"),
+    (["-f", "linuxcnc", "--max-correction", "-1"], "error: --max-correction: expected a positive number\n"),
+])
+def test_usage_mistakes_are_one_line_and_exit_2(runner, test_csv, tmp_path, args, message):
+    r = runner.invoke(app, ["compensate", str(test_csv), *args], catch_exceptions=False)
+    assert r.exit_code == 2
+    assert r.stderr == message
+    assert not (tmp_path / "x.txt").exists()
+
+
+def test_never_overwrites_the_input(runner, test_csv):
+    r = run(runner, test_csv, "-f", "csv", "-o", test_csv)
+    assert r.exit_code == 2 and "refusing to overwrite the input file" in r.stderr
+
+
+def test_help_has_an_example(runner):
+    r = run(runner, "--help")
+    assert r.exit_code == 0 and "Example: wormgear compensate test.csv --orders 1,2,9 -o table.comp" in r.stdout
+
+
+FIELD = CONFIGS.parent / "tests" / "data" / "field"
+
+
+def test_field_partial_span_finds_its_order_and_says_the_range(runner, tmp_path):
+    """tests/data/field/partial-span-order144.csv: 11 deg of a scan with an order-144 error (its README)."""
+    rep = tmp_path / "r.json"
+    args = [FIELD / "partial-span-order144.csv", "-f", "csv", "--points", "1000", "--report", rep]
+    r = run(runner, *args)
+    assert r.exit_code == 0, r.stderr
+    assert "beyond the table's 0 to 360 deg (--range): the controller holds the end values there" in r.stderr
+    r = run(runner, *args, "--range=-11:1")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(rep.read_text())
+    assert doc["orders"]["requested"] == [144.0]
+    assert "as measured:  E_forward 20" in r.stderr and "A_forward -" in r.stderr
+    before, after = doc["prediction"]["before"]["E_forward"], doc["prediction"]["after"]["E_forward"]["median"]
+    assert after < before / 100
+    assert doc["prediction"]["method"] == "in-sample" and "in-sample, optimistic" in r.stderr
+
+
+def test_field_directions_not_stated_are_warned_about(runner):
+    r = run(runner, FIELD / "no-direction-column.csv", "-f", "csv")
+    assert r.exit_code == 0, r.stderr
+    assert "warning: no direction column: every row is taken as forward" in r.stderr
+    assert "warning: forward and reverse visits cannot be told apart" in r.stderr
+
+
+def test_a_mount_record_under_two_worm_cycles_is_not_cross_validated(runner):
+    r = run(runner, FIELD / "time-restarts-no-run.csv", "-f", "eqmod", "--drive", FIELD / "telescope-mount.toml")
+    assert r.exit_code == 0, r.stderr
+    assert "1.07 worm cycles recorded" in r.stderr and "as measured, not predicted" in r.stderr
+    assert "warning: the record holds 1.1 worm cycles: fewer than two" in r.stderr

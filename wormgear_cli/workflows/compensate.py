@@ -1,0 +1,619 @@
+"""``compensate`` as a library call: read a measurement, choose the orders, make the correction a
+controller or a mount loads, say what it will leave, and write it through the writer registry.
+
+:func:`compensate` takes a file, :func:`compensate_measurement` a
+:class:`~wormgear_cli.measurement.reader.Measurement` already read (a guide log read by its own
+reader goes there); both return a :class:`CompensateResult` whose ``text`` is the file.
+:func:`report` is the JSON document of ``--report``, :func:`summary` the lines the command
+prints on stderr.
+
+Two paths, chosen by what the writer accepts:
+
+* a **correction table** (``linuxcnc``, ``csv``): the orders fitted per direction
+  (:mod:`~wormgear_cli.compensation.model`), per-target means added where the orders do not
+  explain the data, evaluated at evenly spaced points, orders the spacing cannot carry left
+  out, and the ISO 230-2 figures of a repeat test predicted by cross-validation over the runs
+  (:mod:`~wormgear_cli.compensation.predict`);
+* a **PEC curve** (``eqmod``): one worm period of a mount's tracking error, drift removed
+  (:mod:`~wormgear_cli.compensation.pec`), with the PE peak-to-peak it will leave,
+  cross-validated over worm cycles.
+
+Orders: ``--orders``; else the drive's shafts and meshes (``--drive``); else the strongest
+orders found (:func:`~wormgear_cli.compensation.scan.strongest_orders` for a table, the
+strongest period for a mount).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from wormgear_cli.errors import DataError, UsageError
+
+#: harmonics of each shaft and mesh order with --drive (as ``measure``)
+DEFAULT_HARMONICS = 3
+#: a tracking record whose angle runs faster or slower than sidereal by more than this is warned about
+SIDEREAL_TOLERANCE = 0.02
+
+
+@dataclass(frozen=True)
+class CompensateOptions:
+    """Everything ``compensate`` is asked for (angles in rad).
+
+    ``format``: writer name (None: from the ``output`` file name's
+    ending); ``drive``: spec path; ``orders``: orders to fit [cycles/rev];
+    ``harmonics``: with ``drive``; ``points``: table points (None: the
+    writer's default); ``range_deg``: (start, end) of the table [deg];
+    ``file_type``: LinuxCNC COMP_FILE_TYPE; ``unit``: unit of the CSV
+    values and the report; ``max_correction`` [rad]: the largest correction
+    allowed (None: no limit); ``worm_period_s`` [s] and ``steps_per_worm``:
+    a mount's; ``output``: where the file goes (None: stdout), used for the
+    format and the loading instructions.
+    """
+
+    format: str | None = None
+    drive: str | Path | None = None
+    orders: tuple[float, ...] | None = None
+    harmonics: int = DEFAULT_HARMONICS
+    points: int | None = None
+    range_deg: tuple[float, float] = (0.0, 360.0)
+    file_type: int = 1
+    unit: str = "arcsec"
+    max_correction: float | None = None
+    worm_period_s: float | None = None
+    steps_per_worm: int | None = None
+    output: str | None = None
+
+    def writer(self):
+        """The writer: ``format``, else the one owning ``output``'s file name ending."""
+        from wormgear_cli.output import writers
+
+        if self.format is not None:
+            return writers.get(self.format)
+        found = writers.for_path(self.output)
+        if found is None:
+            endings = ", ".join(f"{e} ({n})" for e, n in writers.extensions().items())
+            raise UsageError(f"--format: give one of {', '.join(writers.WRITERS)} (or an -o file ending in "
+                             f"{endings})")
+        return found
+
+    def check(self) -> None:
+        problems = []
+        if self.file_type not in (0, 1):
+            problems.append(f"--type: expected 0 or 1 (LinuxCNC COMP_FILE_TYPE), got {self.file_type}")
+        if not 1 <= self.harmonics <= 10:
+            problems.append(f"--harmonics: expected an integer in [1, 10], got {self.harmonics}")
+        if self.max_correction is not None and not (math.isfinite(self.max_correction) and self.max_correction > 0):
+            problems.append("--max-correction: expected a positive number")
+        if self.worm_period_s is not None and not (math.isfinite(self.worm_period_s)
+                                                   and 1.0 <= self.worm_period_s <= 86400.0):
+            problems.append(f"--worm-period: expected a number of seconds in [1, 86400], got {self.worm_period_s:g}")
+        if self.steps_per_worm is not None and not 1 <= self.steps_per_worm <= 10**9:
+            problems.append(f"--steps-per-worm: expected an integer in [1, 1e9], got {self.steps_per_worm}")
+        if problems:
+            raise UsageError(problems)
+
+
+@dataclass(frozen=True)
+class OrderChoice:
+    """The orders asked for and where they come from (``source``, a phrase); ``labels`` and
+    ``priority`` from a drive spec; ``worm_order`` of the drive (None without one)."""
+
+    orders: tuple[float, ...] | None
+    labels: tuple | None
+    priority: tuple | None
+    source: str
+    worm_order: float | None = None
+    drive_name: str | None = None
+
+
+@dataclass(frozen=True)
+class CompensateResult:
+    """Result of :func:`compensate`.
+
+    ``source``: the data's name; ``writer``
+    (:class:`~wormgear_cli.output.writers.Writer`); ``text``: the file;
+    ``instructions``: how to load it; ``choice``: :class:`OrderChoice`;
+    ``warnings`` and ``notes``: sentences; ``exceeded``: the correction
+    exceeds ``max_correction``; ``details``: the path's own results
+    (:class:`TableDetails` or :class:`PecDetails`); ``options``.
+    """
+
+    source: str
+    writer: object
+    text: str
+    instructions: tuple
+    choice: OrderChoice
+    warnings: tuple
+    notes: tuple
+    exceeded: bool
+    details: object
+    options: CompensateOptions = field(repr=False)
+
+
+@dataclass(frozen=True)
+class TableDetails:
+    """The correction-table path: ``plan``, ``model`` (the fitted model, orders not carried
+    left out), ``analysis`` (which orders could be fitted), ``target_test``, ``grid``,
+    ``table``, ``dropped`` (orders the table cannot carry), ``loss`` [rad] (largest
+    interpolation loss between points), ``prediction``
+    (:class:`~wormgear_cli.compensation.predict.TablePrediction`), ``selection`` (the strongest
+    orders search, or None)."""
+
+    plan: object
+    model: object
+    analysis: object
+    target_test: object
+    grid: object
+    table: object
+    dropped: tuple
+    loss: float
+    prediction: object
+    selection: object = None
+
+
+@dataclass(frozen=True)
+class PecDetails:
+    """The PEC path: ``curve`` (:class:`~wormgear_cli.compensation.pec.PecCurve`),
+    ``prediction`` (:class:`~wormgear_cli.compensation.pec.PecPrediction`), ``steps_per_worm``."""
+
+    curve: object
+    prediction: object
+    steps_per_worm: int | None
+
+
+def choose_orders(options: CompensateOptions) -> OrderChoice:
+    """The orders from ``--orders`` and the drive spec (labels, priority, worm order)."""
+    physical: list = []
+    priority = worm = name = None
+    if options.drive is not None:
+        from wormgear_cli.analysis.accuracy import geometry
+        from wormgear_cli.spec.loader import load_spec
+        from wormgear_cli.workflows.measure import _orders_asked
+
+        _, _, priority, physical, name = _orders_asked(options.drive, None, options.harmonics)
+        priority = tuple(priority)
+        worm = float(geometry(load_spec(options.drive)).worm_order)
+    if options.orders is not None:
+        from wormgear_cli.workflows.measure import _label_for
+
+        labels = tuple(_label_for(k, physical) for k in options.orders) if physical else None
+        return OrderChoice(tuple(options.orders), labels, None, "--orders", worm, name)
+    if physical:
+        return OrderChoice(tuple(k for k, _ in physical), tuple(lab for _, lab in physical), priority,
+                           f"the drive's shafts and meshes ({name}, {options.harmonics} harmonics)", worm, name)
+    return OrderChoice(None, None, None, "", None, name)
+
+
+def compensate(data, options: CompensateOptions | None = None, read_options=None) -> CompensateResult:
+    """Read the measurement file ``data`` and make its correction (:func:`compensate_measurement`).
+
+    Raises DataError, SpecError, UsageError."""
+    from wormgear_cli.measurement.readers import read_measurement
+
+    options = options or CompensateOptions()
+    options.check()
+    options.writer()  # a bad --format fails before the file is read
+    return compensate_measurement(read_measurement(data, options=read_options), options)
+
+
+def compensate_measurement(measurement, options: CompensateOptions | None = None) -> CompensateResult:
+    """The correction of a :class:`~wormgear_cli.measurement.reader.Measurement`: a table
+    (``linuxcnc``, ``csv``) or a mount's PEC curve (``eqmod``), with what it will leave.
+
+    The one call a reader of another kind (a guide log) needs: read the file
+    into a Measurement (angle: the axis angle; error: actual - ideal; time;
+    run: one per session), then call this."""
+    from wormgear_cli.output.writers import PEC_CURVE, WriteOptions
+
+    options = options or CompensateOptions()
+    options.check()
+    writer = options.writer()
+    choice = choose_orders(options)
+    m = measurement
+    if writer.accepts == PEC_CURVE:
+        details, warnings, notes, choice = _pec_path(m, options, choice)
+        steps = options.steps_per_worm
+        largest = float(np.max(np.abs(details.curve.pe)))
+        caption = f"PEC of {Path(m.source).name} by wormgear compensate: worm order {details.curve.worm_order:.6g}"
+    else:
+        details, warnings, notes, choice = _table_path(m, options, writer, choice)
+        steps = None
+        largest = details.table.largest
+        caption = ""
+    exceeded = options.max_correction is not None and largest > options.max_correction
+    if exceeded:
+        from wormgear_cli.units import to_unit
+
+        u = options.unit
+        warnings.append(f"the largest correction, {to_unit(largest, u):.4g} {u}, exceeds --max-correction "
+                        f"{to_unit(options.max_correction, u):.4g} {u}")
+    wopts = WriteOptions(unit=options.unit, file_type=options.file_type, steps_per_worm=steps, caption=caption,
+                         path=options.output)
+    text = writer.write(details.curve if writer.accepts == PEC_CURVE else details.table, wopts)
+    return CompensateResult(m.source, writer, text, tuple(writer.instructions(wopts)), choice, tuple(warnings),
+                            tuple(notes), bool(exceeded), details, options)
+
+
+# --- the table path --------------------------------------------------------------------------------------
+
+
+#: highest whole order a search for a table's orders tries (the worm orders of tables and mounts)
+SEARCH_MAX_ORDER = 360
+#: per-target means a search works on at most, per direction (finer scans are averaged in bins)
+SEARCH_POINTS = 2048
+
+
+def _select_table_orders(theta, y, d, run, candidates=None):
+    """The orders of a rotary-axis measurement that stand out of the noise: a forward selection on
+    the per-target means (:func:`~wormgear_cli.compensation.scan.strongest_orders`) among
+    ``candidates`` (default: whole orders 1 to the Nyquist order of the mean target spacing, at
+    most :data:`SEARCH_MAX_ORDER`)."""
+    from wormgear_cli.compensation.noise import noise_components
+    from wormgear_cli.compensation.scan import MAX_ORDERS, strongest_orders
+    from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
+    from wormgear_cli.measurement.iso230 import group_targets
+
+    index, targets = group_targets(theta)
+    cell = 2 * index + (d < 0)
+    _, first, ci, counts = np.unique(cell, return_index=True, return_inverse=True, return_counts=True)
+    means = np.bincount(ci.ravel(), weights=y) / counts
+    noise = noise_components(cell, run, y)
+    noise_var = noise.within if noise.replicated and math.isfinite(noise.within) and noise.within > 0 else None
+    cov = coverage(theta, run)
+    if candidates is None:
+        nyquist = math.pi * cov.distinct / cov.span if cov.span > 0 else 0.0
+        candidates = range(1, int(min(SEARCH_MAX_ORDER, nyquist)) + 1)
+    candidates = [float(k) for k in candidates if not cov.beyond(k)]
+    at, dc, means, counts = _binned(targets[index[first]], d[first], means, counts, cov)
+    base = None
+    if not cov.full_turn:  # over a partial span the slow part is a trend, not an order
+        t = trend_columns(at, cov, max(0, min(TREND_DEGREE, cov.distinct - 2)))
+        both = bool(np.any(dc > 0) and np.any(dc < 0))
+        base = np.hstack([np.ones((at.size, 1)), t] + ([dc[:, None], t * dc[:, None]] if both else []))
+    return strongest_orders(at, means, dc, candidates, noise_var, weights=counts, max_orders=MAX_ORDERS,
+                            base=base)
+
+
+def _binned(at, dc, means, counts, cov):
+    """Per-target means averaged into at most :data:`SEARCH_POINTS` bins of angle per direction
+    (weighted by their rows), when there are more: (angles, directions, means, weights)."""
+    if at.size <= 2 * SEARCH_POINTS:
+        return at, dc, means, counts
+    u = np.mod(at - cov.start, 2.0 * math.pi)
+    width = max(cov.span, 1e-12) / SEARCH_POINTS
+    key = np.minimum((u / width).astype(np.int64), SEARCH_POINTS - 1) * 2 + (dc < 0)
+    _, first, inv = np.unique(key, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    w = np.bincount(inv, weights=counts)
+    angle = np.bincount(inv, weights=counts * u) / w + cov.start
+    return angle, dc[first], np.bincount(inv, weights=counts * means) / w, w
+
+
+def _table_path(m, options: CompensateOptions, writer, choice: OrderChoice):
+    from wormgear_cli.compensation.model import fit_plan, parameters, plan_model
+    from wormgear_cli.compensation.predict import predict_table
+    from wormgear_cli.compensation.table import TableGrid, build_table, interpolation_loss, uncarried
+
+    theta, y, d, run = m.angle, m.error, m.direction, m.run
+    grid = TableGrid(options.points or writer.default_points or 361, *options.range_deg)
+    grid.check(writer.max_points)
+    selection = None
+    if choice.orders is None:
+        selection = _select_table_orders(theta, y, d, run)
+        top = int(max(selection.candidates, default=0))
+        source = (f"the strongest found among whole orders 1 to {top}" if top else
+                  "no whole order fits in the span and targets measured")
+        choice = OrderChoice(tuple(selection.orders), None, None, source, choice.worm_order, choice.drive_name)
+    elif options.orders is None:  # the drive's orders: those that stand out of the noise (a table must not overfit)
+        selection = _select_table_orders(theta, y, d, run, choice.orders)
+        label = dict(zip(choice.orders, choice.labels))
+        kept = tuple(k for k in choice.orders if k in selection.orders)
+        choice = OrderChoice(kept, tuple(label[k] for k in kept), None,
+                             choice.source.replace("the drive's shafts and meshes", "the drive's shafts and meshes "
+                                                   "that stand out of the noise", 1), choice.worm_order,
+                             choice.drive_name)
+    plan, analysis, test, model = plan_model(theta, y, d, choice.orders or (), choice.labels, choice.priority, run)
+    dropped = tuple(uncarried(plan.orders, grid.spacing_deg))
+    carried = model.without(dropped)
+    table = build_table(carried, grid)
+
+    def make(mask):
+        return build_table(fit_plan(plan, theta[mask], y[mask], d[mask], run[mask]).without(dropped), grid)
+
+    prediction = predict_table(make, theta, y, d, run, tuple(plan.orders) + dropped, parameters(plan, theta, d))
+    details = TableDetails(plan, carried, analysis, test, grid, table, dropped, interpolation_loss(carried, table),
+                           prediction, selection)
+    warnings, notes = _structure(m)
+    more_warnings, more_notes = _table_findings(details, theta, options)
+    return details, warnings + more_warnings, notes + more_notes, choice
+
+
+def _structure(m) -> tuple[list, list]:
+    """What the file does not state (``measure``'s checks), as warnings and notes for a table."""
+    from wormgear_cli.measurement.checks import structure_findings
+    from wormgear_cli.measurement.iso230 import group_targets
+
+    findings, mixed = structure_findings(m, group_targets(m.angle)[0])
+    warnings = [f.text for f in findings if f.warning]
+    notes = [f.text for f in findings if not f.warning and f.text]
+    if mixed:
+        warnings.append("forward and reverse visits cannot be told apart: the table's two columns are the same "
+                        "mixture and lost motion is not corrected")
+    return warnings, notes
+
+
+def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple[list, list]:
+    """The warnings and notes of the table path, as sentences (angles in ``options.unit``)."""
+    from wormgear_cli.units import to_unit
+    from wormgear_cli.workflows.measure import _order_notes
+
+    u = options.unit
+    warnings, notes = [], list(_order_notes(t.analysis))
+    if t.selection is not None:
+        chosen = ", ".join(f"{k:g}" for k in t.selection.orders) or "none"
+        notes.append(f"orders selected by a forward selection on the per-target means: {chosen} of "
+                     f"{len(t.selection.candidates)} candidates; stopped because {t.selection.reason}")
+    spacing = t.grid.spacing_deg
+    amplitude = {it.order: it.common[0] for it in t.analysis.items if it.fitted}
+    for k in t.dropped:
+        amp = amplitude.get(k, math.nan)
+        warnings.append(f"order {k:g} has a period of {360.0 / k:.4g} deg, {360.0 / k / spacing:.2g} table spacings "
+                        f"of {spacing:.4g} deg: a table of {t.grid.points} points cannot carry it (fewer than 4 "
+                        f"spacings per period), so it is left out and its {to_unit(amp, u):.3g} {u} amplitude stays")
+    cov = t.plan.coverage
+    if not cov.full_turn:
+        start = math.degrees(cov.start)
+        warnings.append(f"the data cover {math.degrees(cov.span):.4g} deg ({start:.4g} to "
+                        f"{start + math.degrees(cov.span):.4g} deg), less than the table's {t.grid.start_deg:g} to "
+                        f"{t.grid.end_deg:g} deg: outside the measured arc the table holds the correction of the "
+                        "nearer end")
+    deg = np.degrees(theta)
+    if deg.min() < t.grid.start_deg - 1e-9 or deg.max() > t.grid.end_deg + 1e-9:
+        warnings.append(f"measured angles run from {deg.min():.4g} to {deg.max():.4g} deg, beyond the table's "
+                        f"{t.grid.start_deg:g} to {t.grid.end_deg:g} deg (--range): the controller holds the end "
+                        "values there")
+    if not t.plan.both:
+        warnings.append("only one direction was measured: the reverse column repeats the forward correction and "
+                        "lost motion is not corrected")
+    test = t.target_test
+    if t.plan.per_target:
+        worst = ", ".join(f"{math.degrees(a):.4g} deg {'forward' if s > 0 else 'reverse'} "
+                          f"{to_unit(v, u):+.3g}" for a, s, v in test.worst[:3])
+        notes.append(f"the fitted orders leave {to_unit(test.rms, u):.3g} {u} RMS at the targets against "
+                     f"{to_unit(test.expected_rms, u):.3g} {u} from the noise (p = {test.p_value:.2g}): the "
+                     "per-target means of the residual are added, a cubic spline between the targets"
+                     + (f" (largest {worst} {u})" if worst else ""))
+    elif test.testable:
+        notes.append(f"the fitted orders explain the data at the targets: residual {to_unit(test.rms, u):.3g} {u} "
+                     f"RMS against {to_unit(test.expected_rms, u):.3g} {u} from the noise (p = {test.p_value:.2g}); "
+                     "no per-target means added")
+    else:
+        notes.append(f"{test.reason}; the table is the fitted orders only")
+    if t.prediction.method == "in-sample":
+        warnings.append("one run only: the prediction is the table applied to the data it was made from "
+                        "(in-sample, optimistic); measure several runs to have it cross-validated")
+    return warnings, notes
+
+
+
+# --- the PEC path ----------------------------------------------------------------------------------------
+
+
+def _worm_order(th, y, run, options: CompensateOptions, choice: OrderChoice, source: str) -> tuple[float, str]:
+    """(worm order [cycles per axis turn], where it comes from); DataError when none can be had."""
+    from wormgear_cli.compensation import pec
+
+    if options.worm_period_s is not None:
+        return pec.order_of(options.worm_period_s), f"--worm-period {options.worm_period_s:g} s"
+    if choice.worm_order is not None:
+        return choice.worm_order, f"the drive's worm ({choice.drive_name})"
+    if choice.orders:
+        whole = [k for k in choice.orders if pec.cycles_covered(th, run, k) >= 1.0]
+        if whole:
+            return min(whole), "the lowest of --orders with a whole cycle in the record"
+    found = pec.strongest_worm_order(th, y, run)
+    if found is None:
+        raise DataError(f"{source}: the record is too short to find a worm period in it; give --worm-period "
+                        "or --drive")
+    return found, "the strongest period found in the record"
+
+
+def _pec_path(m, options: CompensateOptions, choice: OrderChoice):
+    from wormgear_cli.compensation import pec
+
+    warnings, notes = [], []
+    keep = np.ones(len(m), dtype=bool)
+    if np.any(m.direction > 0) and np.any(m.direction < 0):
+        keep = m.direction > 0
+        notes.append("the record holds both directions: the PEC curve is made from the forward (tracking) rows")
+    theta, y, run = m.angle[keep], m.error[keep], m.run[keep]
+    th = pec.continuous(theta, run)
+    worm, where = _worm_order(th, y, run, options, choice, m.source)
+    period = pec.period_of(worm)
+    cycles = pec.cycles_covered(th, run, worm)
+    if cycles < 1.0:
+        raise DataError(f"{m.source}: the record covers {cycles * period:.4g} s of tracking, less than one worm "
+                        f"period ({period:.4g} s, order {worm:.6g}): no PEC curve can be made from it")
+    orders = list(options.orders) if options.orders else [worm * h for h in range(1, options.harmonics + 1)]
+    if not any(abs(k - worm) <= 1e-9 * worm for k in orders):
+        orders.insert(0, worm)
+    curve = pec.pec_curve(theta, y, run, worm, orders)
+    prediction = pec.predict_pec(theta, y, run, curve)
+    source = where if options.orders is None or options.worm_period_s or choice.worm_order else "--orders"
+    choice = OrderChoice(tuple(orders), choice.labels, None, source, worm, choice.drive_name)
+    if cycles < 2.0:
+        warnings.append(f"the record holds {cycles:.2g} worm cycles: fewer than two, so the curve cannot be "
+                        "cross-validated and cycle-to-cycle changes are unknown; record at least two worm periods")
+    for k in curve.extra:
+        notes.append(f"order {k:.6g} (period {pec.period_of(k):.4g} s) is not a whole harmonic of the worm order: "
+                     "fitted alongside, but a curve of one worm period cannot carry it")
+    if options.steps_per_worm is None:
+        warnings.append("no --steps-per-worm: the file has no !StepsPerWorm line and its motor column holds "
+                        "seconds; EQASCOM phases the curve by motor position, so give the mount's steps per worm")
+    rate = _tracking_rate(m, keep)
+    if rate is not None and abs(rate / (2.0 * math.pi / pec.SIDEREAL_DAY_S) - 1.0) > SIDEREAL_TOLERANCE:
+        warnings.append(f"the axis angle advances at {math.degrees(rate) * 3600.0:.4g} deg/h, not the sidereal "
+                        f"{360.0 * 3600.0 / pec.SIDEREAL_DAY_S:.4g} deg/h: the worm period in seconds assumes "
+                        "sidereal tracking")
+    if prediction.method != "cross-validated" and cycles >= 2.0:
+        notes.append("the curve could not be cross-validated (fewer than two whole worm cycles to leave out)")
+    return PecDetails(curve, prediction, options.steps_per_worm), warnings, notes, choice
+
+
+def _tracking_rate(m, keep) -> float | None:
+    """The axis angle's rate [rad/s] over the time of the rows ``keep`` (each run from its own
+    start), or None without a time column."""
+    if "time_s" not in m.present or not np.ptp(m.time[keep]) > 0:
+        return None
+    from wormgear_cli.compensation.pec import continuous
+
+    run = m.run[keep]
+    th = continuous(m.angle[keep], run)
+    _, ri = np.unique(run, return_inverse=True)
+    ri = ri.ravel()
+    time = m.time[keep]
+    t = time - (np.bincount(ri, weights=time) / np.bincount(ri))[ri]
+    a = th - (np.bincount(ri, weights=th) / np.bincount(ri))[ri]
+    tt = float(t @ t)
+    return float(t @ a) / tt if tt > 0 else None
+
+
+# --- the document and the summary ------------------------------------------------------------------------
+
+
+def _u(x, unit: str):
+    from wormgear_cli.units import to_unit
+
+    x = float(x)
+    return float(to_unit(x, unit)) if math.isfinite(x) else None
+
+
+#: report names of the ISO 230-2 figures (the core's _up / _down are forward / reverse)
+_FIGURE_NAMES = {"E": "E", "B": "B", "A": "A", "M": "M", "R": "R", "E_up": "E_forward", "A_up": "A_forward",
+                 "E_down": "E_reverse", "A_down": "A_reverse"}
+
+
+def _table_doc(t: TableDetails, unit: str) -> dict:
+    p = t.prediction
+    test = t.target_test
+    before = {name: _u(getattr(p.before, k), unit) for k, name in _FIGURE_NAMES.items()}
+    items = []
+    for it in t.analysis.items:
+        items.append({"order": it.order, "label": it.label, "status": it.status,
+                      "carried": it.fitted and it.order not in t.dropped,
+                      "common": {"amplitude": _u(it.common[0], unit), "phase_deg": _deg(it.common[2])},
+                      "differential": {"amplitude": _u(it.differential[0], unit),
+                                       "phase_deg": _deg(it.differential[2])},
+                      "reason": it.reason})
+    return {
+        "table": {"points": t.grid.points, "start_deg": t.grid.start_deg, "end_deg": t.grid.end_deg,
+                  "spacing_deg": t.grid.spacing_deg, "largest_correction": _u(t.table.largest, unit),
+                  "interpolation_loss": _u(t.loss, unit), "orders_not_carried": list(t.dropped)},
+        "model": {"orders": items, "per_target_means": t.plan.per_target, "trend_degree": t.plan.trend_degree,
+                  "target_test": {"testable": test.testable, "residual_rms": _u(test.rms, unit),
+                                  "noise_rms": _u(test.expected_rms, unit), "p_value": _finite(test.p_value),
+                                  "dof": test.dof, "significant": test.significant}},
+        "prediction": {
+            "method": p.method, "runs_left_out": p.folds, "replicates": p.replicates,
+            "before": before,
+            "after": {_FIGURE_NAMES[k]: {"median": _u(f.median, unit), "low_5pct": _u(f.low, unit),
+                                         "high_95pct": _u(f.high, unit)} for k, f in p.after.items()},
+            "R_unchanged": before["R"],
+            "noise": {"within_run": _u(math.sqrt(p.noise.within), unit) if math.isfinite(p.noise.within) else None,
+                      "between_runs": _u(math.sqrt(p.noise.between_runs), unit)},
+            "remainder_rms": _u(p.remainder_rms, unit),
+            "residual_orders": [{"order": k, "common": _u(a, unit), "differential": _u(b, unit)}
+                                for k, a, b in p.residual_orders],
+        },
+    }
+
+
+def _deg(x) -> float | None:
+    return float(math.degrees(x)) if math.isfinite(x) else None
+
+
+def _finite(x) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+def _pec_doc(pd: PecDetails, unit: str) -> dict:
+    c, p = pd.curve, pd.prediction
+    return {"pec": {
+        "worm_order": c.worm_order, "worm_period_s": c.period_s, "rows": c.rows, "steps_per_worm": pd.steps_per_worm,
+        "cycles": c.cycles, "harmonics": list(c.harmonics), "not_carried": list(c.extra),
+        "peak_to_peak_before": _u(p.before, unit), "peak_to_peak_after": _u(p.after, unit),
+        "method": p.method, "cycles_left_out": p.folds,
+        "residual_orders": [{"order": k, "amplitude": _u(a, unit)} for k, a in p.residual_orders]}}
+
+
+def report(result: CompensateResult, unit: str | None = None) -> dict:
+    """The JSON document of ``compensate --report`` (angles in ``unit``, default the options')."""
+    unit = unit or result.options.unit
+    doc = {"source": result.source, "drive": result.choice.drive_name, "format": result.writer.name,
+           "kind": result.writer.accepts, "unit": unit,
+           "orders": {"source": result.choice.source,
+                      "requested": list(result.choice.orders) if result.choice.orders else []}}
+    if isinstance(result.details, TableDetails):
+        doc.update(_table_doc(result.details, unit))
+        if result.details.selection is not None:
+            doc["orders"]["search"] = {"chosen": list(result.details.selection.orders),
+                                       "p_values": list(result.details.selection.p_values),
+                                       "stopped": result.details.selection.reason}
+    else:
+        doc.update(_pec_doc(result.details, unit))
+    doc.update({"load": list(result.instructions), "exceeded_max_correction": result.exceeded,
+                "warnings": list(result.warnings), "notes": list(result.notes)})
+    return doc
+
+
+def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
+    """The lines ``compensate`` prints on stderr: what the file is made from, what it will leave,
+    how to load it (warnings and notes follow, printed by the caller)."""
+    unit = unit or result.options.unit
+    doc = report(result, unit)
+    orders = ", ".join(f"{k:.6g}" for k in doc["orders"]["requested"]) or "none"
+    lines = [f"{Path(result.source).name}: orders {orders} ({doc['orders']['source']})"]
+    if "table" in doc:
+        tb, pr = doc["table"], doc["prediction"]
+        lines.append(f"table: {tb['points']} points, {tb['start_deg']:g} to {tb['end_deg']:g} deg every "
+                     f"{tb['spacing_deg']:.4g} deg; largest correction {_fmt(tb['largest_correction'])} {unit}")
+        shown = _shown_figures(pr["before"])
+        lines.append("as measured:  " + "  ".join(f"{k} {_fmt(pr['before'][k])}" for k in shown) + f" {unit}")
+        how = (f"cross-validated over {pr['runs_left_out']} runs" if pr["method"] == "cross-validated"
+               else "in-sample")
+        lines.append(f"predicted after correction (a repeat of this test, {how}; 5-95 %):")
+        after = pr["after"]
+        lines.append("              " + "  ".join(
+            f"{k} {_fmt(after[k]['median'])}" + (f" ({_fmt(after[k]['low_5pct'])}-{_fmt(after[k]['high_95pct'])})"
+                                                 if after[k]["low_5pct"] != after[k]["high_95pct"] else "")
+            for k in shown) + f" {unit}")
+        left = pr["residual_orders"]
+    else:
+        pe = doc["pec"]
+        lines.append(f"worm order {pe['worm_order']:.6g}: period {pe['worm_period_s']:.6g} s, {pe['rows']} rows; "
+                     f"{pe['cycles']:.3g} worm cycles recorded")
+        after = (f"{_fmt(pe['peak_to_peak_after'])} {unit} left (predicted, cross-validated over "
+                 f"{pe['cycles_left_out']} worm cycles)" if pe["peak_to_peak_after"] is not None else "not predicted")
+        lines.append(f"PE peak-to-peak: {_fmt(pe['peak_to_peak_before'])} {unit} as measured, {after}")
+        left = [{"order": o["order"], "common": o["amplitude"]} for o in pe["residual_orders"]]
+    if left:
+        lines.append("largest orders left: " + ", ".join(f"{o['order']:.6g} ({_fmt(o['common'])})" for o in left)
+                     + f" {unit}")
+    lines += [f"load: {line}" for line in doc["load"]]
+    return lines
+
+
+def _shown_figures(before: dict) -> tuple[str, ...]:
+    """The figures the summary shows: E, B, A; with one direction (no bidirectional E) that
+    direction's E and A."""
+    if before["E"] is not None or before["B"] is not None:
+        return ("E", "B", "A")
+    return ("E_forward", "A_forward") if before["E_forward"] is not None else ("E_reverse", "A_reverse")
+
+
+def _fmt(x) -> str:
+    return "-" if x is None else f"{x:.3g}"
