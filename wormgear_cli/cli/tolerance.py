@@ -303,6 +303,9 @@ def _tables(doc: dict, target) -> list:
                      f"{doc['shard']['stop_sample'] - 1}")
     for key, why in doc.get("not_sampled", {}).items():
         notes.append(f"{key.replace('requirements.', '')}: no yield, {why}")
+    loose = [short_key(k) for k, v in doc.get("varied", {}).items() if not v.get("inspected", True)]
+    notes.append("laws: inspected, truncated at the tolerance" + (f", except (uninspected, the whole law): "
+                                                                  f"{', '.join(loose)}" if loose else ", every key"))
     notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]

@@ -75,7 +75,8 @@ class GearTeMax:
     of :func:`wormgear_cli.physics.spur.gear_te_max_fast` (degree 48, checked against
     the exact maximiser between the nodes to 1e-11 relative; the exact maximiser
     is used when the check fails).  Capped at the value at T (the maximum grows
-    with Delta e), so no sample exceeds the corner case.  ``part="deformation"``:
+    with Delta e), so no inspected sample exceeds the corner case; beyond T (an uninspected
+    key's tail) the exact maximiser.  ``part="deformation"``:
     instead the deformation part of that maximum (analyze's ``gear_te_deformation``:
     the maximum less the kinematic curve at its angle), not capped.  ``stage``: the spur
     stage record (a spec of a [worm, spur] drive: its spur stage)."""
@@ -114,7 +115,12 @@ class GearTeMax:
 
             value = chebyshev.chebval(2.0 * de / self.t - 1.0, self.coef)
         value = np.where(de == self.t, self.at_t, value)
-        return np.minimum(value, self.at_t) if self.part == "max" else value
+        if self.part == "max":
+            value = np.minimum(value, self.at_t)
+        over = de > self.t  # beyond the interpolant: an uninspected key's tail, computed exactly
+        if np.any(over):
+            value = np.where(over, self.exact(np.where(over, de, self.t)), value)
+        return value
 
 
 class StageContext(NamedTuple):

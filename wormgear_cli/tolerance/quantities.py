@@ -301,20 +301,24 @@ def _file_column(to_file, column: str) -> str:
 
 
 #: keys of one ``[statistics]`` entry
-ENTRY_KEYS = ("distribution", "cp", "cpk")
+ENTRY_KEYS = ("distribution", "cp", "cpk", "inspected")
 
 
 @dataclass(frozen=True)
 class Varied:
     """A quantity as this spec varies it: tolerance ``tolerance`` [mm] (per element
     for an array key), the interval [``low``, ``high``] each value lies in,
-    ``distribution`` name and process capabilities ``cp``, ``cpk`` (None: not given)."""
+    ``distribution`` name and process capabilities ``cp``, ``cpk`` (None: not given); ``inspected``:
+    parts are inspected against the tolerance, so the law is truncated at it (the default); False, the
+    process's whole law (parts beyond the tolerance are built too: a magnitude or an allowance still
+    never below zero)."""
 
     quantity: Quantity
     tolerance: tuple[float, ...]
     distribution: str
     cp: float | None = None
     cpk: float | None = None
+    inspected: bool = True
 
     @property
     def path(self) -> str:
@@ -326,7 +330,7 @@ class Varied:
         return (-t, t) if self.quantity.kind is Kind.signed else (0.0, t)
 
     def with_tolerance(self, tolerance: tuple[float, ...]) -> Varied:
-        return Varied(self.quantity, tuple(tolerance), self.distribution, self.cp, self.cpk)
+        return Varied(self.quantity, tuple(tolerance), self.distribution, self.cp, self.cpk, self.inspected)
 
 
 def spec_value(spec, path: str):
@@ -385,7 +389,8 @@ def varied_quantities(spec) -> tuple[Varied, ...]:
         value = tolerance_value(spec, q)
         tol = tuple(float(v) for v in value) if q.length > 1 else (float(value),)
         s = settings.get(q.path, {})
-        out.append(Varied(q, tol, s.get("distribution", DEFAULT_DISTRIBUTION[q.kind]), s.get("cp"), s.get("cpk")))
+        out.append(Varied(q, tol, s.get("distribution", DEFAULT_DISTRIBUTION[q.kind]), s.get("cp"), s.get("cpk"),
+                          s.get("inspected", True)))
     return tuple(out)
 
 
@@ -442,7 +447,8 @@ def _not_read_message(spec, q: Quantity) -> str:
 
 
 def statistics_table(spec) -> dict[str, dict]:
-    """The validated ``[statistics]`` table of ``spec``: path (the file's form) -> {distribution, cp, cpk}.
+    """The validated ``[statistics]`` table of ``spec``: path (the file's form) -> {distribution, cp, cpk,
+    inspected (only when false)}.
 
     Problems (all reported at once, one line each, exit 2): a key that is not
     a spec key (with the nearest valid key), a spec key without a tolerance
@@ -516,6 +522,13 @@ def statistics_table(spec) -> dict[str, dict]:
                 ok = False
             else:
                 caps[key] = float(v)
+        inspected = entry.get("inspected", True)
+        if not isinstance(inspected, bool):
+            problems.append(f"{where}.inspected: expected true (parts inspected: the law truncated at the "
+                            f"tolerance) or false (the process's whole law), got {inspected!r}")
+            ok = False
+        elif not inspected:
+            caps["inspected"] = False
         if ok and "cp" in caps and "cpk" in caps and caps["cpk"] > caps["cp"]:
             problems.append(f"{where}: cpk = {caps['cpk']:g} exceeds cp = {caps['cp']:g} (cpk <= cp by definition)")
             ok = False
