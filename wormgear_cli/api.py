@@ -585,7 +585,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     --------
     >>> r = measure("configs/mch50-warm.csv", drive="configs/mch50.toml")
     >>> round(r.iso230_2["E"].arcsec, 1), round(r.iso230_2["B"].arcsec, 1)
-    (177.8, 154.9)
+    (216.7, 159.6)
     """
     from wormgear_cli.errors import UsageError
     from wormgear_cli.workflows.measure import measure as run
