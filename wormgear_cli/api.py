@@ -677,7 +677,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     --------
     >>> r = measure("configs/mch50-warm.csv", drive="configs/mch50.toml")
     >>> round(r.iso230_2["E"].arcsec, 1), round(r.iso230_2["B"].arcsec, 1)
-    (177.8, 154.9)
+    (216.7, 159.6)
     >>> g = measure("configs/cge-pro-guidelog.txt", drive="configs/cge-pro-ra.toml")
     >>> pe = g.periodic_error
     >>> round(pe.worm_period_s, 1), round(pe.harmonics[0]["amplitude"].arcsec, 2), round(pe.peak_to_peak.arcsec, 1)
@@ -1228,7 +1228,7 @@ class Comparison:
 
     ``drives``: the drives' names, ``files`` their sources (the first is the baseline);
     ``totals``: key (``total_transmission_error``, ``total_backlash``, ``budget_linear``,
-    ``budget_rss``, ``budget_peak``) -> one :class:`Angle` per drive; ``differences``: the same
+    ``budget_statistical``, ``budget_peak``: amplitudes) -> one :class:`Angle` per drive; ``differences``: the same
     keys -> each drive minus the first; ``budget``: source -> one Angle (or None) per drive;
     ``yields``: None, or requirement key (or "all") -> {values, low, high, differences}
     (fractions, None where a drive has no such limit).
@@ -1270,8 +1270,8 @@ def compare(specs: Sequence, *, samples: int | None = None, seed: int = 0) -> Co
     >>> c = compare(["configs/mch50.toml", "configs/rotary-table-precision.toml"])
     >>> c.differences["total_transmission_error"][1] < Angle(0, "arcsec")
     True
-    >>> f"{c.totals['budget_rss'][1]:.2f}"
-    '17.45 arcsec'
+    >>> f"{c.totals['budget_statistical'][1]:.2f}"
+    '27.00 arcsec'
     """
     from wormgear_cli.workflows.compare import Options
     from wormgear_cli.workflows.compare import compare as run

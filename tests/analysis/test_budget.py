@@ -164,13 +164,13 @@ def test_analyze_json_budget_in_the_chosen_unit(runner):
 
 def test_check_holds_a_budget_requirement(runner, tmp_path):
     text = (CONFIGS / "rotary-table-precision.toml").read_text().replace(
-        "max_budget_rss_arcsec = 20.0", "max_budget_rss_arcsec = 5.0")
+        "max_budget_statistical_arcsec = 10.0", "max_budget_statistical_arcsec = 5.0")
     path = tmp_path / "t.toml"
     path.write_text(text)
     r = runner.invoke(app, ["check", str(path), "--format", "json"])
     assert r.exit_code == 1
     [verdict] = [v for v in json.loads(r.stdout)["files"][0]["requirements"]
-                 if v["key"] == "requirements.max_budget_rss_arcsec"]
+                 if v["key"] == "requirements.max_budget_statistical_arcsec"]
     assert verdict["passed"] is False and verdict["value_arcsec"] > 5.0
 
 
@@ -219,15 +219,19 @@ def test_report_by_hand():
     # lines 3 and 1 (arcsec, in rad), linear 4: shares 75 % and 25 %; phase 0.5 rad = 28.6479 deg
     a = ARCSEC
     b = Budget("d", (BudgetLine("x", "gear", "shaft", 1.0, 3 * a, "spec", 0.5),
-                     BudgetLine("y", "worm", "static", 0.0, 1 * a, "default")), 4 * a, 3.5 * a, 3.8 * a)
+                     BudgetLine("y", "worm", "static", 0.0, 1 * a, "default")), 4 * a, 3.5 * a, 3.8 * a, 3.9 * a,
+               5.0 * a)
     r = b.report("arcsec")
     assert r["budget"][0] == {"source": "x", "stage": "gear", "kind": "shaft", "order": 1.0,
                               "amplitude": pytest.approx(3.0, rel=1e-12), "origin": "spec",
                               "phase_deg": pytest.approx(28.6479, abs=1e-4), "share_pct": pytest.approx(75.0),
                               "stage_index": 0, "stage_kind": "", "part": ""}
     assert r["budget"][1]["share_pct"] == pytest.approx(25.0) and r["budget"][1]["phase_deg"] == 0.0
-    assert r["total_with_budget"] == pytest.approx({"transmission_error_linear": 4.0, "transmission_error_rss": 3.5,
-                                                    "transmission_error_peak": 3.8}, rel=1e-12)
+    assert r["total_with_budget"] == pytest.approx({
+        "transmission_error_linear": 4.0, "transmission_error_rss": 3.5, "transmission_error_peak": 3.8,
+        "transmission_error_amplitude_linear": 4.0, "transmission_error_amplitude_statistical": 3.9,
+        "transmission_error_amplitude_peak": 3.8, "transmission_error_range_peak": 5.0}, rel=1e-12)
+    assert "budget_offsets" not in r
     empty = Budget("d", (BudgetLine("x", "gear", "shaft", 1.0, 0.0, "spec"),), 0.0, 0.0, 0.0).report("arcsec")
     assert empty["budget"][0]["share_pct"] == 0.0
 

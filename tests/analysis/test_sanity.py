@@ -2,9 +2,9 @@
 
 Legal inputs at the edges of their ranges (the issue's: a 0.05 mm module, one-tooth gears, a
 10 mm centre-distance error) take the small-angle models to tens of thousands of degrees of
-backlash.  The guard names such results in one warning line; a value that is not finite
-stops the run (exit 2, one line).  Which inputs are implausible is the plausibility checks'
-business (another issue)."""
+backlash.  Such inputs are now refused at load (issue 19: spec.plausibility); behind that, the guard
+stops a nominal result beyond a full turn or not finite (exit 2, one line) and names an
+ensemble's in one warning line."""
 
 from __future__ import annotations
 
@@ -31,23 +31,46 @@ def absurd(tmp_path):
     return path
 
 
-def test_the_issues_drive_says_its_backlash_is_beyond_a_full_turn(runner, absurd):
+def test_the_issues_drive_is_refused_at_load_one_line_per_impossible_value(runner, absurd):
+    """Issue 19 item 4: a 10 mm centre-distance error on a 0.05 mm module and one-tooth gears cannot be
+    built: exit 2 before any analysis, each impossible value in one line (spec.plausibility)."""
     r = runner.invoke(app, ["analyze", str(absurd), "-f", "json"])
-    assert r.exit_code == 0
-    (line,) = r.stderr.splitlines()
-    assert line.startswith(f"warning: {absurd}: total_backlash 1.674e+04 deg, ")
-    assert line.endswith("more than a full turn, so the inputs lie far outside what the model describes; check "
-                         "modules, teeth, centre distances and loads")
-    assert '"backlash": 60265626.' in r.stdout  # the numbers themselves are still reported (1.674e4 deg)
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr.splitlines() == [
+        f"error: {absurd}: assembly.gear_centre_distance_error_mm = 10 mm: more than the teeth's working depth "
+        "2 m (0.1 mm), which no built drive can have; micrometres typed as millimetres? (10 um is 0.01 mm)",
+        f"error: {absurd}: gear_pair.pinion.teeth = 1: a gear of 1 tooth cannot mesh continuously (its teeth "
+        "would be pointed and undercut away); check the tooth counts",
+        f"error: {absurd}: gear_pair.output_gear.teeth = 1: a gear of 1 tooth cannot mesh continuously (its "
+        "teeth would be pointed and undercut away); check the tooth counts"]
 
 
 @pytest.mark.parametrize("args", [["simulate", "--points", "100"], ["check"], ["synth", "--seed", "1"]])
-def test_other_commands_say_it_too(runner, absurd, args):
-    """A variant: the curve of simulate and synth, and check's verdict, carry the same word."""
+def test_other_commands_refuse_it_too(runner, absurd, args):
     r = runner.invoke(app, [args[0], str(absurd), *args[1:]])
-    assert r.exit_code in (0, 1), r.stderr
-    warnings = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
-    assert len(warnings) == 1 and "more than a full turn" in warnings[0]
+    assert r.exit_code == 2
+    assert sum("teeth = 1: a gear of 1 tooth cannot mesh" in ln for ln in r.stderr.splitlines()) == 2
+
+
+def test_a_nominal_result_beyond_a_full_turn_is_an_error_an_ensembles_a_warning(runner, monkeypatch):
+    """The guard behind the plausibility checks: analyze's own figures beyond a full turn stop the run
+    (exit 2, one line); in an ensemble (check_angles without strict) it is one warning line."""
+    from wormgear_cli.analysis import accuracy
+
+    real = accuracy.analyze
+
+    def beyond(spec):
+        result = real(spec)
+        result.angles["total_backlash"] = 3 * FULL_TURN
+        return result
+
+    monkeypatch.setattr(accuracy, "analyze", beyond)
+    r = runner.invoke(app, ["analyze", str(MCH50), "-f", "json"])
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {MCH50}: total_backlash 1080 deg: more than a full turn, which no drive can have: "
+                        "the inputs lie far outside what the model describes; check modules, teeth, centre distances "
+                        "and loads\n")
+    assert check_angles({"total_backlash": 3 * FULL_TURN}).startswith("total_backlash 1080 deg: more than a full turn")
 
 
 def test_the_shipped_drive_has_nothing_to_say(runner):

@@ -53,8 +53,8 @@ def test_part2_extrapolation_warns_and_grade_3_has_no_composite(runner):
     r = runner.invoke(app, ["grade", "-g", "6", "--module-mm", "4", "--diameter-mm", "1200", "--face-width-mm",
                             "50", "-f", "json"])
     assert r.exit_code == 0
-    assert r.stderr == ("warning: diameter 1200 outside ISO 1328-2:1997's scope [5, 1000] mm: its formulas are "
-                        "extrapolated\n")
+    assert r.stderr == ("warning: diameter 1200 outside ISO 1328-2:1997's scope [5, 1000] mm: the tolerance of "
+                        "its nearest range is given (the formulas are not extrapolated)\n")
     r = runner.invoke(app, ["grade", "-g", "3", "--module-mm", "2", "--diameter-mm", "100", "--face-width-mm",
                             "20", "-f", "json"])
     assert r.exit_code == 0 and json.loads(r.stdout)["F_i2T_um"] is None

@@ -160,19 +160,55 @@ def test_module_mode_reports_whole_teeth(runner, mch50_path):
 
 def test_param_sweep_reproduces_analyze(runner, mch50_path, mch50_spec):
     from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS, analyze
+    from wormgear_cli.analysis.figures import FIGURE_COLUMNS, figures
     from wormgear_cli.spec.loader import with_values
+    from wormgear_cli.units import to_unit
 
     r = run(runner, mch50_path, "--param", "worm_pair.lead_error_mm=0:0.05:3",
             "--param", "gear_pair.pinion.teeth=16:20:3", "--format", "csv", "--unit", "arcsec")
     assert r.exit_code == 0 and r.stderr == ""
     header, rows = parse_csv(r.stdout)
     keys = ["worm_pair.lead_error_mm", "gear_pair.pinion.teeth"]
-    assert header == keys + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
+    assert header == keys + list(METRIC_COLUMNS) + list(INFO_COLUMNS) + list(FIGURE_COLUMNS)
     assert [(row[0], row[1]) for row in rows] == [(e, z) for e in (0.0, 0.025, 0.05) for z in (16, 18, 20)]
     for row in rows:
         spec = with_values(mch50_spec, {keys[0]: row[0], keys[1]: int(row[1])})
-        expected = analyze(spec).metrics("arcsec")
+        result = analyze(spec)
+        expected = {**result.metrics("arcsec"),
+                    **{k: float(to_unit(v, "arcsec")) for k, v in figures(spec, result).items()}}
         assert row[2:] == [expected[c] for c in header[2:]]  # exact: same floats, repr round-trip
+
+
+def test_a_grade_sweep_shows_its_effect_on_the_budget_and_the_acceptance_test(runner, tmp_path):
+    """Issue 19, item 8: the paper's total has no pitch deviations, so a grade sweep leaves it alone; the
+    budget's totals and the ISO 230-2 figures carry the grade (each row against analyze's JSON and check's
+    predicted figure, computed by their own commands)."""
+    from tests.support.paths import CONFIGS
+
+    drive = CONFIGS / "rotary-table-precision.toml"
+    r = run(runner, str(drive), "--param", "gear_pair.output_gear.accuracy_grade=3:7:5", "--format", "json")
+    pts = json.loads(r.stdout)["points"]
+    te = [p["total_transmission_error"] for p in pts]
+    assert max(te) == min(te)  # the paper's model: no pitch deviations
+    stat = [p["budget_amplitude_statistical"] for p in pts]
+    iso_m = [p["iso230_M"] for p in pts]
+    assert all(b > a for a, b in zip(stat, stat[1:])) and iso_m[-1] > iso_m[0]
+    for p in (pts[0], pts[-1]):
+        path = tmp_path / f"g{p['gear_pair.output_gear.accuracy_grade']}.toml"
+        text = drive.read_text(encoding="utf-8").replace("\n[requirements]\n",
+                                                         "\n[requirements]\nmax_iso230_M_arcsec = 1.0\n", 1)
+        grade = p["gear_pair.output_gear.accuracy_grade"]
+        path.write_text(text.replace("accuracy_grade = 4", f"accuracy_grade = {grade}", 1), encoding="utf-8")
+        doc = json.loads(runner.invoke(app, ["analyze", str(path), "-f", "json"]).stdout)["total_with_budget"]
+        assert p["budget_amplitude_statistical"] == pytest.approx(doc["transmission_error_amplitude_statistical"],
+                                                                  rel=1e-12)
+        assert p["budget_range_peak"] == pytest.approx(doc["transmission_error_range_peak"], rel=1e-12)
+        rows = json.loads(runner.invoke(app, ["check", str(path), "-f", "json"]).stdout)["files"][0]["requirements"]
+        row = next(q for q in rows if q["key"] == "requirements.max_iso230_M_arcsec")
+        assert p["iso230_M"] == pytest.approx(row["value_arcsec"], rel=1e-12)
+    summary = run(runner, str(drive), "--param", "gear_pair.output_gear.accuracy_grade=3:7:5").stdout
+    assert "lowest total TE  │ 9.29 arcsec at every point" in summary
+    assert "lowest budget TE │ " in summary and "accuracy_grade = 3 " in summary
 
 
 def test_param_json(runner, mch50_path):

@@ -34,7 +34,7 @@ def test_json_contract(runner):
     assert doc["samples"] == 2000 and doc["seed"] == 7
     # the issue's six metrics in its order, then the full budget's totals (more keys may be added)
     assert list(doc["metrics"]) == ["total_transmission_error", "total_backlash", "iso230_E", "iso230_B",
-                                    "iso230_M", "iso230_A", "budget_linear", "budget_rss"]
+                                    "iso230_M", "iso230_A", "budget_linear", "budget_statistical", "budget_rss"]
     for v in doc["metrics"].values():
         assert list(v["percentiles"]) == PERCENTILE_KEYS
         p = [v["percentiles"][k] for k in PERCENTILE_KEYS]
@@ -86,8 +86,9 @@ def test_csv_columns(runner):
     assert header[0] == "sample"
     assert "assembly.wheel_eccentricity_mm" in header and "assembly.worm_pair_errors_mm[5]" in header
     assert "worm_pair.lead_error_phase_deg" in header
-    assert header[-8:] == ["total_transmission_error_deg", "total_backlash_deg", "iso230_E_deg", "iso230_B_deg",
-                           "iso230_M_deg", "iso230_A_deg", "budget_linear_deg", "budget_rss_deg"]
+    assert header[-9:] == ["total_transmission_error_deg", "total_backlash_deg", "iso230_E_deg", "iso230_B_deg",
+                           "iso230_M_deg", "iso230_A_deg", "budget_linear_deg", "budget_statistical_deg",
+                           "budget_rss_deg"]
     assert len(r.stdout.splitlines()) == 4
 
 
@@ -207,9 +208,26 @@ def test_allocation_ranks_the_key_that_buys_yield_first(runner, tmp_path):
                           "--format", "json").stdout)
     steps = doc["allocation"]["steps"]
     assert steps[0]["key"] == "assembly.gear_eccentricity_mm"
-    assert steps[0]["to_mm"] == pytest.approx(0.7 * 0.03)
-    assert steps[0]["gain"] > 0
-    gains = [s["gain"] for s in steps]
+    assert steps[0]["gain"] > 0 and steps[0]["yield"]["low"] >= 0.99
+    # the least tightening that reaches the target, by bisection (issue 19; not a fixed 70 % step): the
+    # kept fraction is a multiple of 2^-7, and a spec with that tolerance reaches 99 % while one with
+    # 2^-7 of the tolerance more does not (each run by the command itself, the same samples and seed)
+    kept = steps[0]["to_mm"] / 0.03
+    assert kept * 128 == pytest.approx(round(kept * 128), abs=1e-9) and 0 < kept < 1
+    assert steps[0]["step"] == f"{100 * kept:.0f} %"
+    text = drive.read_text(encoding="utf-8")
+    for fraction, reaches in ((kept, True), (kept + 1 / 128, False)):
+        path = tmp_path / f"e{fraction:.4f}.toml"
+        # the eccentricity defaults to the centre-distance error (0.03): written explicitly
+        path.write_text(text.replace("gear_centre_distance_error_mm = 0.03\n", "gear_centre_distance_error_mm = 0.03\n"
+                                     f"gear_eccentricity_mm = {0.03 * fraction!r}\n", 1))
+        y = json.loads(_run(runner, path, "-n", 20_000, "--metrics", "paper", "--format", "json").stdout)["yield"]
+        assert (y["all"]["low"] >= 0.99) is reaches
+    reaching = [s for s in steps if s["yield"]["low"] >= 0.99]
+    assert steps[:len(reaching)] == reaching
+    kept_all = [s["to_mm"] / s["from_mm"] for s in reaching]
+    assert kept_all == sorted(kept_all, reverse=True)
+    gains = [s["gain"] for s in steps[len(reaching):]]
     assert gains == sorted(gains, reverse=True)
 
 
@@ -239,7 +257,7 @@ def test_check_min_yield_without_limits_is_an_input_error(runner, tmp_path):
     assert r.exit_code == 2
     assert r.stderr == (f"error: {drive}: requirements.min_yield: needs a limit to count the yield against "
                         "(max_transmission_error_arcsec, max_backlash_arcsec, max_budget_linear_arcsec, "
-                        "max_budget_rss_arcsec)\n")
+                        "max_budget_statistical_arcsec, max_budget_rss_arcsec)\n")
 
 
 def test_plot(runner, tmp_path):

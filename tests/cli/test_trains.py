@@ -48,7 +48,9 @@ def test_belt_and_worm_through_analyze_check_simulate_and_synth(runner, tmp_path
 def test_every_suggested_template_runs(runner, tmp_path, stages):
     path = tmp_path / "d.toml"
     run(runner, "new", path, "--stages", stages)
-    run(runner, "check", path)
+    # the worm + spur template is the MCH50, which fails the paper's +/-0.010 deg read as an amplitude
+    # (issue 19): a check that ran and failed
+    run(runner, "check", path, code=1 if stages == "worm,spur" else 0)
     run(runner, "simulate", path, "--points", "200", "-o", tmp_path / "c.csv")
     run(runner, "synth", path, "-o", tmp_path / "m.csv", "--seed", "1")
     doc = json.loads(run(runner, "analyze", path, "-f", "json").stdout)
@@ -93,6 +95,9 @@ def test_a_ratio_sweep_of_a_drive_without_a_spur_stage_says_so(runner):
 # --- done when: every command on every train --------------------------------------------------------------------
 
 SHIPPED = sorted(p.stem for p in CONFIGS.glob("*.toml"))
+#: drives whose check fails by design: their limits restated like with like (issue 19, docs/budget.md, "The
+#: shipped drives"; the worm + spur template is the MCH50)
+FAILING_CHECK = {"mch50", "rotary-table-precision", "rotary-table-worm", "template:worm,spur"}
 
 
 @pytest.mark.slow
@@ -105,7 +110,8 @@ def test_every_shipped_drive_and_template_passes_every_check(runner, tmp_path, d
         run(runner, "new", path, "--stages", drive.split(":", 1)[1])
     else:
         path = CONFIGS / f"{drive}.toml"
-    run(runner, "check", path)
+    verdict = 1 if drive in FAILING_CHECK else 0  # a check that ran (and failed by design) or passed
+    run(runner, "check", path, code=verdict)
     sim = json.loads(run(runner, "simulate", path, "--points", "2000", "-f", "json").stdout)
     tol = json.loads(run(runner, "tolerance", path, "--samples", "2000", "-f", "json").stdout)
     assert tol["samples"] == 2000
@@ -119,7 +125,7 @@ def test_every_shipped_drive_and_template_passes_every_check(runner, tmp_path, d
     assert diag["schema_version"] == 2 and sim["schema_version"] == 2
     # the augmented spec is written in the input's form and describes the same drive
     assert ("stage" in tomllib.loads(aug.read_text())) == ("stage" in tomllib.loads(path.read_text()))
-    run(runner, "check", aug)
+    run(runner, "check", aug, code=verdict)
 
 
 #: arguments per command for the belt + worm mount (the test fails when a command is added without them)

@@ -71,16 +71,23 @@ def test_radar_data_against_the_mch50_spec_say_the_spec_does_not_fit(runner, tmp
     assert verdict.startswith("the drive spec does not describe these data"), verdict
     assert "missing effect found" not in verdict
     pl = doc["plausibility"]
-    assert pl["spec_fits_data"] is False and pl["likely_units"] is None
-    # by construction the radar data have no lost-motion variation at order 8 (their backlash is constant)
+    assert pl["spec_fits_data"] is False
+    # by construction the radar data have no lost-motion variation at order 8 (their backlash is constant);
+    # the MCH50's clearance varies at order 8 by its wheel's radial composite deviation only (+/- F_i tan
+    # alpha_2, issue 19: the paper's static half-width no longer swings), a differential amplitude of 1.75"
     item = next(it for it in pl["items"] if it["what"].startswith("differential amplitude at order 8 "))
-    assert abs(item["data_arcsec"]) < 0.5 and item["spec_arcsec"] > 10.0
+    assert abs(item["data_arcsec"]) < 0.1 and item["spec_arcsec"] == pytest.approx(1.75, abs=0.05)
+    # a unit slip is named only when the mismatch looks like one; with this one item left, a ratio near 60
+    # (arcmin read as arcsec) can be chance, so the hint may appear (seed 3) but never as the only advice
+    if pl["likely_units"] is not None:
+        assert len(pl["items"]) == 1 and "check that the spec is the drive measured" in verdict
     assert f"the spec gives {item['spec_arcsec']:.3g} arcsec, the data {item['data_arcsec']:.3g}" in verdict
     # the repeatability is the white + per-run noise the data were made with (0.3 and 0.2 arcsec)
     assert pl["repeatability_arcsec"] == pytest.approx(math.hypot(0.3, 0.2), rel=0.35)
-    assert pl["gap_after_arcsec"] > 10 * pl["repeatability_arcsec"]
+    # the gap stays well above the noise (150" of lost motion is near the MCH50's own 172", so less of it)
+    assert pl["gap_after_arcsec"] > 5 * pl["repeatability_arcsec"]
     for name in pl["effects_not_named"]:
-        assert f"not naming {name}" in verdict
+        assert "not naming " in verdict and name in verdict.split("not naming ", 1)[1]
 
 
 def test_the_table_verdict_says_the_spec_does_not_fit(runner, tmp_path):

@@ -18,9 +18,10 @@ from wormgear_cli.spec.loader import load_spec, loads_spec
 from wormgear_cli.spec.upgrade import upgrade_text
 from wormgear_cli.units import ARCSEC
 
-#: the MCH50's figures of the two-stage implementation (before this change) [arcsec]
-OLD_MCH50 = {"gear_te": 34.37843996519304, "gear_bl": 28.589949569086553, "worm_te": 153.6723552643686,
-             "worm_bl": 1153.4113381388324, "total_te": 53.58748437323911, "total_bl": 172.7663668364406}
+#: the MCH50's figures [arcsec] (the worm mesh's ISO 6336 stiffness with the worm as a rack in the wheel's
+#: slot of q', z_n2 = infinity: docs/models.md)
+OLD_MCH50 = {"gear_te": 34.37843996519304, "gear_bl": 28.589949569086553, "worm_te": 153.4654035329265,
+             "worm_bl": 1152.9967971635378, "total_te": 53.56161540680885, "total_bl": 172.71454921452877}
 
 WORM = """
 [[stage]]

@@ -85,7 +85,7 @@ def test_a_drive_named_by_a_hostile_file_name_on_a_terminal_sends_no_osc(tmp_pat
 
 def test_check_lines_name_a_hostile_file_written_out(tmp_path, runner, hostile_drive):
     r = runner.invoke(app, ["check", str(hostile_drive)])
-    assert r.exit_code == 0
+    assert r.exit_code == 1  # the MCH50's restated TE limit fails (issue 19): its line names the file too
     assert _controls(r.stdout.encode()) == [] and "\\u001B]0;PWNED" in r.stdout
 
 

@@ -85,8 +85,8 @@ def test_radial_composite_with_range_means():
 
 def test_radial_composite_extrapolated_warns_and_grades_are_4_to_12():
     rc = radial_composite(6, 2.0, 1500.0)
-    assert rc.warnings == ("diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: its formulas are "
-                           "extrapolated",)
+    assert rc.warnings == ("diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: the tolerance of its "
+                           "nearest range is given (the formulas are not extrapolated)",)
     with pytest.raises(GradeError, match=r"\[4, 12\]"):
         radial_composite(3, 2.0, 100.0)
 
@@ -152,6 +152,9 @@ def test_radial_composite_range_upper_bounds_are_inclusive():
     assert rc.diameter_mean == pytest.approx(79.057, abs=1e-3)
 
 
+NEAREST = "the tolerance of its nearest range is given (the formulas are not extrapolated)"
+
+
 def test_radial_composite_beyond_the_last_range_uses_the_last_range():
     # d = 1500 > 1000: the last range (560, 1000] -> sqrt(560000) = 748.331; m = 12 > 10: (6, 10] -> sqrt(60) = 7.7460
     # F_i'' = (3.2 * 7.7460 + 1.01 * 27.3556 + 6.4) sqrt(2) = (24.787 + 27.629 + 6.4) sqrt(2) = 83.18 -> 83
@@ -160,5 +163,5 @@ def test_radial_composite_beyond_the_last_range_uses_the_last_range():
     assert rc.module_mean == pytest.approx(7.7460, abs=1e-4)
     assert rc.F_i2T == 83.0
     assert rc.warnings == (
-        "module 12 outside ISO 1328-2:1997's scope [0.2, 10] mm: its formulas are extrapolated",
-        "diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: its formulas are extrapolated")
+        "module 12 outside ISO 1328-2:1997's scope [0.2, 10] mm: " + NEAREST,
+        "diameter 1500 outside ISO 1328-2:1997's scope [5, 1000] mm: " + NEAREST)

@@ -84,7 +84,7 @@ def test_spec_is_immutable(mch50_spec):
     [
         (("gear_pair", "modul_mm", 2.5), "d.toml: gear_pair.modul_mm: unknown key (did you mean gear_pair.module_mm?)"),
         (("", "foo", 1), "d.toml: foo: unknown key (a drive file holds the tables [assembly], [drive], [effects], "
-                         "[gear_pair], [loads], [materials], [requirements], [statistics], [stiffness], [worm_pair])"),
+                         "[gear_pair], [loads], [materials], [requirements], [statistics], [stiffness], [test_plan], [worm_pair])"),
         (("gear_pair.output_gear", "teeth", 18.5),
          "d.toml: gear_pair.output_gear.teeth: expected an integer in [1, 10000], got 18.5 (not a whole number)"),
         (("gear_pair.output_gear", "teeth", 0), "d.toml: gear_pair.output_gear.teeth: expected an integer in [1, 10000], got 0"),

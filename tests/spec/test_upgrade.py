@@ -23,7 +23,7 @@ def test_comments_travel_with_their_keys():
     assert lines[0] == "# MCH50 machining-centre rotary table: the paper's worked example (its Table 1)."
     assert "[stage.gear]  # gear 1" in lines and "[stage.pinion]  # gear 2" in lines
     # drive-level tables are copied with their comments
-    assert "# (i.e. 0.020 deg and 0.070 deg spans); as limits in arcsec:" in lines
+    assert "# mean: 0.070 deg = 252 arcsec." in lines
     assert not new.count("[gear_pair") and not new.count("[assembly]")
 
 

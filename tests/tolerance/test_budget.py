@@ -24,9 +24,15 @@ def _run(runner, *args):
     return runner.invoke(app, ["tolerance", *map(str, args)])
 
 
+#: the precision table's limits these tests count the yield against (the shipped file's are restated
+#: like with like, issue 19, and fail by design): the paper's total and the lost motion
+ROTARY_LIMITS = {"max_transmission_error_arcsec": 20.0, "max_backlash_arcsec": 70.0}
+
+
 def _rotary(tmp_path, **limits):
     doc = raw_copy(load_spec(ROTARY))
-    doc["requirements"].update(limits)
+    doc.pop("test_plan", None)
+    doc["requirements"] = {**ROTARY_LIMITS, **limits}
     return write(tmp_path, doc)
 
 
@@ -75,8 +81,8 @@ def test_allocation_answer_names_the_grade_step(runner, tmp_path):
     assert max(len(line) for line in table.splitlines()) <= 80
 
 
-def test_met_target_says_no_tightening_is_needed(runner):
-    r = _run(runner, ROTARY, "-n", 5000, "--metrics", "paper", "--target-yield", "0.5", "--format", "json")
+def test_met_target_says_no_tightening_is_needed(runner, tmp_path):
+    r = _run(runner, _rotary(tmp_path), "-n", 5000, "--metrics", "paper", "--target-yield", "0.5", "--format", "json")
     alloc = json.loads(r.stdout)["allocation"]
     assert alloc["yield"]["low"] >= 0.5
     assert alloc["answer"].startswith("target met, no tightening needed: yield ")
@@ -89,18 +95,18 @@ def test_describe_keys_in_words():
 
 
 def test_budget_yields_equal_the_fractions_counted_from_the_csv(runner, tmp_path):
-    drive = _rotary(tmp_path, max_budget_rss_arcsec=12.0, max_budget_linear_arcsec=20.0)
+    drive = _rotary(tmp_path, max_budget_statistical_arcsec=14.0, max_budget_linear_arcsec=20.0)
     out = tmp_path / "s.csv"
     r = _run(runner, drive, "-n", 4000, "--metrics", "paper+budget", "--format", "csv", "-o", out)
     assert r.exit_code == 0, r.output
     rows = list(csv.DictReader(io.StringIO(out.read_text())))
     doc = json.loads(_run(runner, drive, "-n", 4000, "--metrics", "paper+budget", "--format", "json").stdout)
-    for key, column, limit in (("max_budget_rss_arcsec", "budget_rss_arcsec", 12.0),
+    for key, column, limit in (("max_budget_statistical_arcsec", "budget_statistical_arcsec", 14.0),
                                ("max_budget_linear_arcsec", "budget_linear_arcsec", 20.0)):
         passing = sum(float(row[column]) <= limit for row in rows)
         assert 0 < passing < 4000  # the limit cuts through the distribution
         assert doc["yield"][f"requirements.{key}"]["value"] == passing / 4000
-    both = sum(float(row["budget_rss_arcsec"]) <= 12.0 and float(row["budget_linear_arcsec"]) <= 20.0
+    both = sum(float(row["budget_statistical_arcsec"]) <= 14.0 and float(row["budget_linear_arcsec"]) <= 20.0
                and float(row["total_transmission_error_arcsec"]) <= 20.0 and float(row["total_backlash_arcsec"]) <= 70.0
                for row in rows)
     assert doc["yield"]["all"]["value"] == both / 4000
@@ -163,12 +169,12 @@ def test_spur_profile_error_is_never_varied(runner, tmp_path):
 
 
 def test_check_judges_only_the_sampled_limits_by_the_yield(runner, tmp_path):
-    # min_yield judges the limits it counts (rss budget: yield ~87 %, target 50 % met); a limit it does not
-    # sample (the budget's peak rule, corner 17.45" over 1") still fails by its worst case
-    drive = _rotary(tmp_path, max_budget_rss_arcsec=12.0, max_budget_peak_arcsec=1.0, min_yield=0.5)
+    # min_yield judges the limits it counts (statistical budget: yield ~70 %, target 50 % met); a limit it
+    # does not sample (the budget's peak rule, corner over 1") still fails by its worst case
+    drive = _rotary(tmp_path, max_budget_statistical_arcsec=16.0, max_budget_peak_arcsec=1.0, min_yield=0.5)
     r = runner.invoke(app, ["check", str(drive)])
     assert r.exit_code == 1
-    assert f"{drive}: worst case over requirements.max_budget_rss_arcsec: limit 12 arcsec" in r.stdout
+    assert f"{drive}: worst case over requirements.max_budget_statistical_arcsec: limit 16 arcsec" in r.stdout
     assert f"{drive}: FAIL requirements.max_budget_peak_arcsec: limit 1 arcsec" in r.stdout
     assert f"{drive}: ok requirements.min_yield: target 50 %" in r.stdout
 

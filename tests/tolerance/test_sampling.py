@@ -39,7 +39,7 @@ SEEDS = (1, 2, 3)
 @pytest.mark.parametrize("seed", SEEDS)
 def test_uniform_mean_and_spread(seed):
     # U(L, U): mean (L + U)/2, variance (U - L)^2 / 12; signed quantity: L = -T, U = T
-    x = _draw(_varied("worm_pair.wheel.thickness_deviation_mm", "uniform"), N, seed)
+    x = _draw(_varied("worm_pair.lead_error_mm", "uniform"), N, seed)
     sd = 2 * T / math.sqrt(12)
     assert abs(x.mean()) < 5 * sd / math.sqrt(N)  # 5 standard errors
     assert x.std() == pytest.approx(sd, rel=0.01)
@@ -90,8 +90,12 @@ def test_rayleigh_truncated_at_tolerance(seed):
 def test_normal_law_passes_kolmogorov_smirnov_against_scipy():
     from scipy.stats import kstest, truncnorm
 
-    x = _draw(_varied("worm_pair.worm.thickness_deviation_mm", "normal"), 20_000, 7)
+    x = _draw(_varied("worm_pair.lead_error_mm", "normal"), 20_000, 7)
     assert kstest(x, truncnorm(-3, 3, scale=T / 3).cdf).pvalue > 1e-3
+    # a thickness allowance is one-sided (issue 19): [0, T], centred on T/2 with its ends at 3 sigma
+    y = _draw(_varied("worm_pair.worm.thickness_deviation_mm", "normal"), 20_000, 7)
+    assert y.min() >= 0.0 and y.max() <= T
+    assert kstest(y, truncnorm(-3, 3, loc=T / 2, scale=T / 6).cdf).pvalue > 1e-3
 
 
 @pytest.mark.parametrize("distribution,cp,cpk", [("normal", None, None), ("normal", 0.5, 0.2), ("normal", 2, 2),

@@ -12,7 +12,7 @@ from wormgear_cli.workflows.check import check_file
 def test_a_limit_below_the_computed_total_fails_with_one_finding(tmp_path):
     # the paper's total TE of MCH50 is about 68 arcsec at the output: 30 arcsec cannot be met
     total = float(to_unit(analyze(load_spec(MCH50)).angles["total_transmission_error"], "arcsec"))
-    text = MCH50.read_text().replace("max_transmission_error_arcsec = 72.0", "max_transmission_error_arcsec = 30.0")
+    text = MCH50.read_text().replace("max_transmission_error_arcsec = 36.0", "max_transmission_error_arcsec = 30.0")
     path = tmp_path / "tight.toml"
     path.write_text(text)
     c = check_file(path)
@@ -25,12 +25,17 @@ def test_a_limit_below_the_computed_total_fails_with_one_finding(tmp_path):
     assert c.to_dict()["passed"] is False
 
 
-def test_the_shipped_drive_passes_and_says_how_many_requirements(tmp_path):
-    c = check_file(MCH50)
+def test_a_drive_that_passes_says_how_many_requirements(tmp_path):
+    # the shipped MCH50 fails the paper's +/-0.010 deg read as an amplitude (issue 19); held as the range it
+    # was before (72 arcsec) it passes
+    path = tmp_path / "mch50.toml"
+    path.write_text(MCH50.read_text().replace("max_transmission_error_arcsec = 36.0",
+                                              "max_transmission_error_arcsec = 72.0"))
+    c = check_file(path)
     assert c.valid and c.passed and c.problems == ()
     n = len(c.requirements)
     assert n >= 1 and all(r["passed"] for r in c.requirements)
-    assert c.findings == (f"{MCH50}: ok ({n} requirement{'s' if n != 1 else ''} met)",)
+    assert c.findings == (f"{path}: ok ({n} requirement{'s' if n != 1 else ''} met)",)
 
 
 def test_an_invalid_spec_is_returned_not_raised(tmp_path):

@@ -200,6 +200,9 @@ class Analysis:
             "total": {
                 "transmission_error": a["total_transmission_error"],
                 "backlash": a["total_backlash"],
+                **({"backlash_additions": {k[len("drive_backlash_"):]: v for k, v in a.items()
+                                           if k.startswith("drive_backlash_")}}
+                   if any(k.startswith("drive_backlash_") for k in a) else {}),
             },
         }
 
@@ -219,11 +222,14 @@ def _stage_report(r, a: dict, i: dict) -> dict:
     tp = {k: a[f"{n}_te_{k}"] for k in r.te_parts}
     bp = {k: a[f"{n}_backlash_{k}"] for k in r.backlash_parts}
     if r.kind == "worm":
+        paper_te, paper_bl = ("deformation", "envelope"), ("deformation", "profile", "thickness", "envelope")
         tp = {"deformation": tp["deformation"], "envelope_halfwidth": tp["envelope"],
-              "lower_bound": tp["deformation"] - tp["envelope"]}
+              "lower_bound": tp["deformation"] - tp["envelope"],
+              **{k: v for k, v in tp.items() if k not in paper_te}}  # the parts beyond the paper, when given
         if "envelope" in bp:
             bp = {"deformation": bp["deformation"], "profile": bp["profile"], "thickness": bp["thickness"],
-                  "envelope_halfwidth": bp["envelope"], "lower_bound": bl - 2.0 * bp["envelope"]}
+                  "envelope_halfwidth": bp["envelope"], "lower_bound": bl - 2.0 * bp["envelope"],
+                  **{k: v for k, v in bp.items() if k not in paper_bl}}
     out: dict = {"stage": r.index, "name": n, "kind": r.kind, "ratio": r.ratio, "ratio_after": r.after}
     if r.symbols[0]:
         out["symbols"] = {"transmission_error": r.symbols[0], "backlash": r.symbols[1]}
@@ -259,9 +265,10 @@ def analyze(spec, registry=None) -> Analysis:
 
     reg = registry if registry is not None else build(spec)
     total_te, total_bl = reg.totals()
-    angles: dict = {}
+    extra = reg.backlash_additions()  # drive-level lost motion: in the total, in no stage's share
+    angles: dict = {f"drive_backlash_{k}": v for k, v in extra.items()}
     info: dict = {"total_ratio": reg.train.total_ratio, "deflection_model": spec.stiffness.model}
-    for r, (te_pct, bl_pct) in zip(reg.results, shares(reg.results, total_te, total_bl)):
+    for r, (te_pct, bl_pct) in zip(reg.results, shares(reg.results, total_te, total_bl - sum(extra.values()))):
         n = r.name
         angles[f"{n}_transmission_error"] = r.transmission_error
         angles[f"{n}_backlash"] = r.backlash

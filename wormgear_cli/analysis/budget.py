@@ -1,32 +1,48 @@
-"""The full error budget of a drive: every source as a line at the output, and three totals.
+"""The full error budget of a drive: every source as a line at the output, and its totals.
 
 No I/O.  The lines are the drive's registry (:mod:`wormgear_cli.drive.registry`): its
 periodic sources (the same names, orders, sizes and phases that ``simulate``, ``synth``
-and ``diagnose`` use) and its static terms (each gear stage's tooth deflection, the
+and ``diagnose`` use), its static terms (each gear stage's tooth deflection, the
 paper's deformation parts of Delta phi_cc and Delta phi_wc, and a belt's stretch, each
-divided by the ratios after its stage).
+divided by the ratios after its stage) and its thermal drifts at the stated operating
+temperatures.
 
 Each line: ``source``, ``stage`` (the stage's name: gear / worm / belt ...), ``kind``
 (shaft: once per turn of a shaft; mesh: a tooth-mesh order; belt: once per belt
-revolution; static: load, no order), ``order`` (cycles per output revolution: 1, i_c,
-z1, n_w ...; 0 for static), ``amplitude`` [rad at the output: the largest value of the
-line's curve over a turn, the amplitude for a sinusoid], ``origin`` (spec / grade /
-default), ``phase`` [rad], ``stage_index`` (1-based from the motor), ``stage_kind``,
-``part``.
+revolution; static: load, no order; thermal: a drift at the operating temperatures),
+``order`` (cycles per output revolution: 1, i_c, z1, n_w ...; 0 for static and thermal),
+``amplitude`` [rad at the output: the largest value of the line's periodic part over a
+turn, the amplitude for a sinusoid; a curve's constant mean is no positioning error and
+is reported apart, :attr:`Budget.offsets`], ``origin`` (spec / grade / default), ``phase``
+[rad], ``stage_index`` (1-based from the motor), ``stage_kind``, ``part``.
 
-Combination rules (:class:`Rule`), all for the transmission error at the output:
+Every total is of the transmission error at the output and is an **amplitude**
+(zero-to-peak: the largest departure from the mean position over a turn), the quantity
+the paper's Delta phi_c is; a **range** (peak-to-peak, max - min) is what ISO 230-2's
+E, M, A and B are, and is named so (docs/budget.md, "Amplitudes and ranges").
+
+Combination rules (:class:`Rule`), amplitudes:
 
 * ``linear``: the paper's rule, the sum of every line's maximum, sum_k a_k (a
   bound: every source at its peak at once);
-* ``rss``: the static lines added, the periodic ones root-sum-squared,
-  sum_static a_k + sqrt(sum_periodic a_k^2) (the statistical size when the
-  phases are independent and uniformly random);
+* ``statistical``: the static lines added; the periodic lines root-sum-squared within
+  an order and the orders added: sum_static a_k + sum_o sqrt(sum_{k in o} a_k^2).
+  Sources of one order add as vectors (the rss is the rms of their sum under
+  independent uniform phases, and the median for two); sources of different orders
+  reach their peaks within one turn nearly together, so across orders the peaks add
+  (docs/budget.md gives the derivation and the check against the random-phase peak);
 * ``peak``: the static lines plus the exact largest value, over one output
   revolution, of the phased periodic curve that ``simulate`` draws,
-  sum_static a_k + max_theta sum_periodic c_k(theta, psi_k).
+  sum_static a_k + max_theta sum_periodic (c_k(theta, psi_k) - offset_k);
+* ``rss`` (kept for compatibility, deprecated): the static lines plus the
+  root-sum-square of every periodic line, which under-states the peak of sources of
+  different orders.
 
-rss <= linear and peak <= linear always; peak = linear when every periodic
-line peaks at the same output angle (``simulate --phases aligned-error``).
+And one range: ``range_peak``, max - min over one output revolution of that phased
+periodic curve (the common mode's peak-to-peak, what ISO 230-2's M sees on a dense test).
+
+statistical <= linear, rss <= statistical, peak <= linear always; peak = linear when every
+periodic line peaks at the same output angle (``simulate --phases aligned-error``).
 """
 
 from __future__ import annotations
@@ -41,11 +57,16 @@ import numpy as np
 
 
 class Rule(str, Enum):
-    """How the budget's lines combine into a total (see the module docstring)."""
+    """How the budget's lines combine into a total amplitude (see the module docstring)."""
 
     LINEAR = "linear"
-    RSS = "rss"
+    STATISTICAL = "statistical"
     PEAK = "peak"
+    RSS = "rss"  # deprecated: everything in quadrature
+
+
+#: the budget's line kinds that have no order: added in every rule
+STATIC_KINDS = ("static", "thermal")
 
 
 # an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
@@ -73,20 +94,27 @@ _MIN_PEAK_SAMPLES = 4096
 
 @dataclass(frozen=True)
 class Budget:
-    """The lines and their totals [rad] under each :class:`Rule`."""
+    """The lines and their totals [rad] under each :class:`Rule` (amplitudes), the phased
+    curve's range ``range_peak`` and the constant ``offsets`` ((source, stage, offset [rad]) of
+    curves whose mean is not zero: reported apart, in no total)."""
 
     drive: str
     lines: tuple
     linear: float
     rss: float
     peak: float
+    statistical: float = 0.0
+    range_peak: float = 0.0
+    offsets: tuple = ()
 
     def total(self, rule) -> float:
-        """The total [rad] under ``rule`` (a :class:`Rule` or its value)."""
-        return {Rule.LINEAR: self.linear, Rule.RSS: self.rss, Rule.PEAK: self.peak}[Rule(rule)]
+        """The total amplitude [rad] under ``rule`` (a :class:`Rule` or its value)."""
+        return {Rule.LINEAR: self.linear, Rule.RSS: self.rss, Rule.PEAK: self.peak,
+                Rule.STATISTICAL: self.statistical}[Rule(rule)]
 
     def report(self, unit: str) -> dict:
-        """``{"budget": [...], "total_with_budget": {...}}`` for analyze's JSON (angles in ``unit``)."""
+        """``{"budget": [...], "total_with_budget": {...}}`` for analyze's JSON (angles in ``unit``;
+        ``budget_offsets`` when a curve has a constant mean)."""
         from wormgear_cli.units import to_unit
 
         lin = self.linear
@@ -96,13 +124,46 @@ class Budget:
                   "share_pct": float(100.0 * ln.amplitude / lin) if lin > 0 else 0.0,
                   "stage_index": ln.stage_index, "stage_kind": ln.stage_kind, "part": ln.part}
                  for ln in self.lines]
-        return {"budget": lines,
-                "total_with_budget": {"transmission_error_" + r.value: float(to_unit(self.total(r), unit))
-                                      for r in Rule}}
+        u = lambda x: float(to_unit(x, unit))  # noqa: E731
+        totals = {
+            # the names of schema 2, kept (deprecated): amplitudes; "rss" is the old quadrature rule
+            "transmission_error_linear": u(self.linear), "transmission_error_rss": u(self.rss),
+            "transmission_error_peak": u(self.peak),
+            "transmission_error_amplitude_linear": u(self.linear),
+            "transmission_error_amplitude_statistical": u(self.statistical),
+            "transmission_error_amplitude_peak": u(self.peak),
+            "transmission_error_range_peak": u(self.range_peak),
+        }
+        out = {"budget": lines, "total_with_budget": totals}
+        if self.offsets:
+            out["budget_offsets"] = [{"source": s, "stage": st, "offset": u(v)} for s, st, v in self.offsets]
+        return out
+
+
+def statistical_total(amplitudes, orders, static=0.0):
+    """static + sum over distinct orders of sqrt(sum of the squared amplitudes at that order)  [rad].
+
+    ``amplitudes``: sequence of the periodic lines' amplitudes (numbers, or arrays of sampled
+    drives, all one shape); ``orders``: their orders [cycles per output revolution] (orders equal
+    to 1e-9 relative are one order); ``static``: the static lines' sum.  Vectorised over the
+    amplitudes' shape, so a sampler can call it on arrays (docs/budget.md, "How the lines
+    combine")."""
+    groups: dict[float, object] = {}
+    keys: list[float] = []
+    for a, o in zip(amplitudes, orders):
+        key = next((k for k in keys if abs(k - o) <= 1e-9 * max(abs(k), abs(o), 1.0)), None)
+        if key is None:
+            keys.append(float(o))
+            key = float(o)
+        groups[key] = groups.get(key, 0.0) + np.square(a)
+    total = static
+    for sq in groups.values():
+        total = total + np.sqrt(sq)
+    return total
 
 
 def budget(spec, analysis=None) -> Budget:
-    """Every error source of ``spec`` as a :class:`BudgetLine` and the three totals.
+    """Every error source of ``spec`` as a :class:`BudgetLine` and the totals.
 
     ``analysis``: the spec's :func:`wormgear_cli.analysis.accuracy.analyze` result (computed when
     omitted); its registry gives the lines.
@@ -114,31 +175,41 @@ def budget(spec, analysis=None) -> Budget:
     reg = a.registry
     sources = reg.periodic(all_budget_sources=True)
     all_lines = tuple(
-        BudgetLine(x.name, x.stage, "static", 0.0, float(x.amplitude), x.origin, 0.0, x.stage_index, x.stage_kind,
+        BudgetLine(x.name, x.stage, x.kind, 0.0, float(x.amplitude), x.origin, 0.0, x.stage_index, x.stage_kind,
                    "") if isinstance(x, Static) else
         BudgetLine(x.name, x.stage, x.kind, float(x.order), float(x.peak if x.peak is not None else x.amplitude),
                    x.origin, float(x.phase), x.stage_index, x.stage_kind, x.part)
         for x in reg.lines)
-    static = [ln for ln in all_lines if ln.kind == "static"]
-    periodic = [ln for ln in all_lines if ln.kind != "static"]
+    static = [ln for ln in all_lines if ln.kind in STATIC_KINDS]
+    periodic = [ln for ln in all_lines if ln.kind not in STATIC_KINDS]
     s_static = sum(ln.amplitude for ln in static)
     linear = sum(ln.amplitude for ln in all_lines)
     rss = s_static + math.sqrt(sum(ln.amplitude ** 2 for ln in periodic))
-    peak = s_static + phased_peak(sources)
-    return Budget(a.drive, all_lines, float(linear), float(rss), float(peak))
+    statistical = statistical_total([ln.amplitude for ln in periodic], [ln.order for ln in periodic], s_static)
+    high, low = phased_extremes(sources)
+    offsets = tuple((x.name, x.stage, float(x.offset)) for x in reg.sources if x.offset != 0.0)
+    return Budget(a.drive, all_lines, float(linear), float(rss), float(s_static + high), float(statistical),
+                  float(high - low), offsets)
 
 
 def phased_peak(sources, phases: dict | None = None) -> float:
-    """max over one output revolution of sum_k curve_k(theta, psi_k)  [rad].
+    """max over one output revolution of sum_k (curve_k(theta, psi_k) - offset_k)  [rad]
+    (:func:`phased_extremes`)."""
+    return phased_extremes(sources, phases)[0]
+
+
+def phased_extremes(sources, phases: dict | None = None) -> tuple[float, float]:
+    """(max, min) over one output revolution of the periodic curve sum_k (curve_k(theta, psi_k)
+    - offset_k)  [rad]; max - min is its range (peak-to-peak).
 
     Dense samples (:data:`PEAK_SAMPLES_PER_CYCLE` per cycle of the highest order),
     then a parabola through the best sample and its neighbours.  ``phases``
-    overrides source phases by name [rad].  0 when there are no sources.
+    overrides source phases by name [rad].  (0, 0) when there are no sources.
     """
     phases = phases or {}
     live = [s for s in sources if s.amplitude != 0.0 or (s.peak or 0.0) != 0.0]
     if not live:
-        return 0.0
+        return 0.0, 0.0
     top = max(max(abs(s.order) for s in live), 1.0)
     n = max(_MIN_PEAK_SAMPLES, int(math.ceil(PEAK_SAMPLES_PER_CYCLE * top)))
     step = 2.0 * math.pi / n
@@ -151,17 +222,23 @@ def phased_peak(sources, phases: dict | None = None) -> float:
         sine = getattr(s.curve, "sine", None)
         psi = phases.get(s.name, s.phase)
         if sine is None:
-            others.append((s.curve, psi))
+            others.append((s.curve, psi, s.offset))
         else:
             phasors[sine[1]] = phasors.get(sine[1], 0j) + sine[0] * cmath.exp(1j * psi)
 
     def curve(t):
-        total = sum(c(t, psi) for c, psi in others) if others else np.zeros_like(t)
+        total = sum(c(t, psi) - off for c, psi, off in others) if others else np.zeros_like(t)
         for order, p in phasors.items():
             total = total + abs(p) * np.sin(order * t + cmath.phase(p))
         return total
 
     y = curve(theta)
+    return _refined(curve, theta, y, step), -_refined(lambda t: -curve(t), theta, -y, step)
+
+
+def _refined(curve, theta, y, step) -> float:
+    """The largest sample of ``y`` refined by a parabola through it and its neighbours."""
+    n = y.size
     k = int(np.argmax(y))
     y0, y1, y2 = y[k - 1], y[k], y[(k + 1) % n]
     den = y0 - 2.0 * y1 + y2

@@ -5,9 +5,11 @@ edges of those ranges (a 0.05 mm module on a one-tooth pinion, a 10 mm centre-di
 error, 10^8 N on a worm) take the paper's small-angle models far outside what they describe.
 The commands pass their angles through :func:`check_angles` before writing them: a value that
 is not finite is an error (exit 2, one line); an error or lost motion of more than a full
-turn of the output is one warning line.  Which inputs are implausible, and why, is the
-plausibility checks' business (the spec's validation); this guard only makes sure no such
-number leaves silently.  No I/O.
+turn of the output is impossible for the nominal drive (``strict``: an error, exit 2) and one
+warning line for an ensemble (sweeps and sampled drives, where some points may lie beyond).
+Which inputs are implausible or impossible, and why, is the plausibility checks' business
+(:mod:`wormgear_cli.spec.plausibility`, at load); this guard only makes sure no such number
+leaves silently.  No I/O.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ FULL_TURN = 2.0 * math.pi
 _CHECK = "check modules, teeth, centre distances and loads"
 
 
-def check_angles(values: Mapping[str, object], source: str = "") -> str | None:
+def check_angles(values: Mapping[str, object], source: str = "", strict: bool = False) -> str | None:
     """Refuse non-finite angles; describe absurd ones.
 
     Parameters
@@ -36,6 +38,9 @@ def check_angles(values: Mapping[str, object], source: str = "") -> str | None:
         output states; only the magnitude is checked).
     source : str
         The drive file, for the message.
+    strict : bool
+        The values are the nominal drive's own (analyze, check, simulate): beyond a full turn
+        is an error, not a warning.
 
     Returns
     -------
@@ -46,7 +51,8 @@ def check_angles(values: Mapping[str, object], source: str = "") -> str | None:
     Raises
     ------
     SpecError
-        A value is NaN or infinite (overflow): one line naming the quantity.
+        A value is NaN or infinite (overflow): one line naming the quantity; with ``strict``,
+        also a magnitude beyond a full turn.
     """
     over = []
     where = f"{source}: " if source else ""
@@ -68,5 +74,8 @@ def check_angles(values: Mapping[str, object], source: str = "") -> str | None:
     over.sort(reverse=True)
     named = ", ".join(f"{name} {math.degrees(peak):.4g} deg" for peak, name in over[:3])
     more = f" and {len(over) - 3} more" if len(over) > 3 else ""
-    return (f"{where}{named}{more}: more than a full turn, so the inputs lie far outside what the model "
+    line = (f"{where}{named}{more}: more than a full turn, so the inputs lie far outside what the model "
             f"describes; {_CHECK}")
+    if strict:
+        raise SpecError(line.replace("more than a full turn, so", "more than a full turn, which no drive can have:"))
+    return line

@@ -123,7 +123,8 @@ def components(spec, signals: Signals, phases: dict | None = None,
 
     Keys: each periodic source's name (common mode), ``lost_motion``
     (the -d L/2 term), ``deformation`` (process-load lag and external
-    wind-up), and ``effect:NAME`` for every enabled effect.  ``phases``
+    wind-up), ``thermal`` (the thermal drift at the spec's operating
+    temperatures, when it has one) and ``effect:NAME`` for every enabled effect.  ``phases``
     overrides source phases by source name [rad].  ``effects`` (name ->
     internal parameters) replaces the spec's ``[effects.*]`` when given.
     """
@@ -140,8 +141,11 @@ def components(spec, signals: Signals, phases: dict | None = None,
     for c in reg.clearances:
         lost = lost + c.amount
     comp = reg.compliance
-    out["lost_motion"] = -d * lost / 2.0
+    out["lost_motion"] = -d * np.maximum(lost, 0.0) / 2.0  # a mesh warmed shut binds: no negative clearance
     out["deformation"] = -d * comp.process_lag + comp.per_Nm * signals.load
+    drift = sum(x.amplitude for x in reg.statics if x.kind == "thermal")
+    if drift:  # the thermal drift at the spec's operating temperatures, both directions alike
+        out["thermal"] = np.full(signals.theta.shape, drift)
     from wormgear_cli.drive.train import drive_geometry
     from wormgear_cli.physics.effects import EFFECTS  # the catalogue: not needed by ``analyze``
 

@@ -295,11 +295,13 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
     Keys given in ``effects`` override the spec's for the same effect.
     Missing optional keys take their catalogue default; a missing
     ``thermal_backlash.centre_distance_um_per_K`` takes the value predicted
-    from the spec's materials; any other missing required key, a value
+    from the spec's materials, a missing ``thermal_drift.arcsec_per_K`` the
+    worm's axial growth (when the spec gives the thrust-bearing distance);
+    any other missing required key, a value
     outside its physical range or an unknown name raises UsageError.
     Returns name -> {key: value} in catalogue units, in catalogue order.
     """
-    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K, predicted_drift_arcsec_per_K
 
     merged: dict[str, dict] = {}
     if include_spec:
@@ -329,6 +331,8 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
                 v = p.default
             elif name == "thermal_backlash" and p.key == "centre_distance_um_per_K":
                 v = predicted_centre_distance_um_per_K(spec)
+            elif name == "thermal_drift" and p.key == "arcsec_per_K" and predicted_drift_arcsec_per_K(spec):
+                v = predicted_drift_arcsec_per_K(spec)
             else:
                 raise UsageError(f"--effect {name}: missing {p.key} (a number in [{p.lo:g}, {p.hi:g}] {p.unit})")
             if not (math.isfinite(v) and p.lo <= v <= p.hi):

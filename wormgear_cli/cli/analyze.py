@@ -20,6 +20,7 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    load_drive,
     output_format,
     render,
     say,
@@ -46,16 +47,18 @@ def analyze(
     """
     from wormgear_cli.analysis.accuracy import analyze as run
     from wormgear_cli.output.analyze import document
-    from wormgear_cli.spec.loader import load_spec
-
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     result = run(spec)
-    warn_if_absurd(result.angles, drive)
+    warn_if_absurd(result.angles, drive, strict=True)
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     if fmt == "csv":
+        from wormgear_cli.analysis.figures import FIGURE_COLUMNS, figures
+        from wormgear_cli.units import to_unit
+
         m = result.metrics(unit)
-        cols = ["drive", "unit", *result.columns[0], *result.columns[1]]
+        m.update({k: float(to_unit(v, unit)) for k, v in figures(spec, result).items()})  # the sign-off figures
+        cols = ["drive", "unit", *result.columns[0], *result.columns[1], *FIGURE_COLUMNS]
         emit(csv_text(cols, [[result.drive, unit, *(m[c] for c in cols[2:])]]), output, [drive])
         return
     report = document(spec, result, unit)
@@ -85,9 +88,15 @@ def _budget_tables(r: dict, unit: str) -> list:
         bt.add_row(ln["source"], ln["kind"], f"{ln['order']:g}", a(ln["amplitude"]), ln["origin"],
                    f"{ln['share_pct']:.1f} %")
     t = r["total_with_budget"]
-    note = escape(f"total_with_budget: linear sum {a(t['transmission_error_linear'])}, root-sum-square "
-                  f"{a(t['transmission_error_rss'])}, phased peak {a(t['transmission_error_peak'])} {unit} "
-                  "(docs/budget.md); the paper's total above is unchanged")
+    note = escape(f"total_with_budget, TE amplitude (zero to peak): linear sum "
+                  f"{a(t['transmission_error_amplitude_linear'])}, statistical "
+                  f"{a(t['transmission_error_amplitude_statistical'])}, phased peak "
+                  f"{a(t['transmission_error_amplitude_peak'])}; range (peak to peak) of the phased curve "
+                  f"{a(t['transmission_error_range_peak'])} {unit} (docs/budget.md); the paper's total above is "
+                  "unchanged")
+    for off in r.get("budget_offsets", ()):
+        note += escape(f"\n{off['source']}: its curve's constant mean {a(off['offset'])} {unit} is no positioning "
+                       "error (a shift of every position) and is in no total")
     # the values in the keys' own unit (_mm), as the spec writes them
     vt = _table("values used", ("key", "value [mm]", "origin"), left=(0, 2))
     for v in r["values_used"]:

@@ -266,15 +266,28 @@ def say(line: str) -> None:
         pass
 
 
-def warn_if_absurd(angles: dict, source, unit: str = "rad") -> None:
+def load_drive(path):
+    """Load a drive spec and say its plausibility warnings on stderr, one ``warning:`` line each
+    (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2)."""
+    from wormgear_cli.spec.loader import load_spec
+
+    spec = load_spec(path)
+    for w in spec.warnings:
+        say(f"warning: {w}")
+    return spec
+
+
+def warn_if_absurd(angles: dict, source, unit: str = "rad", strict: bool = False) -> None:
     """The guard on every result: angles (name -> value or array, in ``unit``) that are not
     finite stop the run (one error line, exit 2); magnitudes beyond a full turn are one
-    warning line (:func:`wormgear_cli.analysis.sanity.check_angles`)."""
+    warning line, or with ``strict`` (the nominal drive's own figures) an error
+    (:func:`wormgear_cli.analysis.sanity.check_angles`)."""
     from wormgear_cli.analysis.sanity import check_angles
     from wormgear_cli.units import RAD_PER_UNIT
 
     scale = RAD_PER_UNIT[unit]
-    warning = check_angles({k: v if scale == 1.0 else _scaled(v, scale) for k, v in angles.items()}, str(source))
+    warning = check_angles({k: v if scale == 1.0 else _scaled(v, scale) for k, v in angles.items()}, str(source),
+                           strict)
     if warning is not None:
         say(f"warning: {warning}")
 

@@ -20,6 +20,7 @@ from wormgear_cli.cli.common import (
     emit,
     fmt_angle,
     json_text,
+    load_drive,
     output_format,
     render,
 )
@@ -47,7 +48,7 @@ def compare(
     """Drives side by side: totals, error budget and yield, and each one's difference to the first.
 
     For each drive the paper's total TE and backlash, the full budget's TE
-    totals (linear, rss, peak) and every budget line at the output, as
+    totals (linear, statistical, peak) and every budget line at the output, as
     analyze computes them; with --samples the yield of each [requirements]
     limit and of all together, as tolerance estimates it.  Differences are
     each drive minus the first (yields in percentage points).
@@ -55,7 +56,6 @@ def compare(
     Example: wormgear compare configs/mch50.toml configs/rotary-table-precision.toml --samples 2e4
     """
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.workflows.compare import MIN_DRIVES, Options, compare, csv_rows
 
     fmt = output_format(format, output)
@@ -63,7 +63,7 @@ def compare(
     if len(drives) < MIN_DRIVES:
         raise UsageError(f"compare needs at least {MIN_DRIVES} drive specs, got {len(drives)}: "
                          f"wormgear compare A.toml B.toml")
-    specs = [load_spec(d) for d in drives]
+    specs = [load_drive(d) for d in drives]
     options = Options(unit=unit, samples=samples, seed=seed)
     total = (samples or 0) * len(specs)
     with Progress(total, total * _SECONDS_PER_SAMPLE, "yield") as bar:

@@ -20,6 +20,7 @@ from wormgear_cli.cli.common import (
     fmt_angle,
     jobs_count,
     json_text,
+    load_drive,
     no_color,
     output_format,
     render,
@@ -107,7 +108,6 @@ def diagnose(
     from wormgear_cli.errors import UsageError
     from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.spec.filekind import kind_of_file
-    from wormgear_cli.spec.loader import load_spec
 
     if kind_of_file(drive) == "table" and kind_of_file(data) == "drive":
         raise UsageError(f"the arguments look swapped: {drive} is a measurement and {data} a drive spec; diagnose "
@@ -116,7 +116,7 @@ def diagnose(
     fmt = output_format(format, output)
     inputs = (drive, data)
     output = _check_paths(drive, data, output, write_spec, plot)
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     check_rows_memory(data, DIAGNOSE_BYTES_PER_ROW, "diagnose")
     meas = read_measurement(data, options=read_options(column_map, error_unit, angle_unit, input_format, session,
                                                        pixel_scale, dec_deg, guide_rate))

@@ -42,7 +42,7 @@ def grade(
     (ISO 1328-1:2013, rounded as its 5.2.3) and the radial composite F_i'' and f_i''
     of ISO 1328-2:1997 for the same grade where that standard has it (4..12), in um.
     A gear outside ISO 1328-1's scope is an error (exit 2); outside ISO 1328-2's scope
-    its values are extrapolated and a warning goes to stderr.
+    the values of its nearest range are given and a warning goes to stderr.
 
     Example: wormgear grade --grade 6 --module-mm 2 --diameter-mm 100 --face-width-mm 20
     """

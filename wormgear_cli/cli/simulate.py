@@ -22,6 +22,7 @@ from wormgear_cli.cli.common import (
     emit,
     jobs_count,
     json_text,
+    load_drive,
     output_format,
     warn_if_absurd,
 )
@@ -105,7 +106,6 @@ def simulate(
 
     from wormgear_cli.analysis.synth import parse_effects
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.workflows import simulate as report
 
     unit = getattr(unit, "value", unit)
@@ -123,7 +123,7 @@ def simulate(
 
         check_plot_path(plot)
     requested = parse_effects(effect)
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
     from wormgear_cli.files import refuse_same_outputs
@@ -266,7 +266,6 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
         synthesize,
     )
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
 
     for name, value in (("--noise-arcsec", o.noise_arcsec), ("--run-noise-arcsec", o.run_noise_arcsec),
                         ("--offset-arcsec", o.offset_arcsec), ("--dwell-s", o.dwell_s),
@@ -287,7 +286,7 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
 
     for p in outs:
         refuse_input(p, [drive], "name")
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     the_plan = Plan(kind=o.plan, targets=o.targets, points=o.points, runs=o.runs, revolutions=o.revs,
                     dwell_s=o.dwell_s, jitter=o.jitter, cycles=o.cycles, cycle_gap_s=o.cycle_gap_s)
     _check_synth_memory(the_plan)

@@ -30,6 +30,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    load_drive,
     output_file,
     output_format,
     render,
@@ -105,7 +106,6 @@ def sweep(
     from wormgear_cli.analysis import sweep as core
     from wormgear_cli.analysis import sweep_limits as limits
     from wormgear_cli.plots import check_plot_path
-    from wormgear_cli.spec.loader import load_spec
 
     fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
@@ -138,7 +138,7 @@ def sweep(
         _require_matplotlib()
     total = n_i * n_l
     start, stop = core.shard_bounds(total, *k_n) if k_n else (0, total)
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     st = core.spur_stage(spec, stage)  # a drive without a spur stage: exit 2 before anything is written
     parameters = {"i": _range_key(i_range), "l_mm": _range_key(l_range), "hold": getattr(hold, "value", hold),
                   "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
@@ -156,9 +156,8 @@ def _param_command(drive: Path, params: list[str], fmt: str, unit: str, output, 
     """sweep --param: the grid of spec keys, sized and checked before anything is built."""
     from wormgear_cli.analysis import sweep as core
     from wormgear_cli.analysis import sweep_limits as limits
-    from wormgear_cli.spec.loader import load_spec
 
-    spec = load_spec(drive)  # the keys are the drive's (stage.N.KEY by its stages' kinds)
+    spec = load_drive(drive)  # the keys are the drive's (stage.N.KEY by its stages' kinds)
     axes = [core.parse_param(p, spec) for p in params]
     limits.check_param_size(axes, fmt, k_n)
     if plot is not None:

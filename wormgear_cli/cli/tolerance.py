@@ -23,6 +23,7 @@ from wormgear_cli.cli.common import (
     is_stdout,
     jobs_count,
     json_text,
+    load_drive,
     output_file,
     output_format,
     render,
@@ -38,9 +39,10 @@ _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, 
 
 LABELS = {"total_transmission_error": "total TE", "total_backlash": "backlash", "iso230_E": "ISO E",
           "iso230_B": "ISO B", "iso230_M": "ISO M", "iso230_A": "ISO A", "budget_linear": "budget lin",
-          "budget_rss": "budget rss"}
+          "budget_statistical": "budget stat", "budget_rss": "budget rss"}
 SHORT = {"total_transmission_error": "TE", "total_backlash": "BL", "iso230_E": "E", "iso230_B": "B",
-         "iso230_M": "M", "iso230_A": "A", "budget_linear": "lin", "budget_rss": "rss"}
+         "iso230_M": "M", "iso230_A": "A", "budget_linear": "lin",
+         "budget_statistical": "stat", "budget_rss": "rss"}
 
 
 class MetricSet(str, Enum):
@@ -112,7 +114,6 @@ def tolerance(
     from dataclasses import replace
 
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
 
     fmt = output_format(format, output)
@@ -121,7 +122,7 @@ def tolerance(
     part = shard_part(shard)
     k_n = (part.k, part.n) if part is not None else None
     _check_usage(drive, fmt, output, plot, summarize, target_yield, sharded=k_n is not None)
-    spec = load_spec(drive)
+    spec = load_drive(drive)
     n_rows = None
     if summarize is not None:
         metric_set = (report.read_npy_header if report.is_npy(summarize) else report.read_header)(summarize).metric_set
@@ -317,6 +318,9 @@ def _tables(doc: dict, target) -> list:
                      f"{doc['shard']['stop_sample'] - 1}")
     for key, why in doc.get("not_sampled", {}).items():
         notes.append(f"{key.replace('requirements.', '')}: no yield, {why}")
+    loose = [short_key(k) for k, v in doc.get("varied", {}).items() if not v.get("inspected", True)]
+    notes.append("laws: inspected, truncated at the tolerance" + (f", except (uninspected, the whole law): "
+                                                                  f"{', '.join(loose)}" if loose else ", every key"))
     notes.append("corner: every tolerance at its limit (analyze; ISO figures: phases aligned)")
     notes.append("RSS: root-sum-square of the single contributions")
     out += [escape(n) for n in notes]

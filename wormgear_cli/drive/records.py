@@ -61,7 +61,10 @@ class Source(NamedTuple):
     is max(c + a sin(order theta + phase), 0) s [rad at the output] (``clipped`` False: c >= |a|,
     never negative, taken as it is) (None: no lost motion);
     ``curve_at(value, theta, phase)`` -> [rad]: the curve of a sampled drive for a source that is
-    not a sinusoid (None: ``size(value) sin(order theta + phase)``)."""
+    not a sinusoid (None: ``size(value) sin(order theta + phase)``);
+    ``offset``: the mean of ``curve`` over a turn [rad] (0 for a sinusoid; the paper's spur curve
+    has one: a constant shift of every position, no positioning error), so ``peak`` is the
+    largest value of ``curve - offset``, the periodic part the budget counts."""
 
     name: str
     phase_path: str
@@ -83,11 +86,13 @@ class Source(NamedTuple):
     tier: int = 0
     lost_size: Callable | None = None
     curve_at: Callable | None = None
+    offset: float = 0.0
 
 
 class Static(NamedTuple):
     """A static transmission-error term at the output (tooth deflection, belt stretch under the
-    process load) [rad], with the same identifying fields as :class:`Source`."""
+    process load; ``kind`` "static") or a thermal drift at the operating temperatures (``kind``
+    "thermal") [rad], with the same identifying fields as :class:`Source`."""
 
     name: str
     amplitude: float
@@ -96,12 +101,17 @@ class Static(NamedTuple):
     stage_kind: str
     origin: str
     size_paths: tuple = ()
+    kind: str = "static"
 
 
 class Clearance(NamedTuple):
     """A constant lost motion at the output [rad] not tied to a periodic source (a belt's tooth
-    clearance, the residual of an anti-backlash arrangement); ``size(value)`` -> [rad] the amount of
-    a sampled drive from ``value(stage_key)`` (None: not toleranced)."""
+    clearance, the residual of an anti-backlash arrangement, a worm's thrust-bearing play, a
+    thermal change of a clearance (negative: it closes), the wind-up of a friction torque;
+    ``stage_index`` 0 and ``stage`` "drive" for a drive-level term); ``size(value)`` -> [rad] the
+    amount of a sampled drive from ``value(stage_key)`` (None: not toleranced).  ``origin``: spec /
+    default; ``in_stage``: already part of the stage's backlash (its :class:`StageResult`), else an
+    addition to the drive's total."""
 
     name: str
     amount: float
@@ -110,6 +120,8 @@ class Clearance(NamedTuple):
     stage_kind: str
     size_keys: tuple = ()
     size: Callable | None = None
+    origin: str = "spec"
+    in_stage: bool = True
 
 
 class Compliance(NamedTuple):

@@ -47,12 +47,18 @@ class Registry(NamedTuple):
         return [s for s in self.sources if all_budget_sources or s.tier == 0 or s.amplitude != 0.0]
 
     def totals(self) -> tuple[float, float]:
-        """(TE, backlash) at the output [rad]: sum_h value_h / O_h, added from the output back."""
+        """(TE, backlash) at the output [rad]: sum_h value_h / O_h, added from the output back, and the
+        drive-level lost motion (:meth:`backlash_additions`)."""
         te = bl = 0.0
         for r in reversed(self.results):
             te = te + r.transmission_error / r.after
             bl = bl + r.backlash / r.after
-        return te, bl
+        return te, bl + sum(self.backlash_additions().values())
+
+    def backlash_additions(self) -> dict:
+        """name -> lost motion at the output [rad] that belongs to no stage (the wind-up of a friction
+        torque through the whole train's compliance)."""
+        return {c.name: c.amount for c in self.clearances if not c.in_stage}
 
     def result(self, kind: str) -> StageResult | None:
         """The last stage of kind ``kind`` (the legacy form's gear or worm stage), or None."""
@@ -94,6 +100,10 @@ def build(spec) -> Registry:
         clears += cl
         keyed += [((x.tier, n - s.index, k), x) for k, x in enumerate(src)]
         keyed += [((0, n - s.index, 100 + k), x) for k, x in enumerate(st)]
+    friction = getattr(spec.drive, "friction_torque", None)
+    if friction:  # reverses with the motion: the train winds up by T_f C_out each way
+        clears.append(Clearance("friction_windup", 2.0 * friction * per_nm, "drive", 0, "drive", origin="spec",
+                                 in_stage=False))
     keyed.sort(key=lambda item: item[0])
     lines = _unique_names([x for _, x in keyed])
     sources = tuple(x for x in lines if isinstance(x, Source))

@@ -6,7 +6,9 @@ the gear shaft (:mod:`wormgear_cli.physics.spur`), by ``kinematics``:
 
 * ``paper``: Delta phi_cc(phi) = (R1+R2)/(2R2) F(l, phi) + delta1 sin(alpha + lambda1)/R2 at its
   maximum over the pinion angle phi; Delta phi_ch = 2 Delta C1 / (m1 z1) with
-  Delta C1 = 2 Delta e tan(alpha) |sin phi| + 2 delta1.
+  Delta C1 = 2 Delta e tan(alpha) |sin phi| + 2 delta1.  The stage's TE is the paper's figure (the
+  curve's maximum); its source in the budget is the curve's periodic part (the maximum less the
+  curve's mean, ``Source.offset``, which shifts every position alike and is reported apart).
 * ``involute``: an eccentricity e gives TE e / r_b2 at the pinion's order, a centre-distance error
   Delta a a backlash 2 Delta a tan(alpha) and no TE, the thickness allowances add to the backlash.
 
@@ -72,9 +74,17 @@ def totals(stage, deflection, value=None, te_max=None) -> tuple:
         inv = model.involute_stage(r2, alpha, de, v("centre_distance_error_mm"), deflection,
                                    v("gear.thickness_deviation_mm") + v("pinion.thickness_deviation_mm"))
         te, bl, bl_def = inv.te_eccentricity + inv.te_deformation, inv.backlash, inv.backlash_deformation
-    if stage.anti_backlash == "none":
-        return te, bl
-    return te, 0.0 + bl_def + float(stage.residual_lost_motion)
+    if stage.anti_backlash != "none":
+        bl = 0.0 + bl_def + float(stage.residual_lost_motion)
+    return te, bl + shaft_windup(stage)
+
+
+def shaft_windup(stage) -> float:
+    """The gear shaft's wind-up under the gear's torque F_N r_b2, both ways [rad at the gear shaft]:
+    2 F_N r_b2 / k_s (0 without a torsional stiffness k_s)."""
+    if not stage.shaft_stiffness:
+        return 0.0
+    return 2.0 * stage.normal_force * base_radius(stage) / 1000.0 / stage.shaft_stiffness
 
 
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
@@ -100,10 +110,11 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
     if stage.anti_backlash == "none":
         bl_parts = {"eccentricity": float(bl - bl_def - bl_thk), "deformation": float(bl_def),
                     "thickness": float(bl_thk)}
-        backlash = float(bl)
     else:
         bl_parts = {"deformation": float(bl_def), "residual": float(stage.residual_lost_motion)}
-        backlash = float(totals(stage, deflection)[1])
+    if stage.shaft_stiffness:  # the gear shaft's wind-up under the gear's torque F_N r_b2, both ways
+        bl_parts["shaft_compliance"] = shaft_windup(stage)
+    backlash = float(totals(stage, deflection)[1])
     info = {
         "kinematics": stage.kinematics,
         "line_load_N_per_mm": stiffness.line_load(spec, stage),
@@ -146,8 +157,10 @@ def _eccentricity_source(stage, t, origin) -> Source:
         def lost(theta, phase):
             return de * math.tan(alpha) * (1.0 + np.sin(o_p * theta + phase)) / r2 / after
 
-        def size(v):  # the curve's peak as a function of Delta e
-            return model.gear_te_max_fast(r1, r2, v("eccentricity_mm"), alpha, 0.0)[0] / after
+        def size(v):  # the periodic part's peak (the curve less its mean) as a function of Delta e
+            e = v("eccentricity_mm")
+            return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
+                / after
 
         def curve_at(v, theta, phase):  # the curve of sampled drives (Delta e an array)
             return model.gear_kinematic_te(o_p * theta + phase, r1, r2, v("eccentricity_mm"), alpha) / after
@@ -157,12 +170,14 @@ def _eccentricity_source(stage, t, origin) -> Source:
             return c, c, 1.0, False
 
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
-        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after
+        offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
+        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset
     else:
         # involute: e / r_b at the pinion's order, i.e. e / r_b2 at the gear (models.gear.involute_stage);
         # the static part of the lost motion (centre distance, thickness allowances) is constant
         r_b = base_radius(stage)
         amp = peak = de / r_b / after
+        offset = 0.0
         curve = sine(amp, o_p)
         static = (2.0 * stage.centre_distance_error * math.tan(alpha)
                   + stage.gear.thickness_deviation + stage.pinion.thickness_deviation)
@@ -186,7 +201,7 @@ def _eccentricity_source(stage, t, origin) -> Source:
     return Source("gear_eccentricity", stage.paths["eccentricity_phase_deg"], o_p, amp, stage.eccentricity_phase,
                   curve, lost if lost_clear else None, stage.name, "shaft", tuple(stage.paths[k] for k in keys), peak,
                   stage.index, "spur", "pinion", origin(stage, keys), keys, size, 0,
-                  lost_size if lost_clear else None, curve_at)
+                  lost_size if lost_clear else None, curve_at, offset)
 
 
 def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> tuple[list, list, list]:
@@ -231,9 +246,14 @@ def sources(spec, stage, t, deflection: float, result: StageResult, origin) -> t
 def compliance(spec, stage, t, deflection: float) -> tuple[float, float]:
     """(process lag, wind-up per N m of output torque) at the output: paper, delta1 on the pitch arc
     (its Delta phi_ch); involute, along the line of action, 1 / r_b2; the gear's torque T / A gives the
-    normal force T / (A r_b2) (ISO 6336-1's c' held at the spec's load)."""
+    normal force T / (A r_b2) (ISO 6336-1's c' held at the spec's load); with the gear shaft's
+    torsional stiffness k_s its wind-up adds (1 / (k_s O^2) at the output)."""
     after = t.after(stage)
     r_b = base_radius(stage)
     angle_per_mm = (1.0 / radii(stage)[1] if stage.kinematics == "paper" else 1.0 / r_b) / after
     unit = stiffness.deflection(spec, stage, 1.0, linear_at_spec_load=True)
-    return float(deflection * angle_per_mm), float(unit * (1000.0 / after / r_b) * angle_per_mm)
+    lag, per_nm = float(deflection * angle_per_mm), float(unit * (1000.0 / after / r_b) * angle_per_mm)
+    if stage.shaft_stiffness:  # the gear shaft: T / (k A) per direction, 1 / (k A^2) per N m at the output
+        k = stage.shaft_stiffness
+        lag, per_nm = lag + stage.normal_force * r_b / 1000.0 / k / after, per_nm + 1.0 / (k * after * after)
+    return lag, per_nm

@@ -7,8 +7,13 @@ the drive-level ``[stiffness]`` factors and ``[materials]`` moduli apply to ever
 * ``iso6336``: delta = F_t / (b c') with ISO 6336-1's single stiffness c' = c'_th C_M C_R C_B
   (E / E_steel).  Spur: c'_th of the pair (z_pinion, z_gear), F_t = F_N cos(alpha), E = the spur
   gears' modulus.  Worm (no standard worm-mesh stiffness exists): the wheel as a gear of
-  z / cos^3(lambda) teeth against a rack, F_t = F_N cos(alpha_n) cos(lambda), E = 2 E_worm E_wheel /
-  (E_worm + E_wheel).  Below a line load F_t K_A / b of 100 N/mm c' is scaled by
+  z / cos^3(lambda) teeth against a rack (the worm in its axial section), F_t = F_N cos(alpha_n)
+  cos(lambda), E = 2 E_worm E_wheel / (E_worm + E_wheel).  Which slot of q' the rack takes: ISO
+  6336-1's fit is written for a pinion (z_n1, the member of fewer teeth) and a wheel (z_n2), and the
+  standard treats a mating member of unbounded tooth count (an internal gear) by setting z_n2 to
+  infinity; so the rack takes the wheel's slot and the worm wheel the pinion's,
+  q' = C1 + C2 / z_n,wheel (the other way round, C3 / z_n,wheel, gives a 3-7 % softer mesh for
+  z = 30..90).  Below a line load F_t K_A / b of 100 N/mm c' is scaled by
   ((F_t K_A / b) / 100)^0.25 (ISO 6336-1:2006 clause 9, method B).
 * ``empirical``: the paper's delta = A1 F_N / ((eps + 1)^B (lambda2 + 1)^C E b).  The contact ratio
   eps is ``[stiffness] contact_ratio`` when given, else a spur stage's own standard eps_alpha and,
@@ -66,7 +71,8 @@ def single_stiffness(spec, stage) -> float:
     if stage.kind == "spur":
         c_th = deformation.iso6336_theoretical_stiffness(stage.pinion.teeth, stage.gear.teeth)
     else:
-        c_th = deformation.iso6336_theoretical_stiffness(np.inf, stage.wheel.teeth / math.cos(stage.lead_angle) ** 3)
+        # the wheel in the pinion's slot (z_n1), the worm as a rack in the wheel's (z_n2 = infinity): module docstring
+        c_th = deformation.iso6336_theoretical_stiffness(stage.wheel.teeth / math.cos(stage.lead_angle) ** 3, np.inf)
     return deformation.iso6336_single_stiffness(c_th, st.iso_cm, st.iso_cr, st.iso_cb, 0.0, modulus(spec, stage))
 
 

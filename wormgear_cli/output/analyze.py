@@ -29,7 +29,8 @@ LISTED_STAGE_KEYS = {
 def values_used(spec) -> list:
     """``[{"key", "value_um", "origin"}]`` of the tolerances the model reads (origin: spec / grade /
     default), keyed by their TOML path: the parts' tolerances stage by stage from the output back,
-    then the assembly's (a spur stage's centre distance and eccentricity)."""
+    then the assembly's (a spur stage's centre distance and eccentricity: the eccentricity the stage's
+    kinematics uses, under the involute reading 0 unless the file states one)."""
     from wormgear_cli.spec.stages import record_values
 
     back = spec.stages[::-1]
@@ -38,9 +39,10 @@ def values_used(spec) -> list:
         for stage in back:
             values = record_values(stage)
             for key in LISTED_STAGE_KEYS[stage.kind][group]:
-                origin = stage.origins.get(key, "default")
-                if key == "eccentricity_mm" and origin == "default":  # defaults to the centre-distance error
-                    origin = "spec" if stage.origins.get("centre_distance_error_mm") == "spec" else origin
-                out.append({"key": stage.paths[key], "value_um": round(float(values[key]) * 1000.0, 6),
-                            "origin": origin})
+                origin, value = stage.origins.get(key, "default"), values[key]
+                if key == "eccentricity_mm":  # the Delta e the kinematics uses (involute: only a stated one)
+                    value = stage.model_eccentricity
+                    if origin == "default" and stage.kinematics == "paper":  # the paper's: the centre-distance error
+                        origin = "spec" if stage.origins.get("centre_distance_error_mm") == "spec" else origin
+                out.append({"key": stage.paths[key], "value_um": round(float(value) * 1000.0, 6), "origin": origin})
     return out

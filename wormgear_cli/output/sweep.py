@@ -263,15 +263,17 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
 def param_columns(axes, spec=None) -> list:
     """CSV/JSON columns of a --param sweep: the keys, then every analyze metric of ``spec``'s train (its
     CSV columns: :attr:`~wormgear_cli.analysis.accuracy.Analysis.columns`; without ``spec``, a worm +
-    spur drive's)."""
+    spur drive's), then the sign-off figures (:data:`~wormgear_cli.analysis.figures.FIGURE_COLUMNS`:
+    the budget's totals and the ISO 230-2 figures, as analyze's CSV)."""
     from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
+    from wormgear_cli.analysis.figures import FIGURE_COLUMNS
 
     if spec is None or tuple(s.kind for s in spec.stages) == ("worm", "spur"):
-        return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS)
+        return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS) + list(FIGURE_COLUMNS)
     from wormgear_cli.analysis.accuracy import analyze
 
     angle, info = analyze(spec).columns  # names of the stages' parts: the same at every point of the grid
-    return [ax.key for ax in axes] + list(angle) + list(info)
+    return [ax.key for ax in axes] + list(angle) + list(info) + list(FIGURE_COLUMNS)
 
 
 def stage_te_column(spec) -> str:
@@ -299,10 +301,16 @@ def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Pro
                 progress(b - a)
             yield from rows
         return
+    from wormgear_cli.analysis.figures import figures
+    from wormgear_cli.spec.loader import with_values
+
     columns = param_columns(axes, spec)
     n = len(axes)
+    keys = [ax.key for ax in axes]
     for values, result in core.param_rows(spec, axes, start, stop, progress=progress):
         m = result.metrics(unit)
+        m.update({k: float(to_unit(v, unit)) for k, v in figures(with_values(spec, dict(zip(keys, values))),
+                                                                result).items()})
         yield list(values) + [m[c] for c in columns[n:]]
 
 
@@ -321,8 +329,15 @@ def param_csv(spec, axes, start: int, stop: int, unit: str, progress: Progress =
     yield csv_text(columns, batch, header=False)
 
 
-def _best_row(columns, rows) -> int:
-    j = columns.index("total_transmission_error")
+def _lowest(rows, j: int, unit: str, where: str) -> str:
+    """A summary cell: the lowest value of column ``j`` and where, or that every point gives it."""
+    low = rows[min(range(len(rows)), key=lambda q: rows[q][j])][j]
+    same = len(rows) > 1 and all(fmt_angle(r[j], unit) == fmt_angle(low, unit) for r in rows)
+    return f"{fmt_angle(low, unit)} {unit} at {'every point' if same else where}"
+
+
+def _best_row(columns, rows, column: str = "total_transmission_error") -> int:
+    j = columns.index(column)
     return min(range(len(rows)), key=lambda q: rows[q][j])
 
 
@@ -336,7 +351,8 @@ def param_json(spec, axes, rows: list, unit: str, shard, start: int, stop: int) 
         doc["shard"] = _shard_doc(shard, start, stop, core.param_size(axes))
     elif rows:
         doc["summary"] = {"points": len(rows),
-                          "best": {"total_transmission_error": dict(zip(columns, rows[_best_row(columns, rows)]))}}
+                          "best": {c: dict(zip(columns, rows[_best_row(columns, rows, c)]))
+                                   for c in ("total_transmission_error", "budget_amplitude_statistical", "iso230_A")}}
     return doc
 
 
@@ -363,6 +379,10 @@ def param_tables(spec, axes, rows: list, unit: str) -> list:
         best = ", ".join(f"{key} = {rows[k][n]:g}" for n, key in enumerate(keys))
         b = Table("summary", [Column("what"), Column("value")], show_header=False)
         b.add_row("points", str(len(rows)))
-        b.add_row("lowest total TE", f"{fmt_angle(rows[k][j], unit)} {unit} at {best}")
+        b.add_row("lowest total TE", _lowest(rows, j, unit, best))
+        for what, col in (("lowest budget TE", "budget_amplitude_statistical"), ("lowest ISO A", "iso230_A")):
+            k, j = _best_row(columns, rows, col), columns.index(col)
+            where = ", ".join(f"{key} = {rows[k][q]:g}" for q, key in enumerate(keys))
+            b.add_row(what, _lowest(rows, j, unit, where))
         out.append(b)
     return out

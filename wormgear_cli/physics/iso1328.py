@@ -28,9 +28,10 @@ geometric means of the standard's module and diameter ranges:
 * total radial composite      F_i'' = (3.2 m + 1.01 sqrt(d) + 6.4) 2^(0.5 (Q - 5))
 * tooth-to-tooth composite    f_i'' = (2.96 m + 0.01 sqrt(d) + 0.8) 2^(0.5 (Q - 5))
 
-Scope: 0.2 <= m_n <= 10 mm, 5 <= d <= 1000 mm.  Outside it the nearest range
-is extrapolated with the gear's own m and d, and :func:`radial_composite`
-reports a warning.
+Scope: 0.2 <= m_n <= 10 mm, 5 <= d <= 1000 mm.  Outside it the formulas are not
+extrapolated: the gear takes the nearest range's geometric mean (the end range:
+0.2..0.5 or 6..10 mm, 5..20 or 560..1000 mm), i.e. the tolerance of the nearest
+size the standard covers, and :func:`radial_composite` reports a warning saying so.
 
 Check value (ISO 1328-1:2013 worked example, d = 100 mm, m = 2 mm, b = 20 mm,
 A = 6): f_pT 8.5, F_pT 27, F_aT 11, F_rT 24 um.  Second check (hand calculation,
@@ -61,8 +62,8 @@ class ValidityRange:
 
     ``name``: parameter (``module``, ``diameter``, ``face_width``, ``teeth``);
     ``lo``/``hi`` in ``unit``; ``on_violation``: ``"error"`` where the standard
-    does not apply outside the range, ``"warning"`` where its formulas are
-    merely extrapolated.
+    does not apply outside the range, ``"warning"`` where the nearest range's
+    value is used instead.
     """
 
     name: str
@@ -86,7 +87,7 @@ PART1_SCOPE = (
     ValidityRange("face_width", 4.0, 1200.0, "mm", "error"),
     ValidityRange("teeth", 5.0, 1000.0, "", "error"),
 )
-#: ISO 1328-2:1997 scope; outside it the formulas are extrapolated -> warning
+#: ISO 1328-2:1997 scope; outside it the nearest range's value is used -> warning
 PART2_SCOPE = (
     ValidityRange("module", 0.2, 10.0, "mm", "warning"),
     ValidityRange("diameter", 5.0, 1000.0, "mm", "warning"),
@@ -127,7 +128,7 @@ class RadialComposite:
     """ISO 1328-2:1997 radial composite tolerances [um] and the range means used.
 
     ``warnings``: one sentence per parameter outside the standard's scope
-    (the formulas extrapolated)."""
+    (the nearest range's mean used instead of the gear's own value)."""
 
     grade: int
     F_i2T: float
@@ -218,6 +219,27 @@ def flank_tolerances(grade: int, module: float, diameter: float, face_width: flo
                            r(f_hb), r(f_fb), r(math.hypot(f_hb, f_fb)), r(0.9 * f_p))
 
 
+#: the coarsest accuracy used as a plausibility scale: one class beyond ISO 1328-1's coarsest (11),
+#: the coarsest grade of ISO 1328-2 (12)
+SCALE_GRADE = 12
+
+
+def coarse_scale(module: float, diameter: float) -> dict[str, float]:
+    """The size of a coarse gear's deviations [um]: ISO 1328-1:2013's formulas at class 12 (one
+    step, sqrt(2), beyond its coarsest class), unrounded and without the scope check, and
+    ISO 1328-2:1997's grade-12 F_i'' (the nearest range's mean outside its scope).  Not a
+    tolerance anyone specifies: the scale a plausible deviation of a gear of this size stays
+    well below (:mod:`wormgear_cli.spec.plausibility`).  Keys ``F_pT``, ``f_pT``, ``F_alphaT``,
+    ``F_rT``, ``F_i2T``; ``module``, ``diameter`` [mm], > 0."""
+    s = grade_step(SCALE_GRADE)
+    m, d = module, diameter
+    f_ha, f_fa = (0.4 * m + 0.001 * d + 4.0) * s, (0.55 * m + 5.0) * s
+    f_p = (0.002 * d + 0.55 * math.sqrt(d) + 0.7 * m + 12.0) * s
+    md, dd = _range_mean(m, PART2_MODULE_BOUNDS), _range_mean(d, PART2_DIAMETER_BOUNDS)
+    return {"F_pT": f_p, "f_pT": (0.001 * d + 0.4 * m + 5.0) * s, "F_alphaT": math.hypot(f_ha, f_fa),
+            "F_rT": 0.9 * f_p, "F_i2T": (3.2 * md + 1.01 * math.sqrt(dd) + 6.4) * 2.0 ** (0.5 * (SCALE_GRADE - 5))}
+
+
 def _range_mean(value: float, bounds) -> float:
     """Geometric mean of the standard's range holding ``value`` (lower bound exclusive,
     as the standard's tables read "above .. up to and including"); the end range outside."""
@@ -238,8 +260,8 @@ def radial_composite(grade: int, module: float, diameter: float) -> RadialCompos
     Parameters
     ----------
     grade : radial composite grade Q [-], integer 4..12
-    module : normal module [mm], > 0 (scope 0.2..10: outside it a warning)
-    diameter : reference diameter [mm], > 0 (scope 5..1000: outside it a warning)
+    module : normal module [mm], > 0 (scope 0.2..10: outside it the end range's mean, and a warning)
+    diameter : reference diameter [mm], > 0 (scope 5..1000: outside it the end range's mean, and a warning)
 
     Raises
     ------
@@ -247,8 +269,9 @@ def radial_composite(grade: int, module: float, diameter: float) -> RadialCompos
         grade outside 4..12.
     """
     _check_grade(grade, PART2_GRADES, "ISO 1328-2:1997")
-    warnings = tuple(f"{r.name} {v:g} outside ISO 1328-2:1997's scope {r.describe()}: its formulas are "
-                     "extrapolated" for r, v in scope_problems(PART2_SCOPE, module=module, diameter=diameter))
+    warnings = tuple(f"{r.name} {v:g} outside ISO 1328-2:1997's scope {r.describe()}: the tolerance of its "
+                     "nearest range is given (the formulas are not extrapolated)"
+                     for r, v in scope_problems(PART2_SCOPE, module=module, diameter=diameter))
     m = _range_mean(module, PART2_MODULE_BOUNDS)
     d = _range_mean(diameter, PART2_DIAMETER_BOUNDS)
     step = 2.0 ** (0.5 * (grade - 5))

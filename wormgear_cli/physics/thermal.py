@@ -60,6 +60,15 @@ def centre_distance_growth(centre_distance, worm_radius, wheel_radius, housing_e
             - (worm_radius * worm_expansion * worm_dt + wheel_radius * wheel_expansion * wheel_dt))
 
 
+def axial_growth(length, expansion, dt):
+    """dL = L alpha dT  [mm]: the free thermal growth of a shaft of length ``length`` [mm] with expansion
+    ``expansion`` [1/K] warmed by ``dt`` [K].  A worm located axially by one (thrust) bearing grows away
+    from it: the mesh, ``length`` from that bearing, moves axially by dL, which turns the wheel by the
+    arc dL on its pitch circle (the worm's axial section is a rack).  MCH50 numbers (steel worm, 100 mm,
+    10 K): 11.5 um, i.e. 11.5 um / 37.5 mm / 8 = 3.83e-5 rad = 7.9 arcsec at the output.  Broadcasts."""
+    return length * expansion * dt
+
+
 def worm_stage(spec):
     """The drive's worm stage (the last one from the motor), or None; a spec-like record without
     stages gives its ``worm_pair`` (the same attribute names)."""
@@ -158,3 +167,22 @@ def predicted_centre_distance_um_per_K(spec, housing_rise_ratio: float = 1.0) ->
     if worm_stage(spec) is None:
         return None
     return float(centre_distance_change_mm(spec, 1.0, housing_rise_ratio) * 1000.0)
+
+
+def predicted_drift_arcsec_per_K(spec) -> float | None:
+    """Predicted ``arcsec_per_K`` of ``thermal_drift`` from the worm's axial growth [arcsec/K]:
+    L alpha_worm / (r_w A) per kelvin of the worm shaft (:func:`axial_growth`), L the worm stage's
+    ``worm.thrust_bearing_distance_mm``, r_w the wheel's pitch radius, A the product of the ratios
+    after the stage.  The sign depends on which side of the mesh the thrust bearing sits; the
+    magnitude is given.  None without a worm stage or without a thrust-bearing distance."""
+    from wormgear_cli.units import ARCSEC
+
+    wp = worm_stage(spec)
+    length = getattr(getattr(wp, "worm", None), "thrust_bearing_distance", 0.0) if wp is not None else 0.0
+    if not length:
+        return None
+    after = 1.0
+    for s in spec.stages[wp.index:]:
+        after *= s.ratio
+    return float(axial_growth(length, spec.materials.worm_expansion, 1.0) / (wp.module * wp.wheel.teeth / 2.0)
+                 / after / ARCSEC)

@@ -23,6 +23,9 @@ UNIT_SCALE = {
     "ppm/K": 1e-6,
     "arcsec": ARCSEC,
     "N m": 1.0,
+    "K": 1.0,
+    "N/um": 1000.0,  # -> N/mm
+    "N m/arcmin": 1.0 / (60.0 * ARCSEC),  # -> N m/rad
     "-": 1.0,
     "": 1.0,
 }

@@ -172,20 +172,44 @@ FIELDS: tuple[Field, ...] = (
        "the housing's temperature rise per kelvin of the measured (mesh/oil) temperature; used by diagnose's "
        "thermal_backlash prediction (1: the whole drive warms alike; a running worm drive warms at the mesh, "
        "so less than 1)", lo=0.0, hi=1.5, lo_open=True),
+    # --- the acceptance test the ISO 230-2 requirements are predicted on --------------
+    Field("test_plan.targets", "targets", "int", "-", 24,
+          "target positions over one output turn, spaced irregularly (ISO 230-2 asks for irregular spacing so "
+          "periodic errors are sampled fairly): i p + r_i, p = 360/targets, r_i uniform in +/- jitter p", 2, 10000),
+    Field("test_plan.targets_deg", "targets_deg", "floats", "deg", "",
+          "the test's target angles, when given (replaces targets, jitter and seed)", -360000.0, 360000.0),
+    Field("test_plan.runs", "runs", "int", "-", 5,
+          "runs in each direction (ISO 230-2's standard cycle: 5; each run one pass up, one pass down)", 1, 10000),
+    field_("test_plan.jitter", "jitter", "-", 0.25,
+           "half-width of the targets' irregular offsets as a fraction of their mean spacing", lo=0.0, hi=0.5,
+           hi_open=True),
+    Field("test_plan.seed", "seed", "int", "-", 0,
+          "seed of the irregular offsets (synth's iso plan with this seed gives the same targets)", 0, 2**31 - 1),
+    field_("test_plan.reading_scatter_arcsec", "reading_scatter", "arcsec", 0.0,
+           "standard deviation s of repeated readings at one target (the axis' repeatability R = 4 s); enters A "
+           "(x +/- 2 s) and the predicted R", lo=0.0, hi=1e6),
     # --- requirements (all optional) ---------------------------------------------
     *(
         field_(f"requirements.max_{name}_arcsec", f"max_{name}", "arcsec", "", f"limit on {what}", lo=0.0, hi=1e9,
            lo_open=True)
         for name, what in (
-            ("transmission_error", "the total transmission error at the output"),
-            ("backlash", "the total backlash at the output"),
-            ("gear_transmission_error", "the gear-stage TE at its output"),
+            ("transmission_error", "the total transmission error at the output, the paper's Delta phi_c: an "
+             "amplitude (zero to peak)"),
+            ("backlash", "the total backlash at the output, the paper's Delta phi_h: the whole lost motion on a "
+             "reversal"),
+            ("gear_transmission_error", "the gear-stage TE at its output (an amplitude)"),
             ("gear_backlash", "the gear-stage backlash"),
-            ("worm_transmission_error", "the worm-stage TE at the wheel"),
+            ("worm_transmission_error", "the worm-stage TE at the wheel (an amplitude)"),
             ("worm_backlash", "the worm-stage backlash at the wheel"),
-            ("budget_linear", "the full budget's TE at the output, linear sum of the lines' maxima"),
-            ("budget_rss", "the full budget's TE at the output, static lines + root-sum-square of the periodic"),
-            ("budget_peak", "the full budget's TE at the output, exact peak of the phased curve"),
+            ("budget_linear", "the full budget's TE amplitude at the output, linear sum of the lines' maxima"),
+            ("budget_statistical", "the full budget's TE amplitude at the output, static lines + root-sum-square "
+             "within an order summed across orders (docs/budget.md)"),
+            ("budget_rss", "deprecated name of budget_statistical (judged against the statistical total)"),
+            ("budget_peak", "the full budget's TE amplitude at the output, exact peak of the phased curve"),
+            ("iso230_A", "ISO 230-2 bidirectional accuracy A of the acceptance test ([test_plan]): a range"),
+            ("iso230_E", "ISO 230-2 bidirectional systematic deviation E of the acceptance test: a range"),
+            ("iso230_B", "ISO 230-2 reversal value B of the acceptance test (largest |B_i|)"),
+            ("iso230_M", "ISO 230-2 mean bidirectional deviation M of the acceptance test: a range"),
         )
     ),
     field_("requirements.min_yield", "min_yield", "-", "", "least fraction of built drives meeting every limit "
@@ -209,7 +233,11 @@ DRIVE_FIELDS: tuple[Field, ...] = (
            "torque on the output under the process load: the load of every stage that does not give its own "
            "(normal_force_N, effective_tension_N), carried back through the ratios after it (losses neglected)",
            lo=0.0, hi=1e9),
-    *(f for f in FIELDS if f.section in ("stiffness", "materials")),
+    field_("drive.friction_torque_Nm", "friction_torque", "N m", "",
+           "friction torque the drive overcomes at the output (table bearings, seals, clamps); it reverses with the "
+           "motion, so the train's compliance winds up by it each way: a lost motion 2 T_f C_out (default: none)",
+           lo=0.0, hi=1e9),
+    *(f for f in FIELDS if f.section in ("stiffness", "materials", "test_plan")),
     *(f for f in FIELDS if f.section == "requirements" and f.path not in _stages.LEGACY_KEYS),
 )
 
@@ -304,7 +332,9 @@ class Spec:
     ``effects`` maps an effect name to its internal parameters; ``source``
     is the file it came from; ``raw`` the TOML document as read (a
     read-only mapping; use :func:`raw_copy` to derive a changed spec); ``form``: ``"stages"``
-    (``[[stage]]`` tables) or ``"legacy"`` (the two-table form).
+    (``[[stage]]`` tables) or ``"legacy"`` (the two-table form); ``warnings``: one line per
+    implausible value (:mod:`wormgear_cli.spec.plausibility`), for the commands to print;
+    ``test_plan``: the acceptance test the ISO 230-2 requirements are predicted on.
     """
 
     drive: Any
@@ -315,11 +345,13 @@ class Spec:
     stiffness: Any
     materials: Any
     requirements: Any
+    test_plan: Any = None
     effects: Any = field(default_factory=lambda: MappingProxyType({}))
     source: str = "<spec>"
     raw: Any = field(default_factory=lambda: MappingProxyType({}), repr=False)
     stages: tuple = ()
     form: str = "legacy"
+    warnings: tuple = ()
 
 
 def raw_copy(spec: Spec) -> dict:
@@ -613,6 +645,8 @@ def _defaults(schema: _Schema, values: dict) -> dict:
                 v[f.path] = tuple(x * UNIT_SCALE[f.unit] for x in d)
             elif f.kind == "str":
                 v[f.path] = d
+            elif f.kind == "int":
+                v[f.path] = int(d)
             else:
                 v[f.path] = float(d) * UNIT_SCALE[f.unit]
     return v
@@ -648,8 +682,21 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
     _legacy_derived(v)
     top = _LEGACY.records(v)
     raw = _freeze(data)
-    return Spec(**top, effects=MappingProxyType(effects), source=source, raw=raw,
-                stages=_legacy_stages(v, raw), form="legacy")
+    return _reviewed(Spec(**top, effects=MappingProxyType(effects), source=source, raw=raw,
+                          stages=_legacy_stages(v, raw), form="legacy"))
+
+
+def _reviewed(spec: Spec) -> Spec:
+    """``spec`` with its plausibility warnings; SpecError for an impossible value
+    (:mod:`wormgear_cli.spec.plausibility`)."""
+    import dataclasses
+
+    from wormgear_cli.spec.plausibility import review
+
+    problems, warnings = review(spec)
+    if problems:
+        raise SpecError(problems)
+    return dataclasses.replace(spec, warnings=tuple(warnings)) if warnings else spec
 
 
 def _legacy_stages(v: dict, raw) -> tuple:
@@ -669,8 +716,20 @@ def _legacy_stages(v: dict, raw) -> tuple:
             else:
                 paths[f.path] = _stages.stage_path(index, f.path)
                 origins[f.path] = "default"
+                if f.path not in values:  # a stage key the legacy form has no table for: its default
+                    values[f.path] = _stage_default(f)
         out.append(_stages.make_record(kind, index, _stages.DEFAULT_NAMES[kind], values, paths, origins))
     return tuple(out)
+
+
+def _stage_default(f: Field):
+    """The default of a stage key in internal units (None for an optional key; a derived default of the
+    keys below, which only the stage form has, is the default of the key it derives from: 0)."""
+    if f.default in ("", None):
+        return None
+    if f.default == "derived":
+        return 0.0
+    return float(f.default) * UNIT_SCALE[f.unit] if f.kind == "float" else f.default
 
 
 def legacy_stages(spec: Spec) -> tuple:
@@ -724,9 +783,10 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     legacy = _legacy_views(v, stages) if _stages.is_legacy_train(stages) else None
     requirements = (legacy or {}).get("requirements") or _SECTION_CLASSES["requirements"](**{
         **{f.attr: None for f in FIELDS if f.section == "requirements"}, **top["requirements"].__dict__})
-    return Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
-                requirements=requirements, **{t: (legacy or {}).get(t) for t in LEGACY_TABLES},
-                effects=MappingProxyType(effects), source=source, raw=_freeze(data), stages=stages, form="stages")
+    return _reviewed(Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
+                          requirements=requirements, test_plan=top["test_plan"],
+                          **{t: (legacy or {}).get(t) for t in LEGACY_TABLES}, effects=MappingProxyType(effects),
+                          source=source, raw=_freeze(data), stages=stages, form="stages"))
 
 
 def _effects_in_train(effects: dict, stages: tuple, source: str, problems: list[str]) -> None:

@@ -78,6 +78,10 @@ def _common(kind: str) -> tuple[Field, ...]:
             field_("residual_lost_motion_arcsec", "residual_lost_motion", "arcsec", 0.0,
                    "lost motion left by the anti-backlash arrangement, at this stage's output shaft (replaces "
                    "the clearance terms; the tooth deflection stays)", lo=0.0, hi=36000.0),
+            field_("shaft_stiffness_Nm_per_arcmin", "shaft_stiffness", "N m/arcmin", "",
+                   "torsional stiffness of the stage's output shaft from its gear (wheel) to the next stage or the "
+                   "load, bearings and couplings included: a wind-up under load, 1 / (k O^2) at the output "
+                   "(default: none, rigid)", lo=1e-6, hi=1e12),
         ]
     return (*out, _limit("max_transmission_error_arcsec", "max_transmission_error", "transmission error"),
             _limit("max_backlash_arcsec", "max_backlash", "backlash"))
@@ -96,6 +100,15 @@ WORM_FIELDS: tuple[Field, ...] = (
            **PRESSURE_ANGLE),
     field_("face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
            **FACE_WIDTH),
+    field_("mesh_temperature_rise_K", "mesh_temperature_rise", "K", 0.0,
+           "rise of the worm and the wheel above the temperature the drive was measured (calibrated) at, in "
+           "operation; with the housing's it changes the centre distance and the backlash", lo=-100.0, hi=300.0),
+    field_("housing_temperature_rise_K", "housing_temperature_rise", "K", 0.0,
+           "rise of the housing (the bores' distance) above the calibration temperature, in operation",
+           lo=-100.0, hi=300.0),
+    field_("worm_shaft_temperature_rise_K", "worm_shaft_temperature_rise", "K", "derived",
+           "rise of the worm shaft between its thrust bearing and the mesh (default: mesh_temperature_rise_K)",
+           lo=-100.0, hi=300.0),
     tol_field("lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
     phase_field("lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
     tol_field("centre_distance_error_mm", "centre_distance_error", "centre-distance error f_a of the worm pair",
@@ -111,6 +124,20 @@ WORM_FIELDS: tuple[Field, ...] = (
     phase_field("worm.runout_phase_deg", "runout_phase", "phase of S1 (once per worm turn)"),
     tol_field("worm.bearing_clearance_mm", "bearing_clearance", "the paper's C1: radial clearance of the worm "
               "bearings"),
+    tol_field("worm.axial_play_mm", "axial_play", "axial play of the worm's thrust bearing (0 when preloaded): the "
+              "worm shifts by it on a reversal, an arc of the same length on the wheel's pitch circle (a constant "
+              "lost motion)"),
+    field_("worm.axial_stiffness_N_per_um", "axial_stiffness", "N/um", "",
+           "axial stiffness of the worm's thrust bearing and shaft (preloaded): the wheel's tangential force "
+           "shifts the worm axially by F / k, an arc of the wheel (default: none, rigid)", lo=1e-6, hi=1e9),
+    tol_field("worm.axial_runout_mm", "axial_runout", "axial runout of the worm (face runout of its thrust "
+              "shoulder, total indicator reading): the worm moves axially by half of it, sinusoidally once per "
+              "worm turn, an arc of the wheel"),
+    phase_field("worm.axial_runout_phase_deg", "axial_runout_phase", "phase of the axial runout (once per worm "
+                "turn)"),
+    field_("worm.thrust_bearing_distance_mm", "thrust_bearing_distance", "mm", 0.0,
+           "axial distance from the worm's axially located (thrust) bearing to the mesh: the worm shaft grows "
+           "by it x alpha_worm x its temperature rise, an arc of the wheel (a thermal drift)", lo=0.0, hi=1e5),
     teeth_field("wheel.teeth", "teeth", "teeth z3 of the worm wheel", "30"),
     tol_field("wheel.profile_error_mm", "profile_error", "wheel profile error f_t2", "0.011"),
     tol_field("wheel.thickness_deviation_mm", "thickness_deviation", "wheel thickness deviation T_s2", "0.090"),
@@ -216,6 +243,11 @@ class Worm(NamedTuple):
     runout: float
     runout_phase: float
     bearing_clearance: float
+    axial_play: float = 0.0
+    axial_stiffness: float | None = None
+    axial_runout: float = 0.0
+    axial_runout_phase: float = 0.0
+    thrust_bearing_distance: float = 0.0
 
 
 class Wheel(NamedTuple):
@@ -279,6 +311,10 @@ class WormStageSpec(NamedTuple):
     wheel: Wheel
     paths: Any
     origins: Any
+    shaft_stiffness: float | None = None
+    mesh_temperature_rise: float = 0.0
+    housing_temperature_rise: float = 0.0
+    worm_shaft_temperature_rise: float = 0.0
     kind = "worm"
 
     @property
@@ -314,6 +350,7 @@ class SpurStageSpec(NamedTuple):
     gear: SpurGear
     paths: Any
     origins: Any
+    shaft_stiffness: float | None = None
     kind = "spur"
 
     @property
@@ -585,6 +622,8 @@ def _defaults(s: StageInput, model_default: str, label: str, problems: list[str]
                 v["residual_lost_motion_arcsec"] not in (0.0, MISSING):
             problems.append(f"{label}: residual_lost_motion_arcsec: only with an anti-backlash arrangement; set "
                             f"anti_backlash = \"{ANTI_BACKLASH[s.kind][1]}\" or remove the key")
+    if s.kind == "worm" and v["worm_shaft_temperature_rise_K"] is MISSING:
+        v["worm_shaft_temperature_rise_K"] = v["mesh_temperature_rise_K"]
     if s.kind == "worm" and v["transverse_pressure_angle_deg"] is MISSING:
         an, lam = v["normal_pressure_angle_deg"], v["lead_angle_deg"]
         if MISSING not in (an, lam):

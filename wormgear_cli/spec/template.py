@@ -58,13 +58,15 @@ STAGE_EXAMPLES: dict[str, dict[str, tuple]] = {
 #: the drive-level tables: values of the MCH50 (configs/mch50.toml)
 DRIVE_EXAMPLES: dict[str, tuple] = {
     "stiffness.model": ("iso6336", "ISO 6336-1"),
-    "requirements.max_transmission_error_arcsec": (72.0, "the paper's measured span"),
-    "requirements.max_backlash_arcsec": (252.0, "the paper's measured span"),
+    "requirements.max_transmission_error_arcsec": (36.0, "the paper's measured +/-0.010 deg, an amplitude"),
+    "requirements.max_backlash_arcsec": (252.0, "the paper's measured +/-0.035 deg, the whole reversal"),
 }
 #: value shown on the commented lines of the optional requirement keys
 EXAMPLE_LIMIT_ARCSEC = 60.0
 #: values shown on the commented lines of other optional keys (each valid when uncommented)
-OPTIONAL_EXAMPLES = {"accuracy_grade": 6, "min_yield": 0.99, "output_torque_Nm": 20.0}
+OPTIONAL_EXAMPLES = {"accuracy_grade": 6, "min_yield": 0.99, "output_torque_Nm": 20.0, "friction_torque_Nm": 2.0,
+                     "axial_stiffness_N_per_um": 300.0, "shaft_stiffness_Nm_per_arcmin": 100.0,
+                     "targets_deg": (0.0, 47.5, 91.0, 136.5, 178.0, 226.5, 271.0, 317.5)}
 #: keys with a default that the template leaves commented (they take effect only with another key)
 COMMENTED_DEFAULTS = ("residual_lost_motion_arcsec",)
 #: the stage orders ``wormgear new --stages`` offers in its help (any order of kinds is accepted)

@@ -8,8 +8,13 @@ quantities are ranked by the joint yield gained (all limits met).
 The step: one ISO 1328 accuracy grade finer where a grade drives the
 quantity (:attr:`Quantity.grade_driven`) and the spec says which grade it is
 (:data:`finer_grade`: the spur gears' pitch deviations that their ISO 1328-1
-``accuracy_grade`` sets); otherwise the tolerance times :data:`TIGHTEN_FACTOR`
-(70 %).  The best step is also given as a sentence (``answer``), e.g. "tighten the
+``accuracy_grade`` sets); otherwise, while the target is not met, the least tightening of
+that key alone that reaches the target yield (the lower end of its 95 % interval), found by
+bisection on the fraction of the tolerance kept (:data:`BISECTION_STEPS` halvings, the same
+seed each run so that the yield is monotone in the fraction), or, when no tightening of that key
+alone reaches the target (not even a zero tolerance), the tolerance times
+:data:`TIGHTEN_FACTOR` (70 %) to rank it by the yield it gains.  The best step is also given as a
+sentence (``answer``), e.g. "tighten the
 output gear's cumulative pitch deviation to grade 3 (17 -> 12 um): yield 91.2 % -> 99.1 %".
 """
 
@@ -21,8 +26,10 @@ from dataclasses import dataclass
 from wormgear_cli.tolerance import engine
 from wormgear_cli.tolerance.statistics import Yield
 
-#: tolerance factor of one step when no grade drives the quantity
+#: tolerance factor of one step when no grade drives the quantity and the target is out of reach by it
 TIGHTEN_FACTOR = 0.7
+#: halvings of the bisection on the fraction of a tolerance kept (2^-7: within 1 % of the tolerance)
+BISECTION_STEPS = 7
 
 #: ISO 1328-1:2013 tolerance (FlankTolerances attribute) behind each grade-driven spur-gear key
 GRADE_TOLERANCE = {"cumulative_pitch_deviation_mm": "F_pT", "single_pitch_deviation_mm": "f_pT"}
@@ -124,6 +131,32 @@ def tightened(spec, varied) -> tuple[tuple, str]:
     return tuple(TIGHTEN_FACTOR * t for t in varied.tolerance), f"{round(100 * TIGHTEN_FACTOR)} %"
 
 
+def least_tightening(varied, run: Callable, target: float) -> tuple | None:
+    """(tolerance, how, yield) of the least tightening of ``varied`` alone whose joint yield reaches
+    ``target`` (the lower end of its 95 % interval), by bisection on the fraction f of the tolerance
+    kept: f = 0 must reach it (else None: out of reach by this key), f = 1 does not (the base run);
+    :data:`BISECTION_STEPS` halvings keep the largest f found to reach it.  ``run(tolerance)`` -> the
+    joint :class:`~wormgear_cli.tolerance.statistics.Yield` with that tolerance (the same seed)."""
+    scaled = lambda f: tuple(f * t for t in varied.tolerance)  # noqa: E731
+    best = run(scaled(0.0))
+    if best.low < target:
+        return None
+    lo, hi = 0.0, 1.0
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        y = run(scaled(mid))
+        if y.low >= target:
+            lo, best = mid, y
+        else:
+            hi = mid
+    return scaled(lo), f"{100 * lo:.0f} %", best
+
+
+def _kept(step) -> float:
+    """The fraction of the tolerance a step keeps (its first element)."""
+    return step.to_mm[0] / step.from_mm[0] if step.from_mm[0] > 0 else 0.0
+
+
 def allocate(spec, options: engine.Options, target: float, progress: Callable[[int], None] | None = None) -> dict:
     """Rank the varied quantities by the joint yield one step of tightening gains.
 
@@ -149,13 +182,23 @@ def allocate(spec, options: engine.Options, target: float, progress: Callable[[i
     for i, v in enumerate(base_setup.varied):
         if not any(t > 0 for t in v.tolerance):
             continue
+
+        def run(tol, i=i):
+            varied = tuple(w.with_tolerance(tol) if j == i else w for j, w in enumerate(base_setup.varied))
+            return engine.joint_yield(engine.setup(spec, opts, varied))
+
         new_tol, how = tightened(spec, v)
-        varied = tuple(w.with_tolerance(new_tol) if j == i else w for j, w in enumerate(base_setup.varied))
-        after = engine.joint_yield(engine.setup(spec, opts, varied))
+        least = None if how.startswith("grade") or base.low >= target else least_tightening(v, run, target)
+        if least is not None:
+            new_tol, how, after = least
+        else:
+            after = run(new_tol)
         steps.append(Step(v.path, v.tolerance, new_tol, how, base, after))
         if progress is not None:
             progress(1)
-    steps.sort(key=lambda st: -st.gain)  # stable: ties keep registry order
+    # the steps that reach the target first, the least tightening (most tolerance kept) first; then the
+    # others by the yield they gain (stable: ties keep registry order)
+    steps.sort(key=lambda st: (st.after.low < target, -_kept(st) if st.after.low >= target else -st.gain))
     reached = [st.path for st in steps if st.after.low >= target]
     if base.low >= target:
         best = (f"target met, no tightening needed: yield {100 * base.value:.2f} % (95 % interval from "

@@ -22,6 +22,7 @@ class Kind(str, Enum):
     radial = "radial"
     signed = "signed"
     unknown = "unknown"
+    allowance = "allowance"
 
 
 def _normal_params(low: float, high: float, cp: float | None, cpk: float | None) -> tuple[float, float]:
@@ -56,26 +57,42 @@ def _uniform_ppf(u, low, high, cp, cpk):
     return low + u * (high - low)
 
 
+def _normal_whole(u, low, high, cp, cpk):
+    from scipy.special import ndtri
+
+    mu, sigma = _normal_params(low, high, cp, cpk)
+    return mu + sigma * ndtri(u)
+
+
+def _rayleigh_whole(u, low, high, cp, cpk):
+    return _rayleigh_sigma(high, cp, cpk) * np.sqrt(-2.0 * np.log1p(-u))
+
+
 @dataclass(frozen=True)
 class Distribution:
     """A distribution of the catalogue: ``name``; ``kinds``: the quantity kinds it
     fits; ``capability``: whether cp/cpk apply; ``ppf(u, low, high, cp, cpk)``: the
-    truncated inverse CDF on [low, high] ([mm] arrays in, [mm] out); ``doc``."""
+    truncated inverse CDF on [low, high] ([mm] arrays in, [mm] out); ``doc``; ``whole``: the
+    inverse CDF of the untruncated law, the same parameters (an uninspected key; None: ``ppf``, a law
+    bounded by itself)."""
 
     name: str
     kinds: tuple[str, ...]
     capability: bool
     ppf: Callable
     doc: str
+    whole: Callable | None = None
 
 
 DISTRIBUTIONS: dict[str, Distribution] = {
     d.name: d for d in (
-        Distribution("normal", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), True, _normal_ppf,
-                     "normal, T at 3 sigma (cp = 1), mean shifted towards the upper limit by cpk < cp"),
+        Distribution("normal", (Kind.signed.value, Kind.radial.value, Kind.unknown.value, Kind.allowance.value), True,
+                     _normal_ppf,
+                     "normal, T at 3 sigma (cp = 1), mean shifted towards the upper limit by cpk < cp", _normal_whole),
         Distribution("rayleigh", (Kind.radial.value, Kind.unknown.value), True, _rayleigh_ppf,
-                     "magnitude of a 2-D normal offset, sigma per axis = T / (3 c)"),
-        Distribution("uniform", (Kind.signed.value, Kind.radial.value, Kind.unknown.value), False, _uniform_ppf,
+                     "magnitude of a 2-D normal offset, sigma per axis = T / (3 c)", _rayleigh_whole),
+        Distribution("uniform", (Kind.signed.value, Kind.radial.value, Kind.unknown.value, Kind.allowance.value),
+                     False, _uniform_ppf,
                      "every value in the interval equally likely"),
     )
 }

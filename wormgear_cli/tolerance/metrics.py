@@ -12,11 +12,12 @@
   M = max_i x_i(bi) - min_i x_i(bi) with x_i(bi) = (x_i(up) + x_i(down)) / 2;
   A = max(x + 2 s) - min(x - 2 s) with s = 0.
 
-* ``budget_linear``, ``budget_rss``: the full error budget's TE at the output
-  (:mod:`wormgear_cli.analysis.budget`, the lines of ``simulation.periodic_sources`` with
-  every budget source plus the two static deflection lines) under the linear
-  rule (sum of every line's maximum) and the rss rule (static lines + root-sum-
-  square of the periodic ones); phases do not enter them.  The peak rule (a
+* ``budget_linear``, ``budget_statistical``, ``budget_rss``: the full error budget's TE amplitude
+  at the output (:mod:`wormgear_cli.analysis.budget`, the registry's periodic lines with every
+  budget source plus the static lines) under the linear rule (sum of every line's maximum), the
+  statistical rule (static lines + root-sum-square within an order, summed across orders:
+  :func:`wormgear_cli.analysis.budget.statistical_total`) and the deprecated rss rule (static
+  lines + root-sum-square of every periodic one); phases do not enter them.  The peak rule (a
   search over one output turn per sample) is not sampled.
 
 Both gear-stage kinematics are followed (``gear_pair.kinematics``): ``paper``
@@ -30,7 +31,7 @@ sinusoidal sources of one shaft combined into one term
 
     e(theta, d) = gear(i_c theta + psi_e) + sum_k a_k sin(o_k theta + psi_k)
                   - d/2 [gear_lost(i_c theta + psi_e)
-                         + max(central + h_j sin(i_c theta + psi_Fi), 0) / (r_w i_c)]
+                         + max(c_w + v_w sin(i_c theta + psi_Fi), 0) / (r_w i_c)]
                   + fixed(theta, d)
 
 with gear = the paper's gear_kinematic_te (paper) or e/r_b1 sin (involute, then one
@@ -38,7 +39,10 @@ of the sinusoids), gear_lost = Delta e tan(alpha)(1 + sin) / R2 (paper) or
 max(2 Delta a tan(alpha) + E_sn1 + E_sn2 + e tan(alpha)(1 + sin), 0) / R2 (involute;
 clipped at 0 as a clearance, which matters only for sampled negative deviations),
 the sinusoids the worm-stage sources (orders n_w and i_c) and the pitch deviations
-(orders 1, i_c, z1), and fixed = tooth-deflection lag and the spec's effects (not varied).
+(orders 1, i_c, z1), c_w + v_w sin the worm stage's clearance (constant where its causes are,
+varying with F_i: :func:`wormgear_cli.drive.worm.lost_motion_terms`) and fixed = tooth-deflection
+lag and the spec's effects (not varied); the registry's constant clearances are added to the
+lost motion.
 All angles [rad], lengths [mm].
 """
 
@@ -52,7 +56,7 @@ import numpy as np
 from wormgear_cli.physics import spur as gear_model
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
-BUDGET_METRICS = ("budget_linear", "budget_rss")
+BUDGET_METRICS = ("budget_linear", "budget_statistical", "budget_rss")
 ISO_METRICS = ("iso230_E", "iso230_B", "iso230_M", "iso230_A")
 #: metric sets of ``--metrics`` ("paper+budget": the cheapest set for limits on both)
 METRIC_SETS = {"paper": PAPER_METRICS, "budget": BUDGET_METRICS, "paper+budget": PAPER_METRICS + BUDGET_METRICS,
@@ -71,7 +75,8 @@ class GearTeMax:
     of :func:`wormgear_cli.physics.spur.gear_te_max_fast` (degree 48, checked against
     the exact maximiser between the nodes to 1e-11 relative; the exact maximiser
     is used when the check fails).  Capped at the value at T (the maximum grows
-    with Delta e), so no sample exceeds the corner case.  ``part="deformation"``:
+    with Delta e), so no inspected sample exceeds the corner case; beyond T (an uninspected
+    key's tail) the exact maximiser.  ``part="deformation"``:
     instead the deformation part of that maximum (analyze's ``gear_te_deformation``:
     the maximum less the kinematic curve at its angle), not capped.  ``stage``: the spur
     stage record (a spec of a [worm, spur] drive: its spur stage)."""
@@ -110,7 +115,12 @@ class GearTeMax:
 
             value = chebyshev.chebval(2.0 * de / self.t - 1.0, self.coef)
         value = np.where(de == self.t, self.at_t, value)
-        return np.minimum(value, self.at_t) if self.part == "max" else value
+        if self.part == "max":
+            value = np.minimum(value, self.at_t)
+        over = de > self.t  # beyond the interpolant: an uninspected key's tail, computed exactly
+        if np.any(over):
+            value = np.where(over, self.exact(np.where(over, de, self.t)), value)
+        return value
 
 
 class StageContext(NamedTuple):
@@ -208,13 +218,14 @@ def stage_value(ctx: Context, v: dict, stage):
     return value
 
 
-def _stage_totals(sc: StageContext, value) -> tuple:
-    """(TE, backlash) [rad] at the stage's own output shaft per sample, by its kind's model."""
+def _stage_totals(sc: StageContext, value, spec) -> tuple:
+    """(TE, backlash) [rad] at the stage's own output shaft per sample, by its kind's model (a worm
+    stage with its additions beyond the paper, which are not sampled)."""
     from wormgear_cli.drive import belt, spur, worm
 
     st = sc.stage
     if st.kind == "worm":
-        return worm.totals(st, sc.deflection, value)  # the worm stage's one definition
+        return worm.totals(st, sc.deflection, value, spec)  # the worm stage's one definition
     if st.kind == "spur":
         return spur.totals(st, sc.deflection, value, sc.te_max)
     return belt.totals(st, value)
@@ -231,14 +242,16 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     """
     te = bl = 0.0
     for sc, r in zip(reversed(ctx.stages), reversed(ctx.registry.results)):
-        t, b = _stage_totals(sc, stage_value(ctx, values, sc.stage))
+        t, b = _stage_totals(sc, stage_value(ctx, values, sc.stage), ctx.spec)
         te = te + t / r.after
         bl = bl + b / r.after
+    bl = bl + sum(ctx.registry.backlash_additions().values())  # a friction torque's wind-up (not sampled)
     return {"total_transmission_error": te, "total_backlash": bl}
 
 
 def _sinusoids(ctx: Context, v: dict) -> list:
-    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order), the
+    """The sinusoidal sources per sample: (amplitude [rad at the output], phase path, order, the spec's
+    phase [rad]: kept where the layout samples no phase, e.g. the worm's axial runout in a legacy file), the
     registry's sources in their order (all of them: the budget's too) with their sizes evaluated on
     the samples (:attr:`wormgear_cli.drive.records.Source.size`); a source that is not a sinusoid
     (the paper kinematics' spur curve) is left out."""
@@ -248,7 +261,8 @@ def _sinusoids(ctx: Context, v: dict) -> list:
     for src in reg.periodic(all_budget_sources=True):
         if getattr(src.curve, "sine", None) is None:
             continue
-        out.append((src.size(stage_value(ctx, v, stages[src.stage_index - 1])), src.phase_path, src.order))
+        out.append((src.size(stage_value(ctx, v, stages[src.stage_index - 1])), src.phase_path, src.order,
+                    src.phase))
     return out
 
 
@@ -272,9 +286,11 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     linear = sum_static a_k + sum_periodic a_k, rss = sum_static a_k + sqrt(sum_periodic a_k^2).
 
     Lines: the registry's periodic sources with their sizes on the samples (a paper-kinematics spur
-    stage's eccentricity: the kinematic maximum of Delta phi_cc at no load, by its interpolant), and
-    its static lines (:func:`_static`).
+    stage's eccentricity: the kinematic maximum of Delta phi_cc at no load, by its interpolant, less
+    the curve's mean: its periodic part), and its static lines (:func:`_static`).
     """
+    from wormgear_cli.analysis.budget import statistical_total
+
     reg = ctx.registry
     stages = reg.train.stages
     periodic = []
@@ -282,7 +298,10 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
         sc = ctx.stages[src.stage_index - 1]
         value = stage_value(ctx, values, stages[src.stage_index - 1])
         if src.curve_at is not None and sc.kin_max is not None:
-            periodic.append(np.asarray(sc.kin_max(value("eccentricity_mm")) / reg.train.after(sc.stage), dtype=float))
+            st, de = sc.stage, value("eccentricity_mm")
+            mean = gear_model.gear_kinematic_mean(st.module * st.pinion.teeth / 2.0, st.module * st.gear.teeth / 2.0,
+                                                  de, st.pressure_angle)  # a constant shift: no line's part
+            periodic.append(np.asarray((sc.kin_max(de) - mean) / reg.train.after(st), dtype=float))
         else:
             periodic.append(np.asarray(src.size(value), dtype=float))
     static = None
@@ -292,7 +311,9 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     static = 0.0 if static is None else static
     lin = sum(periodic)
     sq = sum(a * a for a in periodic)
-    return {"budget_linear": static + lin, "budget_rss": static + np.sqrt(sq)}
+    orders = [src.order for src in reg.periodic(all_budget_sources=True)]
+    return {"budget_linear": static + lin, "budget_rss": static + np.sqrt(sq),
+            "budget_statistical": statistical_total(periodic, orders, static)}
 
 
 def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarray]:
@@ -320,7 +341,10 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     n = len(next(iter(v.values())))
     # sources without a size in this chunk (a tolerance of 0: the budget's pitch deviations of most specs)
     # are left out, and with them their orders
-    sines = [(a, k, o) for a, k, o in _sinusoids(ctx, v) if np.any(a)]
+    # a source whose phase is not sampled (a key beyond the legacy form's, e.g. the worm's axial runout)
+    # keeps the spec's phase
+    sines = [(a, ph[k] if k in ph else np.full(np.shape(a), fixed), o)
+             for a, k, o, fixed in _sinusoids(ctx, v) if np.any(a)]
     losing = [src for src in sources if src.lost_size is not None]
     # every sinusoid of one order as p sin(o theta) + q cos(o theta): one matrix product per term; the
     # lost-motion orders first
@@ -329,11 +353,11 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     basis = np.stack([f(o * th) for o in orders for f in (np.sin, np.cos)] + [np.ones_like(th)])
     where = {o: 2 * k for k, o in enumerate(orders)}
     coef = np.zeros((n, basis.shape[0]))
-    for a, k, o in sines:
+    for a, psi, o in sines:
         j = where[o]
         amp = np.asarray(a, dtype=float)
-        coef[:, j] += amp * np.cos(ph[k])
-        coef[:, j + 1] += amp * np.sin(ph[k])
+        coef[:, j] += amp * np.cos(psi)
+        coef[:, j + 1] += amp * np.sin(psi)
     common = coef @ basis
     theta = ctx.theta[None, :]
     for src in sources:

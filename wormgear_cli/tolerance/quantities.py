@@ -11,8 +11,11 @@ in a legacy two-table file.  The spec value of the key is read as the tolerance 
 
 * ``radial``: a magnitude (eccentricity, runout, radial composite error,
   bearing clearance, a belt's pitch variation and clearance); values in [0, T]; default Rayleigh.
-* ``signed``: a deviation that may have either sign (lead, tooth thickness,
-  centre distance); values in [-T, T]; default normal with T at 3 sigma.
+* ``signed``: a deviation that may have either sign (lead, centre distance); values in
+  [-T, T]; default normal with T at 3 sigma.
+* ``allowance``: a tooth-thickness allowance T, the thinning that makes the backlash (ISO
+  21771's E_sn, DIN 3967): one-sided, a tooth is never thicker than nominal; values in [0, T];
+  default normal centred on T/2 with its ends at 3 sigma.
 * ``unknown``: a process we know nothing about (profile errors, the six
   alignment errors e_i, a belt's tooth-meshing error); values in [0, T]; default uniform.
 
@@ -41,7 +44,8 @@ from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.tolerance.distributions import DISTRIBUTIONS, Kind
 
 #: default distribution per kind
-DEFAULT_DISTRIBUTION = {Kind.radial: "rayleigh", Kind.signed: "normal", Kind.unknown: "uniform"}
+DEFAULT_DISTRIBUTION = {Kind.radial: "rayleigh", Kind.signed: "normal", Kind.unknown: "uniform",
+                        Kind.allowance: "normal"}
 
 
 @dataclass(frozen=True)
@@ -86,7 +90,7 @@ class StageQuantity(NamedTuple):
     since: int = 1
 
 
-R, S, U = Kind.radial, Kind.signed, Kind.unknown
+R, S, U, T = Kind.radial, Kind.signed, Kind.unknown, Kind.allowance
 
 #: stage kind -> its toleranced keys, in a fixed order (append new keys at the end with a higher
 #: ``since``, never reorder)
@@ -94,9 +98,9 @@ STAGE_QUANTITIES: dict[str, tuple[StageQuantity, ...]] = {
     "worm": (
         StageQuantity("lead_error_mm", S, True),
         StageQuantity("worm.profile_error_mm", U, True),
-        StageQuantity("worm.thickness_deviation_mm", S),
+        StageQuantity("worm.thickness_deviation_mm", T),
         StageQuantity("wheel.profile_error_mm", U, True),
-        StageQuantity("wheel.thickness_deviation_mm", S),
+        StageQuantity("wheel.thickness_deviation_mm", T),
         StageQuantity("wheel.radial_composite_error_mm", R, True),
         StageQuantity("centre_distance_error_mm", S),
         StageQuantity("worm.runout_mm", R),
@@ -114,8 +118,8 @@ STAGE_QUANTITIES: dict[str, tuple[StageQuantity, ...]] = {
         StageQuantity("pinion.single_pitch_deviation_mm", U, True),
         # read only by the involute reading (physics.spur.involute_stage)
         StageQuantity("centre_distance_error_mm", S, kinematics="involute"),
-        StageQuantity("gear.thickness_deviation_mm", S, kinematics="involute"),
-        StageQuantity("pinion.thickness_deviation_mm", S, kinematics="involute"),
+        StageQuantity("gear.thickness_deviation_mm", T, kinematics="involute"),
+        StageQuantity("pinion.thickness_deviation_mm", T, kinematics="involute"),
     ),
     "belt": (
         StageQuantity("driver.eccentricity_mm", R),
@@ -297,20 +301,24 @@ def _file_column(to_file, column: str) -> str:
 
 
 #: keys of one ``[statistics]`` entry
-ENTRY_KEYS = ("distribution", "cp", "cpk")
+ENTRY_KEYS = ("distribution", "cp", "cpk", "inspected")
 
 
 @dataclass(frozen=True)
 class Varied:
     """A quantity as this spec varies it: tolerance ``tolerance`` [mm] (per element
     for an array key), the interval [``low``, ``high``] each value lies in,
-    ``distribution`` name and process capabilities ``cp``, ``cpk`` (None: not given)."""
+    ``distribution`` name and process capabilities ``cp``, ``cpk`` (None: not given); ``inspected``:
+    parts are inspected against the tolerance, so the law is truncated at it (the default); False, the
+    process's whole law (parts beyond the tolerance are built too: a magnitude or an allowance still
+    never below zero)."""
 
     quantity: Quantity
     tolerance: tuple[float, ...]
     distribution: str
     cp: float | None = None
     cpk: float | None = None
+    inspected: bool = True
 
     @property
     def path(self) -> str:
@@ -322,7 +330,7 @@ class Varied:
         return (-t, t) if self.quantity.kind is Kind.signed else (0.0, t)
 
     def with_tolerance(self, tolerance: tuple[float, ...]) -> Varied:
-        return Varied(self.quantity, tuple(tolerance), self.distribution, self.cp, self.cpk)
+        return Varied(self.quantity, tuple(tolerance), self.distribution, self.cp, self.cpk, self.inspected)
 
 
 def spec_value(spec, path: str):
@@ -381,7 +389,8 @@ def varied_quantities(spec) -> tuple[Varied, ...]:
         value = tolerance_value(spec, q)
         tol = tuple(float(v) for v in value) if q.length > 1 else (float(value),)
         s = settings.get(q.path, {})
-        out.append(Varied(q, tol, s.get("distribution", DEFAULT_DISTRIBUTION[q.kind]), s.get("cp"), s.get("cpk")))
+        out.append(Varied(q, tol, s.get("distribution", DEFAULT_DISTRIBUTION[q.kind]), s.get("cp"), s.get("cpk"),
+                          s.get("inspected", True)))
     return tuple(out)
 
 
@@ -438,7 +447,8 @@ def _not_read_message(spec, q: Quantity) -> str:
 
 
 def statistics_table(spec) -> dict[str, dict]:
-    """The validated ``[statistics]`` table of ``spec``: path (the file's form) -> {distribution, cp, cpk}.
+    """The validated ``[statistics]`` table of ``spec``: path (the file's form) -> {distribution, cp, cpk,
+    inspected (only when false)}.
 
     Problems (all reported at once, one line each, exit 2): a key that is not
     a spec key (with the nearest valid key), a spec key without a tolerance
@@ -512,6 +522,13 @@ def statistics_table(spec) -> dict[str, dict]:
                 ok = False
             else:
                 caps[key] = float(v)
+        inspected = entry.get("inspected", True)
+        if not isinstance(inspected, bool):
+            problems.append(f"{where}.inspected: expected true (parts inspected: the law truncated at the "
+                            f"tolerance) or false (the process's whole law), got {inspected!r}")
+            ok = False
+        elif not inspected:
+            caps["inspected"] = False
         if ok and "cp" in caps and "cpk" in caps and caps["cpk"] > caps["cp"]:
             problems.append(f"{where}: cpk = {caps['cpk']:g} exceeds cp = {caps['cp']:g} (cpk <= cp by definition)")
             ok = False

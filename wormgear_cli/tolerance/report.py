@@ -285,7 +285,7 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
             if col in s.columns:
                 lo, hi = v.bounds(e)
                 varied[col] = {"kind": v.quantity.kind.value, "distribution": v.distribution, "low_mm": lo,
-                               "high_mm": hi, "cp": v.cp, "cpk": v.cpk}
+                               "high_mm": hi, "cp": v.cp, "cpk": v.cpk, "inspected": v.inspected}
     doc = {
         "drive": s.spec.drive.name,
         "samples": summary.samples,

@@ -50,13 +50,18 @@ STREAM_COLUMNS = len(STREAM_ROWS)
 def sample_values(varied: Varied, u: np.ndarray, element: int = 0) -> np.ndarray:
     """Values [mm] of element ``element`` of a varied quantity from uniforms ``u`` in [0, 1).
 
-    Truncated to the quantity's interval (see the module doc); a zero
-    tolerance gives zeros.  Shape of ``u``.
+    Truncated to the quantity's interval (see the module doc) when it is inspected (the default); an
+    uninspected key follows its law's whole range (a magnitude or an allowance never below zero); a
+    zero tolerance gives zeros.  Shape of ``u``.
     """
     low, high = varied.bounds(element)
     if high <= low:
         return np.full(np.shape(u), low)
-    x = DISTRIBUTIONS[varied.distribution].ppf(u, low, high, varied.cp, varied.cpk)
+    law = DISTRIBUTIONS[varied.distribution]
+    if not varied.inspected and law.whole is not None:
+        x = law.whole(u, low, high, varied.cp, varied.cpk)
+        return x if low < 0 else np.maximum(x, 0.0)
+    x = law.ppf(u, low, high, varied.cp, varied.cpk)
     return np.clip(x, low, high)
 
 

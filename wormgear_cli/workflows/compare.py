@@ -1,6 +1,6 @@
 """``wormgear compare``: two or more drives side by side, and their differences to the first.
 
-For each drive: the paper's totals (TE, backlash), the full budget's three TE totals, each
+For each drive: the paper's totals (TE, backlash), the full budget's three TE totals (amplitudes), each
 budget line's amplitude at the output, and, when asked (``samples``), the yield of built drives
 against each drive's own ``[requirements]`` limits.  Every difference is a drive's value minus
 the first drive's (the baseline).  Core code: no typer, no rich; angles in the output unit.
@@ -15,9 +15,9 @@ from dataclasses import dataclass
 TOTALS = {
     "total_transmission_error": ("total TE (paper)", "total", "transmission_error"),
     "total_backlash": ("total backlash (paper)", "total", "backlash"),
-    "budget_linear": ("budget TE, linear", "total_with_budget", "transmission_error_linear"),
-    "budget_rss": ("budget TE, rss", "total_with_budget", "transmission_error_rss"),
-    "budget_peak": ("budget TE, peak", "total_with_budget", "transmission_error_peak"),
+    "budget_linear": ("budget TE, linear", "total_with_budget", "transmission_error_amplitude_linear"),
+    "budget_statistical": ("budget TE, statistical", "total_with_budget", "transmission_error_amplitude_statistical"),
+    "budget_peak": ("budget TE, peak", "total_with_budget", "transmission_error_amplitude_peak"),
 }
 #: fewest drives compared
 MIN_DRIVES = 2

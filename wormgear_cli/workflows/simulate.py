@@ -62,7 +62,7 @@ def context(spec, unit: str, phases: dict | None, effects: dict | None) -> dict:
     from wormgear_cli.analysis.accuracy import analyze
     from wormgear_cli.analysis.simulate import periodic_sources
     from wormgear_cli.physics.effects import params_to_keys
-    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
+    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K, predicted_drift_arcsec_per_K
 
     a = analyze(spec)
     sources = {}
@@ -76,7 +76,8 @@ def context(spec, unit: str, phases: dict | None, effects: dict | None) -> dict:
                     for name, p in (spec.effects if effects is None else effects).items()},
         "analyze": {"total_transmission_error": float(to_unit(a.angles["total_transmission_error"], unit)),
                     "total_backlash": float(to_unit(a.angles["total_backlash"], unit))},
-        "predicted": {"centre_distance_um_per_K": predicted_centre_distance_um_per_K(spec)},
+        "predicted": {"centre_distance_um_per_K": predicted_centre_distance_um_per_K(spec),
+                      **({"drift_arcsec_per_K": drift} if (drift := predicted_drift_arcsec_per_K(spec)) else {})},
     }
 
 
