@@ -260,13 +260,15 @@ def test_ctrl_c_to_the_whole_foreground_group_stops_the_workers_and_writes_nothi
     stops them, exits 130 and leaves no file (and no process)."""
     import signal
     import subprocess
-    import sys
     import time
 
+    from tests.support.processes import start
+
     out = tmp_path / "big.npy"
-    p = subprocess.Popen([sys.executable, "-m", "wormgear_cli", "tolerance", str(MCH50), "-n", "5000000",
-                          "--metrics", "paper", "--format", "npy", "-j", "2", "-o", str(out)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, cwd=tmp_path)
+    # SIGINT as a terminal has it, whatever this run inherited (a background job of a
+    # non-interactive shell starts with SIGINT ignored, and an ignored signal stays ignored)
+    p = start(["tolerance", MCH50, "-n", "5000000", "--metrics", "paper", "--format", "npy", "-j", "2",
+               "-o", out], tmp_path, start_new_session=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and p.poll() is None:  # until the first block is written (workers busy)
         staged = [f for f in tmp_path.iterdir() if f.name.startswith(".big.npy.wormgear-")]
