@@ -24,7 +24,9 @@ class Fault(NamedTuple):
 PHYS = ("tests/physics", "tests/drive", "tests/analysis")
 ISO1328 = ("tests/physics/test_iso1328.py", "tests/cli/test_grade.py", "tests/physics")
 MEAS = ("tests/measurement",)
-DIAG = ("tests/diagnosis",)
+DIAG = ("tests/diagnosis/test_ranking.py", "tests/diagnosis/test_dof.py", "tests/diagnosis/test_calibration.py",
+        "tests/diagnosis/test_mixed.py", "tests/diagnosis/test_inference.py", "tests/diagnosis/test_not_reached.py",
+        "tests/diagnosis/test_selection.py")
 TOL = ("tests/tolerance",)
 COMP = ("tests/compensation", "tests/output")
 
