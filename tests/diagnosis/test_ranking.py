@@ -64,3 +64,22 @@ def test_max_effects_names_that_many_in_chi_square_order(by_max_effects, k, name
         left = {c["name"]: c for c in doc["candidates"]}
         nxt = "intermediate_shaft_runout" if k == 0 else "thermal_drift"
         assert left[nxt]["status"] == "not_reached"
+
+
+def test_chi_square_not_p_ranks_when_the_larger_chi_square_has_fewer_df():
+    """A larger drift (0.6 arcsec/K): its chi^2 is now the larger, but its Satterthwaite df are few
+    (a warm-up has few independent temperatures), so its p is the larger too: ranking by p would
+    take the runout first, chi^2 takes the drift."""
+    from tests.support.paths import MCH50
+    from wormgear_cli.spec.loader import load_spec
+
+    spec = spec_with(load_spec(MCH50), NO_ORDER_8)
+    hidden = {**HIDDEN, "thermal_drift": {"arcsec_per_K": 0.6}}
+    meas, _ = make_measurement(spec, Plan(warmup=WARM), hidden=hidden, seed=4)
+    diag = diagnose(spec, meas, resamples=0, max_effects=1)
+    scores = {s["name"]: s for s in diag.steps[0]["scores"]}
+    runout, drift = scores["intermediate_shaft_runout"], scores["thermal_drift"]
+    assert runout["p_adjusted"] < 0.01 and drift["p_adjusted"] < 0.01
+    assert runout["p"] < drift["p"]
+    assert drift["F"] * COLUMNS["thermal_drift"] > runout["F"] * COLUMNS["intermediate_shaft_runout"]
+    assert [f.name for f in diag.found] == ["thermal_drift"]
