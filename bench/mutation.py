@@ -5,6 +5,9 @@ Usage (from the repository root)::
     python bench/mutation.py --list                      # the targets and their test selections
     python bench/mutation.py worm                        # one target, 1 worker, prints the score
     nohup python bench/mutation.py gear > /tmp/mut-gear.log 2>&1 &   # in the background
+    python bench/mutation.py --faults                    # the hand-made faults of bench/faults.py
+    python bench/mutation.py --faults --changed          # those in the files this branch changes
+    python bench/mutation.py --faults iso230-ddof rank-by-F   # named ones
 
 Each run copies ``wormgear_cli/``, ``tests/`` and ``pyproject.toml`` into a scratch directory
 (``$TMPDIR/wormgear-mutation/<target>``), adds a ``[tool.mutmut]`` section there that mutates
@@ -19,6 +22,11 @@ over every mutant that ran; mutants no selected test reaches ("no tests") count 
 surviving mutant is either equivalent (state why in docs/development-testing.md) or a gap
 in the tests (write the test that kills it).  The scratch copy is left in place so
 ``mutmut show <name>`` / ``mutmut results`` can be run there; ``--clean`` removes it first.
+
+``--faults`` runs the hand-made faults of ``bench/faults.py`` instead (no mutmut needed): each is put
+into a scratch copy (``$TMPDIR/wormgear-faults``) on its own, its test selection is run (``-x``, the
+everyday set) and it is "killed" when a test fails, "survived" when all pass, "moved" when its text
+is no longer found exactly once (update the entry).  One line per fault, then the score.
 """
 
 from __future__ import annotations
@@ -182,9 +190,69 @@ def _results(dest: Path, env) -> list[tuple[str, str]]:
     return rows
 
 
+def _fault_pytest(dest: Path, tests, timeout: int) -> tuple[str, str]:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    env["PYTHONPATH"] = str(dest)
+    try:
+        out = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", "-x", "-m", "not slow",
+                              *tests], cwd=dest, env=env, capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "timeout", ""
+    failed = re.findall(r"^FAILED (\S+)", out.stdout, flags=re.M)
+    if out.returncode == 0:
+        return "survived", ""
+    if out.returncode == 1:
+        return "killed", failed[0] if failed else ""
+    tail = (out.stdout.strip().splitlines() or [""])[-1]
+    return f"error {out.returncode}", tail
+
+
+def run_faults(names, changed: bool, timeout: int) -> int:
+    """Put each hand-made fault into a scratch copy on its own and run its tests; print the score."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    from faults import FAULTS
+
+    chosen = names or list(FAULTS)
+    unknown = [n for n in chosen if n not in FAULTS]
+    if unknown:
+        print(f"unknown faults: {', '.join(unknown)} (see bench/faults.py)", file=sys.stderr)
+        return 2
+    if changed:
+        diff = subprocess.run(["git", "diff", "--name-only", "main...HEAD"], cwd=ROOT, capture_output=True,
+                              text=True).stdout.split()
+        touched = {d.removeprefix("wormgear_cli/") for d in diff if d.startswith("wormgear_cli/")}
+        chosen = [n for n in chosen if FAULTS[n].file in touched]
+    dest = Path(tempfile.gettempdir()) / "wormgear-faults"
+    _copy_tree(dest)
+    count: dict[str, int] = {}
+    for name in chosen:
+        f = FAULTS[name]
+        path = dest / "wormgear_cli" / f.file
+        text = path.read_text(encoding="utf-8")
+        if text.count(f.old) != 1:
+            status, detail = "moved", f"text found {text.count(f.old)} times in {f.file}"
+        else:
+            path.write_text(text.replace(f.old, f.new), encoding="utf-8")
+            try:
+                status, detail = _fault_pytest(dest, f.tests, timeout)
+            finally:
+                path.write_text(text, encoding="utf-8")
+        count[status] = count.get(status, 0) + 1
+        print(f"{status:9s} {name:26s} {f.why}" + (f"  [{detail}]" if detail else ""), flush=True)
+    ran = sum(count.values())
+    killed = count.get("killed", 0) + count.get("timeout", 0)
+    print(f"\n{killed} of {ran} faults killed ({100.0 * killed / ran if ran else float('nan'):.1f} %); "
+          + ", ".join(f"{k} {v}" for k, v in sorted(count.items())))
+    return 0 if killed == ran else 1
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("target", nargs="?", choices=sorted(TARGETS))
+    ap.add_argument("target", nargs="*", help="a mutmut target (see --list), or fault names with --faults")
+    ap.add_argument("--faults", action="store_true", help="run the hand-made faults of bench/faults.py")
+    ap.add_argument("--changed", action="store_true", help="with --faults: only faults in files that differ "
+                    "from main")
+    ap.add_argument("--timeout", type=int, default=900, help="with --faults: seconds per fault (default 900)")
     ap.add_argument("--list", action="store_true", help="print the targets and their test selections")
     ap.add_argument("--max-children", type=int, default=1, help="parallel mutant workers (default 1)")
     ap.add_argument("--workdir", type=Path, default=Path(tempfile.gettempdir()) / "wormgear-mutation")
@@ -193,6 +261,11 @@ def main(argv=None) -> int:
     ap.add_argument("--show", action="store_true", help="print each surviving mutant's diff (slow: one "
                     "mutmut call per mutant)")
     args = ap.parse_args(argv)
+    if args.faults:
+        return run_faults(args.target, args.changed, args.timeout)
+    if len(args.target) > 1 or (args.target and args.target[0] not in TARGETS):
+        ap.error(f"one target of: {', '.join(sorted(TARGETS))}")
+    args.target = args.target[0] if args.target else None
     if args.list or not args.target:
         for name, (files, tests, _) in TARGETS.items():
             print(f"{name:12s} {' '.join(files)}\n{'':12s} tests: {' '.join(tests)}")

@@ -34,3 +34,22 @@ def mch50_spec():
     from wormgear_cli.spec.loader import load_spec
 
     return load_spec(MCH50)
+
+
+def _slow_set() -> tuple[frozenset, tuple]:
+    """The node ids of tests/slow_set.txt: exact ids, and ids cut short (no closing "]") as prefixes."""
+    exact, prefixes = set(), []
+    for line in (Path(__file__).parent / "slow_set.txt").read_text(encoding="utf-8").splitlines():
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        (prefixes.append(line) if "[" in line and not line.endswith("]") else exact.add(line))
+    return frozenset(exact), tuple(prefixes)
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest's own -m selection reads the marks
+def pytest_collection_modifyitems(config, items):
+    exact, prefixes = _slow_set()
+    for item in items:
+        if item.nodeid in exact or item.nodeid.startswith(prefixes):
+            item.add_marker(pytest.mark.slow)

@@ -68,7 +68,9 @@ def test_api_page_is_in_the_nav():
 
 
 @pytest.mark.parametrize("unit", ["arcsec", "deg"])
-def test_analyze_matches_cli(runner, unit):
+def test_consistency_analyze_api_equals_cli(runner, unit):
+    """A consistency check (both go through the same report code); the figures themselves are pinned
+    against the paper and hand-worked values in tests/analysis/test_paper.py and tests/physics."""
     r = wg.analyze(MCH50)
     doc = cli_json(runner, "analyze", MCH50, "--format", "json", "--unit", unit)
     assert r.to_dict(unit) == doc

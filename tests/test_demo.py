@@ -58,9 +58,14 @@ def test_demo_names_thermal_backlash_and_its_interval_holds_the_truth(regenerate
     lo, hi = doc["effects_found"][0]["interval_95"]["centre_distance_um_per_K"]
     k_true = truth["effects"]["thermal_backlash"]["centre_distance_um_per_K"]
     assert lo <= k_true <= hi
-    # the truth is the physics of the stated model: worm and wheel at the recorded (mesh) temperature, the
-    # housing rising by the housing share of it
-    assert k_true == predicted_centre_distance_um_per_K(mch50_spec, truth["thermal"]["housing_share"])
+    # the truth is the physics of the stated model, worked by hand (not through the package): worm and wheel
+    # at the recorded (mesh) temperature, the housing rising by the housing share q = 0.4 of it.  Table 1:
+    # worm pitch radius r1 = 1 x 2.5 / tan(3.178 deg) / 2 = 22.50 mm, wheel r2 = 2.5 x 30 / 2 = 37.5 mm,
+    # a = 60.0 mm; k = a alpha_H q - (r1 alpha_1 + r2 alpha_2) = 60 x 10.5 x 0.4 - (22.5 x 11.5 + 37.5 x
+    # 18.5) [1e-3 um/K] = 252 - (258.75 + 693.75) = -700.5e-3 um/K
+    assert truth["thermal"]["housing_share"] == 0.4
+    assert k_true == pytest.approx(-0.7005, abs=2e-4)
+    assert k_true == pytest.approx(predicted_centre_distance_um_per_K(mch50_spec, 0.4), rel=1e-12)
 
 
 def test_demo_is_physically_a_mesh_warming_further_than_its_housing(regenerated):

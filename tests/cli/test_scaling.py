@@ -41,7 +41,7 @@ def no_array_env(monkeypatch):
 # --- --jobs: the same bytes ---------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("fmt", ["csv", "json"])
+@pytest.mark.parametrize("fmt", ["csv", pytest.param("json", marks=pytest.mark.slow)])
 def test_sweep_jobs_2_equals_jobs_1(runner, fmt):
     grid = GRID if fmt == "csv" else ("--i", "2:10:30", "--l-mm", "100:300:3000")
     one = run(runner, "sweep", MCH50, *grid, "--format", fmt, "--jobs", "1").stdout_bytes
@@ -49,6 +49,7 @@ def test_sweep_jobs_2_equals_jobs_1(runner, fmt):
     assert one == two and len(one) > 1000
 
 
+@pytest.mark.slow  # whole-command sweeps run twice; -j in the everyday set: the csv sweep and the API
 def test_sweep_jobs_2_equals_jobs_1_to_a_file_snapped_and_by_param(runner, tmp_path):
     snap = ("--i", "2:10:60", "--l-mm", "100:300:2000", "--module-mm", "1.5")
     run(runner, "sweep", MCH50, *snap, "--format", "csv", "-o", tmp_path / "a.csv")
@@ -59,7 +60,9 @@ def test_sweep_jobs_2_equals_jobs_1_to_a_file_snapped_and_by_param(runner, tmp_p
     assert run(runner, "sweep", MCH50, *param, "--format", "csv", "-j", "2").stdout_bytes == one
 
 
-@pytest.mark.parametrize("fmt, metrics", [("csv", "paper"), ("json", "all"), ("table", "paper+budget")])
+@pytest.mark.parametrize("fmt, metrics", [pytest.param("csv", "paper", marks=pytest.mark.slow),
+                                          pytest.param("json", "all", marks=pytest.mark.slow),
+                                          ("table", "paper+budget")])
 def test_tolerance_jobs_2_equals_jobs_1(runner, fmt, metrics):
     args = ("tolerance", MCH50, "-n", 140_000 if metrics != "all" else 70_000, "--metrics", metrics,
             "--format", fmt, "--seed", 5)
@@ -74,6 +77,7 @@ def test_tolerance_npy_jobs_2_equals_jobs_1(runner, tmp_path):
     assert (tmp_path / "1.npy").read_bytes() == (tmp_path / "2.npy").read_bytes()
 
 
+@pytest.mark.slow  # two diagnose runs with 60 resamples each
 def test_simulate_at_and_diagnose_jobs_2_equal_jobs_1(runner, tmp_path):
     data = tmp_path / "d.csv"
     run(runner, "synth", MCH50, "--plan", "dense", "--points", "400", "--runs", "5", "--noise-arcsec", "0.3",
@@ -90,6 +94,7 @@ def test_simulate_at_and_diagnose_jobs_2_equal_jobs_1(runner, tmp_path):
 # --- --shard auto ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # six sweeps of 40 000 points; the variables' reading: tests/batch/test_shards.py
 def test_shard_auto_under_a_0_based_slurm_array_equals_the_explicit_part(runner, no_array_env):
     for task in range(3):
         auto = run(runner, "sweep", MCH50, *GRID, "--format", "csv", "--shard", "auto", env=_slurm(task))
@@ -131,6 +136,8 @@ def _interrupt_at_block(monkeypatch, n):
     return lambda: monkeypatch.setattr(engine, "block", real)
 
 
+@pytest.mark.slow  # nine tolerance runs of 50 000 to 150 000 samples; resume and merge in the everyday set:
+# test_sweep_parts_resume_and_merge_to_the_unsharded_csv, test_merge_refuses_..., test_a_changed_run_...
 @pytest.mark.parametrize("fmt", ["npy", "csv"])
 def test_an_interrupted_sharded_tolerance_run_resumes_and_merges_to_the_unsharded_run(runner, tmp_path,
                                                                                       monkeypatch, fmt):
@@ -260,13 +267,15 @@ def test_ctrl_c_to_the_whole_foreground_group_stops_the_workers_and_writes_nothi
     stops them, exits 130 and leaves no file (and no process)."""
     import signal
     import subprocess
-    import sys
     import time
 
+    from tests.support.processes import start
+
     out = tmp_path / "big.npy"
-    p = subprocess.Popen([sys.executable, "-m", "wormgear_cli", "tolerance", str(MCH50), "-n", "5000000",
-                          "--metrics", "paper", "--format", "npy", "-j", "2", "-o", str(out)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, cwd=tmp_path)
+    # SIGINT as a terminal has it, whatever this run inherited (a background job of a
+    # non-interactive shell starts with SIGINT ignored, and an ignored signal stays ignored)
+    p = start(["tolerance", MCH50, "-n", "5000000", "--metrics", "paper", "--format", "npy", "-j", "2",
+               "-o", out], tmp_path, start_new_session=True)
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and p.poll() is None:  # until the first block is written (workers busy)
         staged = [f for f in tmp_path.iterdir() if f.name.startswith(".big.npy.wormgear-")]

@@ -70,6 +70,7 @@ def _staged(folder: Path) -> list[str]:
 
 def _held_run(tmp_path):
     """simulate with --plot (staged) and -o onto a FIFO nobody reads: the run waits at commit."""
+    pytest.importorskip("matplotlib")  # the staged output is the plot (the `plot` extra)
     fifo = tmp_path / "out.fifo"
     os.mkfifo(fifo)
     proc = _start(["simulate", str(MCH50), "--points", "2000", "--plot", "p.png", "-o", str(fifo)], tmp_path)
@@ -143,6 +144,7 @@ def test_stale_removal_keeps_live_foreign_and_unrecognised_files(tmp_path):
 
 def test_ignored_sighup_stays_ignored(tmp_path):
     """nohup sets SIGHUP to ignored; the run must not turn it back into a stop."""
+    pytest.importorskip("matplotlib")  # the staged output is the plot (the `plot` extra)
     fifo = tmp_path / "out.fifo"
     os.mkfifo(fifo)
     proc = _start(["simulate", str(MCH50), "--points", "2000", "--plot", "p.png", "-o", str(fifo)], tmp_path,

@@ -437,3 +437,15 @@ def test_ranges_are_judged_in_the_canonical_unit():
     assert ok.error_arcsec[1] == pytest.approx(2700 * 3600)
     edge = parse_measurement("angle_deg,error_arcsec,temperature_C\n0,1,-100\n10,2,300\n", "t.csv")
     assert edge.temperature.tolist() == [-100.0, 300.0]  # the range is inclusive
+
+
+@pytest.mark.parametrize("header, factor", [("time (min)", 60.0), ("time (h)", 3600.0), ("time (ms)", 1e-3),
+                                            ("time_s", 1.0)])
+def test_a_time_column_in_minutes_hours_or_ms_is_read_in_seconds(header, factor):
+    """1 min = 60 s, 1 h = 3600 s, 1 ms = 1e-3 s: the stated unit multiplies the cells."""
+    from wormgear_cli.measurement.readers import parse_measurement
+
+    cells = np.array([0.5, 1.5, 2.0, 3.25])
+    text = f"angle_deg,error_arcsec,{header}\n" + "".join(f"{a},1,{t}\n" for a, t in zip((0, 90, 180, 270), cells))
+    m = parse_measurement(text, "<t>")
+    np.testing.assert_allclose(m.time, cells * factor, rtol=1e-15)

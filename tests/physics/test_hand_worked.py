@@ -104,9 +104,11 @@ def test_worm_backlash_bound_by_hand():
 def test_wheel_transverse_pressure_angle_by_hand():
     """alpha_n 20 deg, lambda 5 deg: tan(alpha_x) = 0.3639702 / 0.9961947 = 0.3653605 -> 20.07031 deg
     (DIN 3975 ZN relation); lambda 0 leaves the angle unchanged."""
-    a = worm.wheel_transverse_pressure_angle(math.radians(20.0), math.radians(5.0))
+    from wormgear_cli.spec.stages import wheel_transverse_pressure_angle  # the one the loader derives with
+
+    a = wheel_transverse_pressure_angle(math.radians(20.0), math.radians(5.0))
     assert math.degrees(a) == pytest.approx(20.07031, abs=1e-5)
-    assert worm.wheel_transverse_pressure_angle(0.3, 0.0) == pytest.approx(0.3, rel=1e-12)
+    assert wheel_transverse_pressure_angle(0.3, 0.0) == pytest.approx(0.3, rel=1e-12)
 
 
 # --- spur stage -------------------------------------------------------------------------------

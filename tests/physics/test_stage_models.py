@@ -102,11 +102,15 @@ def test_maximum_is_vectorised():
         assert v[k] == pytest.approx(float(gear.gear_te_max(r1[k], 180.0, 0.03, ALPHA, 0.0)[0]), rel=1e-12)
 
 
-def test_gear_backlash_uses_the_paper_constant():
-    """6.875 * 2 de tan(alpha) / (m z) arcmin, with de in um (the paper's form)."""
-    value = gear.gear_backlash_max(2.5, 144, 0.030, ALPHA, 0.0)
-    paper_arcmin = 6.875 * 2 * 30.0 * math.tan(ALPHA) / (2.5 * 144)
-    assert to_unit(value, "arcmin") == pytest.approx(paper_arcmin, rel=1e-4)
+def test_gear_backlash_max_by_hand():
+    """De = 30 um, alpha = 20 deg, delta1 = 4 um, m = 2.5 mm, z = 144, at |sin phi| = 1:
+    Delta C = 2 De tan(alpha) + 2 delta1 = 0.060 * 0.3639702 + 0.008 = 0.0298382 mm;
+    Delta phi_ch = 2 Delta C / (m z) = 0.0596764 / 360 = 1.657679e-4 rad = 34.1921 arcsec
+    (the paper's 6.875 / (m z) arcmin per um of arc: 6.875 * 29.8382 / 360 = 0.56983 arcmin)."""
+    value = gear.gear_backlash_max(2.5, 144, 0.030, ALPHA, 0.004)
+    assert value == pytest.approx(1.657679e-4, abs=5e-11)
+    assert to_unit(value, "arcsec") == pytest.approx(34.1921, abs=5e-5)
+    assert to_unit(value, "arcmin") == pytest.approx(0.56983, rel=2e-4)   # 6.875 is 180*60*2/(pi*1000) to 4 digits
 
 
 # --- worm stage -----------------------------------------------------------------------------------

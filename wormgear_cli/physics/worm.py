@@ -13,22 +13,6 @@ import numpy as np
 from wormgear_cli.physics.spur import pitch_arc_to_angle
 
 
-def wheel_transverse_pressure_angle(normal_pressure_angle, lead_angle):
-    """alpha_2 = atan( tan(alpha_n) / cos(lambda) )  [rad].
-
-    For a 90 deg shaft angle the wheel's transverse pressure angle equals
-    the worm's axial pressure angle; for a worm specified by its normal
-    pressure angle (ZN/ZI type) tan(alpha_x) = tan(alpha_n)/cos(gamma)
-    (DIN 3975 relations).
-
-    Parameters
-    ----------
-    normal_pressure_angle : alpha_n [rad], 0 < alpha_n < pi/4
-    lead_angle : lambda [rad], 0 < lambda < pi/4
-    """
-    return np.arctan(np.tan(normal_pressure_angle) / np.cos(lead_angle))
-
-
 def worm_te_halfwidth(lead_error, worm_eccentricity, worm_clearance, radial_composite,
                       wheel_eccentricity, wheel_clearance, lead_angle, transverse_pressure_angle):
     """Half-width of the worm-stage TE envelope  [mm of arc at the wheel pitch circle].

@@ -52,6 +52,17 @@ DEFAULT_NAMES = {"worm": "worm", "spur": "gear", "belt": "belt"}
 ANTI_BACKLASH = {"worm": ("none", "duplex"), "spur": ("none", "split_pinion"), "belt": ("none",)}
 
 
+def wheel_transverse_pressure_angle(normal_pressure_angle: float, lead_angle: float) -> float:
+    """alpha_2 = atan(tan(alpha_n) / cos(lambda)) [rad], the default of ``transverse_pressure_angle_deg``.
+
+    For a 90 deg shaft angle the wheel's transverse pressure angle equals the worm's axial pressure
+    angle; for a worm specified by its normal pressure angle (ZN/ZI type) tan(alpha_x) =
+    tan(alpha_n) / cos(gamma) (DIN 3975).  ``normal_pressure_angle`` alpha_n and ``lead_angle``
+    lambda [rad], scalars.
+    """
+    return math.atan(math.tan(normal_pressure_angle) / math.cos(lead_angle))
+
+
 def _limit(key, attr, what):
     return field_(key, attr, "arcsec", "", f"limit on this stage's {what} at its own output shaft", lo=0.0,
                   hi=1e9, lo_open=True)
@@ -627,7 +638,7 @@ def _defaults(s: StageInput, model_default: str, label: str, problems: list[str]
     if s.kind == "worm" and v["transverse_pressure_angle_deg"] is MISSING:
         an, lam = v["normal_pressure_angle_deg"], v["lead_angle_deg"]
         if MISSING not in (an, lam):
-            v["transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
+            v["transverse_pressure_angle_deg"] = wheel_transverse_pressure_angle(an, lam)
     if s.kind == "spur":
         if v["eccentricity_mm"] is MISSING:
             v["eccentricity_mm"] = v["centre_distance_error_mm"]
