@@ -90,6 +90,11 @@ class BudgetLine(NamedTuple):
 #: search is then refined by a parabola through the three samples around the best one
 PEAK_SAMPLES_PER_CYCLE = 64
 _MIN_PEAK_SAMPLES = 4096
+#: most samples of the phased curve over a turn (orders up to 2**23 / 64 = 131072 are sampled;
+#: faster ones are bounded by their amplitudes, see :func:`phased_extremes`)
+MAX_PEAK_SAMPLES = 2**23
+#: samples evaluated at a time (memory: a few arrays of this length)
+_PEAK_BLOCK = 2**16
 
 
 @dataclass(frozen=True)
@@ -202,23 +207,31 @@ def phased_extremes(sources, phases: dict | None = None) -> tuple[float, float]:
     """(max, min) over one output revolution of the periodic curve sum_k (curve_k(theta, psi_k)
     - offset_k)  [rad]; max - min is its range (peak-to-peak).
 
-    Dense samples (:data:`PEAK_SAMPLES_PER_CYCLE` per cycle of the highest order),
-    then a parabola through the best sample and its neighbours.  ``phases``
+    Dense samples (:data:`PEAK_SAMPLES_PER_CYCLE` per cycle of the highest order), evaluated a
+    block at a time (memory bounded whatever the orders), then a parabola through the best
+    sample and its neighbours.  A train of many stages puts orders at the product of its ratios:
+    past :data:`MAX_PEAK_SAMPLES` samples the orders above ``MAX_PEAK_SAMPLES /
+    PEAK_SAMPLES_PER_CYCLE`` are not sampled; their amplitudes are added to the slower curve's
+    extremes (a bound: a fast term reaches its own peak within half its period of any angle, so
+    the true extremes lie within the slower curve's change over that span of it).  ``phases``
     overrides source phases by name [rad].  (0, 0) when there are no sources.
     """
     phases = phases or {}
     live = [s for s in sources if s.amplitude != 0.0 or (s.peak or 0.0) != 0.0]
     if not live:
         return 0.0, 0.0
-    top = max(max(abs(s.order) for s in live), 1.0)
+    fastest = MAX_PEAK_SAMPLES / PEAK_SAMPLES_PER_CYCLE
+    fast = [s for s in live if abs(s.order) > fastest]
+    slow = [s for s in live if abs(s.order) <= fastest]
+    bound = sum(abs(s.amplitude) for s in fast)
+    top = max([abs(s.order) for s in slow] + [1.0])
     n = max(_MIN_PEAK_SAMPLES, int(math.ceil(PEAK_SAMPLES_PER_CYCLE * top)))
     step = 2.0 * math.pi / n
-    theta = np.arange(n) * step
     # sinusoids of one order add exactly as phasors, sum_k a_k sin(o t + psi_k) = |P| sin(o t + arg P)
     # with P = sum_k a_k exp(i psi_k): one sine per order instead of one per source
     phasors: dict[float, complex] = {}
     others = []
-    for s in live:
+    for s in slow:
         sine = getattr(s.curve, "sine", None)
         psi = phases.get(s.name, s.phase)
         if sine is None:
@@ -232,15 +245,20 @@ def phased_extremes(sources, phases: dict | None = None) -> tuple[float, float]:
             total = total + abs(p) * np.sin(order * t + cmath.phase(p))
         return total
 
-    y = curve(theta)
-    return _refined(curve, theta, y, step), -_refined(lambda t: -curve(t), theta, -y, step)
+    high, low = -math.inf, math.inf
+    for a in range(0, n, _PEAK_BLOCK):  # each block with one sample either side, for the parabola
+        theta = (np.arange(a - 1, min(n, a + _PEAK_BLOCK) + 1)) * step
+        y = curve(theta)
+        high = max(high, _refined(curve, theta, y, step))
+        low = min(low, -_refined(lambda t: -curve(t), theta, -y, step))
+    return high + bound, low - bound
 
 
 def _refined(curve, theta, y, step) -> float:
-    """The largest sample of ``y`` refined by a parabola through it and its neighbours."""
-    n = y.size
-    k = int(np.argmax(y))
-    y0, y1, y2 = y[k - 1], y[k], y[(k + 1) % n]
+    """The largest inner sample of ``y`` (the first and last are its neighbours only) refined by
+    a parabola through it and its neighbours."""
+    k = 1 + int(np.argmax(y[1:-1]))
+    y0, y1, y2 = y[k - 1], y[k], y[k + 1]
     den = y0 - 2.0 * y1 + y2
     best = float(y1)
     if den < 0.0:
