@@ -18,15 +18,18 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 TUTORIAL = (ROOT / "docs" / "tutorial.md").read_text(encoding="utf-8")
 
 
-def readme_commands() -> list[str]:
-    """The quick start's wormgear commands, continuation lines joined, comments dropped."""
+def readme_commands() -> list[tuple[str, int]]:
+    """The quick start's wormgear commands (continuation lines joined, comments dropped) with the
+    exit code each is shown to give: 0, or N where its comment starts "exit N"."""
     section = README[README.index("## Quick start"):]
     block = re.search(r"```sh\n(.*?)```", section, flags=re.S).group(1)
     commands = []
     for line in block.replace("\\\n", " ").splitlines():
-        line = line.split("  #", 1)[0].strip()
+        line, _, comment = line.partition("  #")
+        line = line.strip()
         if line.startswith("wormgear "):
-            commands.append(line[len("wormgear "):])
+            code = re.match(r"\s*exit (\d+)", comment)
+            commands.append((line[len("wormgear "):], int(code.group(1)) if code else 0))
     return commands
 
 
@@ -50,7 +53,7 @@ def test_the_set_up_makes_a_virtual_environment_before_installing(page):
 
 
 def test_the_readme_and_the_tutorial_write_different_templates():
-    readme = _new_targets(readme_commands())
+    readme = _new_targets(c for c, _ in readme_commands())
     tutorial = _new_targets(arg for kind, arg, _ in tutorial_steps() if kind == "run")
     assert readme and tutorial
     assert not readme & tutorial, f"both write {readme & tutorial}: the second stops with 'already exists'"
@@ -70,7 +73,7 @@ def test_the_tutorial_then_the_readme_run_in_one_directory(tmp_path, runner):
             shown = re.search(r"\[exit code (\d+)\]", block)
             r = runner.invoke(app, shlex.split(arg), env=env)
             assert r.exit_code == (int(shown.group(1)) if shown else 0), f"tutorial: wormgear {arg}\n{r.output}"
-        for command in readme_commands():
+        for command, code in readme_commands():
             r = runner.invoke(app, shlex.split(command), env=env)
-            assert r.exit_code == 0, f"README: wormgear {command}\n{r.output}"
+            assert r.exit_code == code, f"README: wormgear {command}\n{r.output}"
             assert "already exists" not in r.output
