@@ -333,6 +333,18 @@ def refuse_same_outputs(outputs) -> None:
                 raise UsageError(f"{quote(b)}: {opt_a} and {opt_b} name the same file")
 
 
+def check_outputs(outputs, inputs=()) -> None:
+    """Every output of a run checked before any work: each a path that may be written
+    (:func:`check_output_path`) and not an input (:func:`refuse_input`), and no two the same
+    file (:func:`refuse_same_outputs`).  ``outputs``: (path or None, option name) pairs;
+    ``inputs``: the run's input files.  Raises UsageError."""
+    outputs = list(outputs)
+    for path, option in outputs:
+        check_output_path(path, option)
+        refuse_input(path, inputs, option)
+    refuse_same_outputs(outputs)
+
+
 def check_output_path(path: str | Path | None, option: str = "-o") -> None:
     """Refuse early (before any work) an output path that can never be written.
 

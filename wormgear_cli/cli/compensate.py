@@ -112,7 +112,9 @@ def compensate(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
-    _check_outputs(output, report_path, inputs)
+    from wormgear_cli.files import check_outputs
+
+    check_outputs([(output, "-o"), (report_path, "--report")], inputs)  # before any work
     is_file = output is not None and str(output) != "-"
     options = CompensateOptions(
         format=fmt, drive=drive,
@@ -133,14 +135,3 @@ def compensate(
         emit(json_text(report(result, unit)), report_path, inputs)
     if result.exceeded:
         raise typer.Exit(1)
-
-
-def _check_outputs(output: Path | None, report_path: Path | None, inputs: list) -> None:
-    """The outputs named apart and none of them an input: refused before any work."""
-    from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
-
-    refuse_same_outputs([(output, "-o"), (report_path, "--report")])
-    refuse_input(output, inputs, "-o")
-    if report_path is not None:
-        check_output_path(report_path, "--report")
-        refuse_input(report_path, inputs, "--report")

@@ -159,15 +159,11 @@ def _check_paths(drive: Path, data: Path, output: Path | None, write_spec: Path 
     """Refuse outputs that would overwrite an input or each other, and a plot or spec file of the wrong
     kind, before any work; returns ``output`` (None for stdout)."""
     from wormgear_cli.errors import UsageError
-    from wormgear_cli.files import check_output_path, refuse_input, refuse_same_outputs
+    from wormgear_cli.files import check_outputs
 
     if output is not None and str(output) == "-":
         output = None
-    targets = [(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")]
-    for target, what in targets:
-        check_output_path(target, what)
-        refuse_input(target, (drive, data), what)
-    refuse_same_outputs(targets)
+    check_outputs([(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")], (drive, data))
     if plot is not None:
         import importlib.util
 

@@ -114,15 +114,13 @@ def measure(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
-    from wormgear_cli.files import refuse_input, refuse_same_outputs
+    from wormgear_cli.files import check_outputs
 
-    refuse_input(output, inputs, "-o")  # before any work, not when the result is written
+    check_outputs([(output, "-o"), (plot, "--plot")], inputs)  # before any work, not when a result is written
     if plot is not None:
         from wormgear_cli.plots import check_plot_path
 
         check_plot_path(plot)
-        refuse_input(plot, inputs, "--plot")
-        refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     options = read_options(column_map, error_unit, angle_unit, input_format, session, pixel_scale, dec_deg, guide_rate)
     check_rows_memory(data, MEASURE_BYTES_PER_ROW, "measure")
     order_list = parse_orders(orders) if orders is not None else None
