@@ -13,8 +13,7 @@ from wormgear_cli.cli.common import (
     JobsOption,
     OutputOption,
     Progress,
-    announce_written,
-    is_stdout,
+    emit_stream,
     jobs_count,
     output_format,
 )
@@ -64,26 +63,11 @@ def merge(
             raise UsageError(f"--format {fmt}: sweep parts join into their CSV; use --format csv")
         if target_yield is not None:
             raise UsageError("--target-yield applies to tolerance parts only")
-        _write(work.joined_csv(got), output, inputs)
+        emit_stream(work.joined_csv(got), output, inputs)
         return
     drive = drive if drive is not None else Path(got[0]["drive"])
     work.check_drive(drive, got)
     _tolerance(got, drive, fmt or "table", target_yield, jobs_count(jobs), output, inputs + [drive])
-
-
-def _write(chunks, output, inputs) -> None:
-    from wormgear_cli.cli.common import write_stdout
-
-    if is_stdout(output):
-        for chunk in chunks:
-            write_stdout(chunk)
-        return
-    from wormgear_cli.files import atomic_stream
-
-    with atomic_stream(output, tuple(inputs)) as write:
-        for chunk in chunks:
-            write(chunk)
-    announce_written(output)
 
 
 def _tolerance(parts, drive, fmt, target_yield, jobs, output, inputs) -> None:
@@ -100,10 +84,10 @@ def _tolerance(parts, drive, fmt, target_yield, jobs, output, inputs) -> None:
     s = work.tolerance_setup(spec, parts, jobs)
     if fmt == "csv":
         if all(p["parameters"]["format"] == "csv" for p in parts):
-            _write(work.joined_csv(parts), output, inputs)
+            emit_stream(work.joined_csv(parts), output, inputs)
         else:
             header = report.csv_header(s)
-            _write((header if b is None else report.csv_rows(s, b)
+            emit_stream((header if b is None else report.csv_rows(s, b)
                     for b in (None, *work.tolerance_blocks(s, parts))), output, inputs)
         return
     summary = work.tolerance_summary(s, parts)
