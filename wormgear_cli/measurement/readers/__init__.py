@@ -103,6 +103,16 @@ def read_source(source, name: str, options: ReadOptions) -> Measurement:
     return fmt.function("read")(source.text(), name, options)
 
 
+def _asked(options: ReadOptions | None, require_error: bool) -> ReadOptions:
+    """``options`` (default: canonical names and units, format detected) with ``require_error``."""
+    from wormgear_cli.measurement.reader import ReadOptions
+
+    options = options or ReadOptions()
+    if options.require_error != require_error:
+        options = dataclasses.replace(options, require_error=require_error)
+    return options
+
+
 def parse_measurement(text: str, name: str = "<data>", require_error: bool = True,
                       options: ReadOptions | None = None) -> Measurement:
     """Read measurement text in any registered format (see the module doc).
@@ -123,12 +133,9 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
     DataError
         One line per problem, naming file, line and column.
     """
-    from wormgear_cli.measurement.reader import ReadOptions
     from wormgear_cli.measurement.readers.source import TextSource, normalised
 
-    options = options or ReadOptions()
-    if options.require_error != require_error:
-        options = dataclasses.replace(options, require_error=require_error)
+    options = _asked(options, require_error)
     return read_source(TextSource(normalised(text), name, options.block_chars), name, options)
 
 
@@ -153,13 +160,11 @@ def read_measurement(path: str | Path, require_error: bool = True, options: Read
         One line per problem, naming file, line and column.
     """
     from wormgear_cli.errors import DataError
-    from wormgear_cli.measurement.reader import MAX_LINE_BYTES, ReadOptions
+    from wormgear_cli.measurement.reader import MAX_LINE_BYTES
     from wormgear_cli.measurement.readers.source import open_source
     from wormgear_cli.spec.filekind import looks_like_drive_lines
 
-    options = options or ReadOptions()
-    if options.require_error != require_error:
-        options = dataclasses.replace(options, require_error=require_error)
+    options = _asked(options, require_error)
     source = open_source(path, "a CSV file", options.max_bytes, MAX_LINE_BYTES, options.block_chars)
     if looks_like_drive_lines(line for _, line in source.lines()):  # a drive spec where the data belong: say so
         raise DataError(f"{path}: a TOML drive spec, not a measurement; expected a CSV file with a header "
