@@ -94,23 +94,27 @@ class HarmonicFit:
 def fit_harmonics(th, y, run, orders: Sequence[float], degree: int = DRIFT_DEGREE) -> HarmonicFit:
     """Least squares of ``y`` on a drift per run (:func:`drift_columns`) and cos/sin at ``orders``
     (minimum-norm where the rows cannot tell orders apart)."""
-    th = np.asarray(th, dtype=float)
     y = np.asarray(y, dtype=float)
     ords = np.asarray(list(orders), dtype=float)
-    drift = drift_columns(th, np.asarray(run), degree)
-    x = np.hstack([drift, harmonic_columns(th, ords)])
-    scale = np.sqrt(np.maximum(np.einsum("ij,ij->j", x, x), 1e-300))
+    x, scale, drifts = _design(th, run, ords, degree)
     coef = np.linalg.lstsq(x / scale, y, rcond=1e-10)[0] / scale
-    h = coef[drift.shape[1]:]
+    h = coef[drifts:]
     return HarmonicFit(ords, h[0::2], h[1::2], y - x @ coef)
+
+
+def _design(th, run, orders: np.ndarray, degree: int) -> tuple[np.ndarray, np.ndarray, int]:
+    """The fit's columns [a drift per run, cos/sin at ``orders``], their norms (the scaling the
+    least squares uses) and the number of drift columns."""
+    th = np.asarray(th, dtype=float)
+    drift = drift_columns(th, np.asarray(run), degree)
+    x = np.hstack([drift, harmonic_columns(th, orders)])
+    return x, np.sqrt(np.maximum(np.einsum("ij,ij->j", x, x), 1e-300)), drift.shape[1]
 
 
 def determinacy(th, run, orders: Sequence[float], degree: int = DRIFT_DEGREE) -> tuple[int, int, int]:
     """(rows, terms, terms the rows tell apart) of the fit :func:`fit_harmonics` makes: the
     design's size and its numerical rank (scaled columns, relative tolerance 1e-10)."""
-    th = np.asarray(th, dtype=float)
-    x = np.hstack([drift_columns(th, np.asarray(run), degree), harmonic_columns(th, np.asarray(list(orders), float))])
-    scale = np.sqrt(np.maximum(np.einsum("ij,ij->j", x, x), 1e-300))
+    x, scale, _ = _design(th, run, np.asarray(list(orders), dtype=float), degree)
     return x.shape[0], x.shape[1], int(np.linalg.matrix_rank(x / scale, tol=None))
 
 
