@@ -240,4 +240,28 @@ FAULTS: dict[str, Fault] = {
         "analysis/sweep.py", "        return np.linspace(self.start, self.stop, self.n)",
         "        return np.linspace(self.start, self.stop, self.n, endpoint=False)",
         "sweep grid stops short of STOP", ("tests/analysis", "tests/cli/test_sweep.py")),
+    # --- this stop's changes: the phased peak, the correction's prediction, the PEC and table checks ----
+    "peak-fast-bound-dropped": Fault(
+        "analysis/budget.py", "    return high + bound, low - bound", "    return high, low",
+        "orders past the sampled ones left out of the phased peak instead of bounded",
+        ("tests/analysis/test_budget.py",)),
+    "peak-block-edge": Fault(
+        "analysis/budget.py", "    k = 1 + int(np.argmax(y[1:-1]))", "    k = int(np.argmax(y[1:-1]))",
+        "the best sample of a block taken one sample off (the neighbours' index shift forgotten)",
+        ("tests/analysis/test_budget.py",)),
+    "predict-remainder-unscaled": Fault(
+        "compensation/predict.py", "    return means * math.sqrt(remainder_var / mean_square)",
+        "    return means",
+        "the cross-validated cell means taken as the remainder with their noise left in",
+        ("tests/compensation", "tests/cli/test_compensate.py")),
+    "predict-own-noise-dropped": Fault(
+        "compensation/predict.py", "    return missed, within * h", "    return missed, 0.0",
+        "the table's own noise left out of a repeat test", ("tests/compensation", "tests/cli/test_compensate.py")),
+    "pec-rows-per-term": Fault(
+        "workflows/compensate.py", "    if told < terms or rows < 2 * terms:", "    if told < terms or rows < terms:",
+        "a PEC curve accepted with as many terms as rows", ("tests/cli/test_compensate.py",)),
+    "table-range-full-turn": Fault(
+        "workflows/compensate.py", "    if coverage(theta).full_turn:", "    if not coverage(theta).full_turn:",
+        "the default table span swapped: a partial arc gets 0-360",
+        ("tests/cli/test_compensate.py", "tests/workflows/test_compensate.py")),
 }

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from tests.support import compensation_data as data
@@ -168,3 +169,15 @@ def test_a_file_name_of_another_format_names_the_endings_that_work(runner, test_
     assert r.exit_code == 2 and not (tmp_path / "x.pec").exists()
     assert r.stderr.endswith("the file name says eqmod, but --format linuxcnc was given; drop --format or name the "
                              "file .comp\n")
+
+
+def test_a_record_with_fewer_than_two_rows_a_term_is_refused_even_when_it_has_full_rank(runner, tmp_path):
+    """14 rows over 1.5 worm cycles tell the 10 terms apart (rank 10) but leave 4 degrees of freedom:
+    the curve would pass near every reading, noise included.  Two rows a term at least."""
+    data = tmp_path / "thin.csv"
+    angles = np.linspace(0.0, 3.75, 14)
+    data.write_text("angle_deg,error_arcsec\n" + "".join(f"{a:.4f},{3 * np.sin(np.radians(144 * a)):.4f}\n"
+                                                        for a in angles))
+    r = run(runner, data, "--drive", FIELD / "telescope-mount.toml", "-f", "eqmod", "-o", tmp_path / "thin.pec")
+    assert r.exit_code == 2 and not (tmp_path / "thin.pec").exists()
+    assert "14 rows cannot give a PEC curve of 10 terms" in r.stderr and "the rows tell 10 apart" in r.stderr
