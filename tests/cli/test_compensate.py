@@ -181,3 +181,43 @@ def test_a_record_with_fewer_than_two_rows_a_term_is_refused_even_when_it_has_fu
     r = run(runner, data, "--drive", FIELD / "telescope-mount.toml", "-f", "eqmod", "-o", tmp_path / "thin.pec")
     assert r.exit_code == 2 and not (tmp_path / "thin.pec").exists()
     assert "14 rows cannot give a PEC curve of 10 terms" in r.stderr and "the rows tell 10 apart" in r.stderr
+
+
+def _mount_rows(keep) -> str:
+    """A tracking record of the field mount (worm order 144, 598.4 s): 5 arcsec at the worm and 1
+    at twice it, a row every 2 s for 6000 s, the rows where ``keep(t)``."""
+    t = np.arange(0.0, 6000.0, 2.0)
+    t = t[keep(t)]
+    angle = 360.0 * t / 86164.0905
+    error = 5.0 * np.sin(np.radians(144 * angle)) + np.sin(np.radians(288 * angle) + 0.5)
+    return "angle_deg,error_arcsec,time_s\n" + "".join(f"{a:.6f},{e:.4f},{s:g}\n" for a, e, s in zip(angle, error, t))
+
+
+def test_a_record_of_pieces_at_one_worm_phase_is_refused(runner, tmp_path):
+    """A minute of every ten (about one worm period) reaches a tenth of the worm cycle: the curve
+    elsewhere is the fit's extrapolation (it came out at 1.4e4 arcsec peak to peak).  The whole
+    record makes the curve (10.3 arcsec)."""
+    data, whole = tmp_path / "pieces.csv", tmp_path / "whole.csv"
+    data.write_text(_mount_rows(lambda t: t % 600 < 60))
+    whole.write_text(_mount_rows(lambda t: t >= 0))
+    r = run(runner, data, "--drive", FIELD / "telescope-mount.toml", "-o", tmp_path / "pieces.pec")
+    assert r.exit_code == 2 and not (tmp_path / "pieces.pec").exists()
+    assert "equal parts of the worm cycle (period 598.4 s) without a reading" in r.stderr
+    r = run(runner, whole, "--drive", FIELD / "telescope-mount.toml", "-o", tmp_path / "whole.pec")
+    assert r.exit_code == 0, r.stderr
+
+
+def test_a_worm_period_shorter_than_a_minute_is_not_taken_from_a_record(runner, tmp_path):
+    """Nine minutes of the CGE log: its strongest period is 15 s (not a worm): refused, asking for
+    --worm-period or --drive, instead of a 15 s PEC curve."""
+    lines = (CONFIGS.parent / "tests" / "data" / "telescope" / "cge-pro-180.guidelog.txt").read_text().splitlines()
+    log = tmp_path / "short.txt"
+    log.write_text("\n".join(lines[:1000]) + "\n")
+    r = run(runner, log, "-o", tmp_path / "short.pec")
+    assert r.exit_code == 2 and "no period of 60 s or longer stands out" in r.stderr
+
+
+def test_one_target_at_a_whole_degree_gets_a_table_a_degree_either_side(runner, tmp_path):
+    r = run(runner, FIELD / "one-position-backlash.csv", "-f", "csv", "-o", tmp_path / "ob.csv")
+    assert r.exit_code == 0, r.stderr
+    assert "table: 361 points, -1 to 1 deg" in r.stderr

@@ -37,6 +37,11 @@ DRIFT_DEGREE = 3
 MIN_FOLD_CYCLES = 0.5
 #: points per worm cycle where the peak-to-peak is read
 PP_POINTS = 3600
+#: worm periods shorter than this [s] are not taken for a mount's worm when found in a record (mounts'
+#: worms turn in 2 to 10 minutes; a shorter strongest period is a motor gear, the seeing or a few samples)
+MIN_WORM_PERIOD_S = 60.0
+#: phase bins of the worm cycle per harmonic of the curve that must each hold a row (see :func:`phase_bins_empty`)
+BINS_PER_HARMONIC = 4
 
 
 def period_of(order: float) -> float:
@@ -164,6 +169,17 @@ def harmonics_of(worm_order: float, orders: Sequence[float], rel_tol: float = 1e
         h = k / worm_order
         (carried if round(h) >= 1 and abs(h - round(h)) <= rel_tol * max(h, 1.0) else other).append(float(k))
     return carried, other
+
+
+def phase_bins_empty(th, worm_order: float, harmonics: int) -> tuple[int, int]:
+    """(empty bins, bins): the worm cycle cut into :data:`BINS_PER_HARMONIC` x ``harmonics`` equal
+    phase bins, those no row falls in.  A curve of ``harmonics`` harmonics is determined only where
+    the rows reach every part of the cycle: a record of short pieces at one phase (a session each
+    worm period, clouds) leaves the rest of the curve to the fit's extrapolation."""
+    bins = BINS_PER_HARMONIC * max(1, int(harmonics))
+    phase = np.mod(np.asarray(th, dtype=float) * worm_order, 2.0 * math.pi)
+    held = np.bincount(np.minimum((phase / (2.0 * math.pi) * bins).astype(int), bins - 1), minlength=bins)
+    return int(np.count_nonzero(held == 0)), bins
 
 
 def cycles_covered(th, run, worm_order: float) -> float:

@@ -359,7 +359,8 @@ def _default_range(theta) -> tuple[float, float]:
     if coverage(theta).full_turn:
         return 0.0, 360.0
     deg = np.degrees(theta)
-    return float(math.floor(deg.min())), float(math.ceil(deg.max()))
+    lo, hi = float(math.floor(deg.min())), float(math.ceil(deg.max()))
+    return (lo, hi) if hi > lo else (lo - 1.0, lo + 1.0)  # one whole-degree angle: a degree either side
 
 
 def _withheld(prediction):
@@ -410,10 +411,12 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
     cov = t.plan.coverage
     deg = np.degrees(theta)
     slack = max(spacing, 1.0)  # the default span is the measured arc rounded out to whole degrees
-    if not cov.full_turn and (deg.min() - t.grid.start_deg > slack or t.grid.end_deg - deg.max() > slack):
+    unmeasured = (t.grid.end_deg - t.grid.start_deg) - math.degrees(cov.span)  # at the ends or in a gap
+    if not cov.full_turn and unmeasured > 2.0 * slack:
         warnings.append(f"the data cover {math.degrees(cov.span):.4g} deg ({deg.min():.4g} to {deg.max():.4g} deg), "
                         f"less than the table's {t.grid.start_deg:g} to {t.grid.end_deg:g} deg: outside the "
-                        "measured arc the table holds the correction of the nearer end")
+                        "measured arc the table holds the correction of the nearer end, and across a gap it "
+                        "interpolates between its edges")
     if deg.min() < t.grid.start_deg - 1e-9 or deg.max() > t.grid.end_deg + 1e-9:
         warnings.append(f"measured angles run from {deg.min():.4g} to {deg.max():.4g} deg, beyond the table's "
                         f"{t.grid.start_deg:g} to {t.grid.end_deg:g} deg (--range): the controller holds the end "
@@ -460,10 +463,11 @@ def _worm_order(m, th, run, options: CompensateOptions, choice: OrderChoice) -> 
         whole = [k for k in choice.orders if pec.cycles_covered(th, run, k) >= 1.0]
         if whole:
             return min(whole), "the lowest of --orders with a whole cycle in the record"
-    found = [p.order for p in strongest_orders(m).significant if pec.cycles_covered(th, run, p.order) >= 1.0]
+    found = [p.order for p in strongest_orders(m).significant
+             if pec.cycles_covered(th, run, p.order) >= 1.0 and pec.period_of(p.order) >= pec.MIN_WORM_PERIOD_S]
     if not found:
-        raise DataError(f"{m.source}: no period stands out of the noise in the record, or it is too short to find a "
-                        "worm period in it; give --worm-period or --drive")
+        raise DataError(f"{m.source}: no period of {pec.MIN_WORM_PERIOD_S:g} s or longer stands out of the noise in "
+                        "the record, or it is too short to find a worm period in it; give --worm-period or --drive")
     return found[0], "the strongest period found in the record"
 
 
@@ -504,6 +508,12 @@ def _pec_path(m, options: CompensateOptions,
                         f"{', '.join(f'{k:.6g}' for k in orders)} and a drift per session; the rows tell {told} "
                         f"apart): at least {2 * terms} rows spread over the worm cycle are needed; record longer "
                         "or more often, or fit fewer orders (--harmonics, --orders)")
+    harmonics = max(int(round(k / worm)) for k in orders if abs(k / worm - round(k / worm)) < 1e-6)
+    empty, bins = pec.phase_bins_empty(th, worm, harmonics)
+    if empty:
+        raise DataError(f"{m.source}: the rows leave {empty} of {bins} equal parts of the worm cycle (period "
+                        f"{period:.4g} s) without a reading: the curve is not determined there; record at least "
+                        "one worm period without gaps")
     curve = pec.pec_curve(theta, y, run, worm, orders)
     prediction = pec.predict_pec(theta, y, run, curve)
     source = where if options.orders is None or options.worm_period_s or choice.worm_order else "--orders"
