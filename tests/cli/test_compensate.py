@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -221,3 +222,20 @@ def test_one_target_at_a_whole_degree_gets_a_table_a_degree_either_side(runner, 
     r = run(runner, FIELD / "one-position-backlash.csv", "-f", "csv", "-o", tmp_path / "ob.csv")
     assert r.exit_code == 0, r.stderr
     assert "table: 361 points, -1 to 1 deg" in r.stderr
+
+
+def test_the_pe_left_counts_the_worm_harmonics_the_curve_does_not_carry(runner, tmp_path):
+    """The mount's PE has 1.0 and 1.2 arcsec at the worm's 2nd and 3rd harmonics (tests/support).
+    A curve of the fundamental only leaves them on the sky: the PE left must be about the
+    peak-to-peak of the two together (4.13 arcsec, computed in the test), not the fundamental's
+    small remainder."""
+    rec = tmp_path / "track.csv"
+    rec.write_text(data.tracking_csv(*data.tracking_rows(seed=5)))
+    r = run(runner, rec, "-o", tmp_path / "mount.pec", "--drive", MOUNT, "--harmonics", "1")
+    assert r.exit_code == 0, r.stderr
+    left = float(re.search(r"arcsec as measured, ([0-9.]+) arcsec left", r.stderr).group(1))
+    u = np.linspace(0.0, 2.0 * np.pi, 100_001)
+    harmonics = 1.0 * np.sin(2 * u + 1.0) + 1.2 * np.sin(3 * u + 2.0)  # data.PE's 2nd and 3rd
+    assert left == pytest.approx(float(np.ptp(harmonics)), rel=0.15)
+    r = run(runner, rec, "-o", tmp_path / "mount3.pec", "--drive", MOUNT)  # all three carried: little left
+    assert float(re.search(r"arcsec as measured, ([0-9.]+) arcsec left", r.stderr).group(1)) < 1.0

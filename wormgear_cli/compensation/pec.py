@@ -40,6 +40,9 @@ PP_POINTS = 3600
 #: worm periods shorter than this [s] are not taken for a mount's worm when found in a record (mounts'
 #: worms turn in 2 to 10 minutes; a shorter strongest period is a motor gear, the seeing or a few samples)
 MIN_WORM_PERIOD_S = 60.0
+#: worm harmonics at least in the PE a curve leaves (twice the curve's, if more): a mount's PE has
+#: content up to the 3rd or 4th harmonic whether the curve carries it or not
+LEFT_HARMONICS = 4
 #: phase bins of the worm cycle per harmonic of the curve that must each hold a row (see :func:`phase_bins_empty`)
 BINS_PER_HARMONIC = 4
 
@@ -275,10 +278,13 @@ def predict_pec(theta, y, run, curve: PecCurve, most: int = 3) -> PecPrediction:
         r = y[held] - part.evaluate(th[held], curve.harmonics)
         x = np.column_stack([np.ones(r.shape[0]), th[held] - th[held].mean()])
         left[held] = r - x @ np.linalg.lstsq(x, r, rcond=None)[0]
-    top = max(len(curve.harmonics), 1) * 2
+    top = max(2 * len(curve.harmonics), LEFT_HARMONICS)
     candidates = sorted({curve.worm_order * h for h in range(1, top + 1)} | set(curve.extra))
-    resid_fit = fit_harmonics(th, left, fold, list(curve.harmonics), degree=0)
-    after = peak_to_peak(resid_fit, curve.worm_order, curve.harmonics, curve.reference)
+    # the PE left is the worm-periodic part of what remains: at the curve's harmonics and at those it
+    # does not carry (up to twice as many), which the mount still shows after PEC
+    worm_harmonics = [curve.worm_order * h for h in range(1, top + 1)]
+    resid_fit = fit_harmonics(th, left, fold, worm_harmonics, degree=0)
+    after = peak_to_peak(resid_fit, curve.worm_order, worm_harmonics, curve.reference)
     scan = order_amplitudes(th, left, np.ones_like(th), candidates)
     best = np.argsort(-scan.common)[:most]
     tops = tuple((float(scan.orders[i]), float(scan.common[i])) for i in best)
