@@ -302,3 +302,17 @@ def test_python_examples_of_the_docs_run(page, block, code, monkeypatch, capsys)
     for claimed in re.findall(r"^print\(.*\)\s*#\s*(.+)$", code, re.M):
         number = claimed.split()[0]
         assert number in printed, f"{page}: shows {claimed!r}, prints {printed}"
+
+
+def test_the_readme_csv_example_is_what_analyze_prints():
+    """The README's `analyze --format csv | cut -d, -f1,2,7,8` block, run."""
+    from typer.testing import CliRunner
+
+    from wormgear_cli.cli import app
+
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"\$ wormgear analyze configs/mch50.toml --format csv \| cut -d, -f1,2,7,8\n(.*?)```", text,
+                      re.S).group(1)
+    r = CliRunner().invoke(app, ["analyze", str(CONFIGS / "mch50.toml"), "--format", "csv"])
+    cut = [",".join(line.split(",")[k] for k in (0, 1, 6, 7)) for line in r.stdout.splitlines()]
+    assert block.splitlines() == cut
