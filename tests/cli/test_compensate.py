@@ -239,3 +239,18 @@ def test_the_pe_left_counts_the_worm_harmonics_the_curve_does_not_carry(runner, 
     assert left == pytest.approx(float(np.ptp(harmonics)), rel=0.15)
     r = run(runner, rec, "-o", tmp_path / "mount3.pec", "--drive", MOUNT)  # all three carried: little left
     assert float(re.search(r"arcsec as measured, ([0-9.]+) arcsec left", r.stderr).group(1)) < 1.0
+
+
+def test_one_direction_gives_the_same_correction_in_both_columns(runner, tmp_path):
+    """Forward runs only, with the per-target means added (orders 1 and 2 leave order 9 at the
+    targets): the reverse column repeats the forward one, as the warning says (the means had gone
+    into the forward column alone)."""
+    a, e, d, r = data.iso_rows(3)
+    fwd = d > 0
+    rec = tmp_path / "fwd.csv"
+    rec.write_text(data.rows_csv(a[fwd], e[fwd], d[fwd], r[fwd]))
+    r = run(runner, rec, "--orders", "1,2", "-f", "csv", "-o", tmp_path / "t.csv")
+    assert r.exit_code == 0, r.stderr
+    assert "per-target means of the residual are added" in r.stderr
+    rows = [line.split(",") for line in (tmp_path / "t.csv").read_text().splitlines()[1:]]
+    assert [row[1] for row in rows] == [row[2] for row in rows]

@@ -211,8 +211,8 @@ def fit_plan(plan: ModelPlan, theta, y, direction, run=None) -> CorrectionModel:
     resid = y - model.error(th, d)
     nt = targets.shape[0]
     means = []
-    for sign in (1.0, -1.0):
-        rows = d == sign
+    # one direction measured: its means serve both columns (the reverse repeats the forward, as said)
+    for rows in ((d > 0, d < 0) if plan.both else (np.ones(d.shape, dtype=bool),) * 2):
         count = np.bincount(index[rows], minlength=nt)
         with np.errstate(invalid="ignore", divide="ignore"):
             means.append(np.bincount(index[rows], weights=resid[rows], minlength=nt) / count)
