@@ -254,3 +254,10 @@ def test_one_direction_gives_the_same_correction_in_both_columns(runner, tmp_pat
     assert "per-target means of the residual are added" in r.stderr
     rows = [line.split(",") for line in (tmp_path / "t.csv").read_text().splitlines()[1:]]
     assert [row[1] for row in rows] == [row[2] for row in rows]
+
+
+def test_the_largest_orders_left_are_listed_largest_first(runner, test_csv, tmp_path):
+    r = run(runner, test_csv, "--orders", "1,2", "-o", tmp_path / "t.comp")
+    line = next(ln for ln in r.stderr.splitlines() if ln.startswith("largest orders left:"))
+    amplitudes = [float(a) for a in re.findall(r"\(([-0-9.e+]+)\)", line)]
+    assert len(amplitudes) >= 2 and amplitudes == sorted(amplitudes, reverse=True)

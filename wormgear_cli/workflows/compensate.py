@@ -670,7 +670,8 @@ def summary(result: CompensateResult, unit: str | None = None) -> list[str]:
                  f"{pe['cycles_left_out']} worm cycles)" if pe["peak_to_peak_after"] is not None else "not predicted")
         lines.append(f"PE peak-to-peak: {_fmt(pe['peak_to_peak_before'])} {unit} as measured, {after}")
         left = [{"order": o["order"], "common": o["amplitude"]} for o in pe["residual_orders"]]
-    if left:
+    if left:  # largest first, as the line says (the table path finds them one after the other)
+        left = sorted(left, key=lambda o: -(o["common"] or 0.0))
         lines.append("largest orders left: " + ", ".join(f"{o['order']:.6g} ({_fmt(o['common'])})" for o in left)
                      + f" {unit}")
     lines += [f"load: {line}" for line in doc["load"]]
