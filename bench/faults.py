@@ -264,4 +264,14 @@ FAULTS: dict[str, Fault] = {
         "workflows/compensate.py", "    if coverage(theta).full_turn:", "    if not coverage(theta).full_turn:",
         "the default table span swapped: a partial arc gets 0-360",
         ("tests/cli/test_compensate.py", "tests/workflows/test_compensate.py")),
+    "pec-phase-gaps-ignored": Fault(
+        "workflows/compensate.py", "    if empty:\n", "    if empty > bins // 2:\n",
+        "a PEC record accepted while half the worm cycle is unread", ("tests/cli/test_compensate.py",)),
+    "pec-left-curve-harmonics-only": Fault(
+        "compensation/pec.py", "    top = max(2 * len(curve.harmonics), LEFT_HARMONICS)",
+        "    top = max(len(curve.harmonics), 1)",
+        "the PE left read only at the harmonics the curve carries", ("tests/cli/test_compensate.py",)),
+    "table-one-direction-means": Fault(
+        "compensation/model.py", "(np.ones(d.shape, dtype=bool),) * 2", "(d > 0, d < 0)",
+        "one direction's per-target means put into its own column only", ("tests/cli/test_compensate.py",)),
 }
