@@ -274,4 +274,10 @@ FAULTS: dict[str, Fault] = {
     "table-one-direction-means": Fault(
         "compensation/model.py", "(np.ones(d.shape, dtype=bool),) * 2", "(d > 0, d < 0)",
         "one direction's per-target means put into its own column only", ("tests/cli/test_compensate.py",)),
+    "sweep-figures-torque-scale": Fault(
+        "analysis/sweep.py", "ref.gear_force * (ref.r2 / r2 if torque", "ref.gear_force * (r2 / ref.r2 if torque",
+        "a design's swept-stage force scaled the wrong way under the torque hold", ("tests/cli/test_sweep.py",)),
+    "sweep-figures-upstream-unscaled": Fault(
+        "analysis/sweep.py", "_load(up) * (ref.i / ratio if torque else 1.0)", "_load(up)",
+        "the stages before the swept one keep the spec's loads under the torque hold", ("tests/cli/test_sweep.py",)),
 }

@@ -1046,7 +1046,8 @@ def _axis(value, option: str):
 
 
 def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | None = None,
-          min_pinion_teeth: int | None = None, jobs: int = 1, stage: int | None = None) -> Sweep:
+          min_pinion_teeth: int | None = None, jobs: int = 1, stage: int | None = None,
+          figures: bool = False) -> Sweep:
     """Gear TE, total TE and total backlash over a grid of gear ratio i and centre distance l.
 
     Parameters
@@ -1068,11 +1069,16 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
         Worker processes (0: every core); the result is the same whatever the count.
     stage : int or None
         The spur stage swept (1-based from the motor); None: the drive's last spur stage.
+    figures : bool
+        With ``module_mm``: add each design's sign-off figures (the budget's totals, amplitudes and
+        range, and the ISO 230-2 A, E, B, M on the spec's ``[test_plan]``; ranges) as points
+        columns [rad], those ``analyze`` gives for the design (about 50 ms a design).
 
     Raises
     ------
     UsageError, SpecError
-        UsageError for a drive without a spur stage, or a ``stage`` that is not one.
+        UsageError for a drive without a spur stage, or a ``stage`` that is not one; for
+        ``figures`` without ``module_mm``.
 
     Examples
     --------
@@ -1093,7 +1099,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     i_values = _axis(i, "--i") if i is not None else [st.gear.teeth / st.pinion.teeth]
     l_values = _axis(l_mm, "--l-mm") if l_mm is not None else [st.module * (st.gear.teeth + st.pinion.teeth) / 2.0]
     sw = core.RatioDistanceSweep(spec, i_values, l_values, hold=hold, module=module_mm, min_teeth=min_pinion_teeth,
-                                 stage=st.index)
+                                 stage=st.index, figures=figures)
     data = sw.collect(0, sw.size, jobs=_jobs(jobs))
     doc = _sweep_report(sw, data, "rad")  # the CLI's document in radians
     points = {c: (AngleArray(data[c]) if c in core.ANGLE_COLUMNS else data[c]) for c in sw.columns}

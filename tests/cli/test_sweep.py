@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from tests.support.paths import CONFIGS
 from wormgear_cli.cli import app
 from wormgear_cli.spec.loader import FIELD_BY_PATH
 
@@ -183,7 +184,6 @@ def test_a_grade_sweep_shows_its_effect_on_the_budget_and_the_acceptance_test(ru
     """Issue 19, item 8: the paper's total has no pitch deviations, so a grade sweep leaves it alone; the
     budget's totals and the ISO 230-2 figures carry the grade (each row against analyze's JSON and check's
     predicted figure, computed by their own commands)."""
-    from tests.support.paths import CONFIGS
 
     drive = CONFIGS / "rotary-table-precision.toml"
     r = run(runner, str(drive), "--param", "gear_pair.output_gear.accuracy_grade=3:7:5", "--format", "json")
@@ -515,3 +515,84 @@ def test_the_core_names_stage_and_the_command_line_says_dash_dash_stage(runner):
     r = run(runner, drive, "--i", "2:4:3", "--l-mm", "100:200:3", "--stage", "2", "--format", "csv")
     assert r.exit_code == 2
     assert r.stderr.startswith(f"error: --stage 2: stage 2 of {drive} is a worm stage")
+
+
+# --- --figures: the sign-off figures of each whole-tooth design ----------------------------------
+
+
+def _analyze_csv(runner, path):
+    r = runner.invoke(app, ["analyze", str(path), "--format", "csv", "--unit", "arcsec"])
+    assert r.exit_code in (0, 1), r.stderr
+    rows = list(csv.reader(io.StringIO(r.stdout)))
+    return dict(zip(rows[0], rows[1]))
+
+
+FIGURES = ("budget_amplitude_linear", "budget_amplitude_statistical", "budget_amplitude_peak", "budget_range_peak",
+           "iso230_A", "iso230_E", "iso230_B", "iso230_M")
+
+
+@pytest.mark.parametrize(("config", "swept", "teeth", "hold", "edits"), [
+    # the legacy precision table states its forces: held as they are (force)
+    ("rotary-table-precision.toml", ("--i", "5:5:1", "--l-mm", "150:150:1", "--module-mm", "2"), (125, 25), "force",
+     (("teeth = 180 ", "teeth = 125 "), ("teeth = 20 ", "teeth = 25 "))),
+    # the HEQ5 derives its loads from the output torque: the torque held (its motor gears at m = 1)
+    ("heq5-spur-worm.toml", ("--i", "6:6:1", "--l-mm", "35:35:1", "--module-mm", "1", "--min-pinion-teeth", "9"), (60, 10), "torque",
+     (("teeth = 9 ", "teeth = 10 "), ("teeth = 47 ", "teeth = 60 "))),
+    # the radar's bull gear after a worm and a spur gearmotor: their loads follow the torque too
+    ("radar-pedestal-2start.toml", ("--i", "6:6:1", "--l-mm", "500:500:1", "--module-mm", "4"), (214, 36), "torque",
+     (("teeth = 25 ", "teeth = 36 "), ("teeth = 200 ", "teeth = 214 "))),
+])
+def test_figures_are_what_analyze_prints_for_the_design_written_as_a_file(runner, tmp_path, config, swept, teeth,
+                                                                          hold, edits):
+    """Independent path: the design written as a drive file (its tooth counts edited in the text) and
+    run through ``wormgear analyze --format csv``.  Its totals equal the sweep row's own (the sweep's
+    vectorised model) and its sign-off figures the row's --figures columns, to the printed digits."""
+    text = (CONFIGS / config).read_text()
+    for old, new in edits:
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    design = tmp_path / config
+    design.write_text(text)
+    want = _analyze_csv(runner, design)
+    r = run(runner, CONFIGS / config, *swept, "--hold", hold, "--figures", "--format", "csv")
+    assert r.exit_code == 0, r.stderr
+    rows = list(csv.DictReader(io.StringIO(r.stdout)))
+    assert len(rows) == 1 and (int(rows[0]["z1"]), int(rows[0]["z2"])) == teeth
+    for name in ("total_transmission_error", "total_backlash", *FIGURES):
+        assert float(rows[0][name]) == pytest.approx(float(want[name]), rel=1e-11), name  # the CSV prints 12 digits
+
+
+def test_figures_columns_follow_the_figures_of_analyze():
+    from wormgear_cli.analysis import figures, sweep
+
+    assert sweep.FIGURE_COLUMNS == tuple(figures.FIGURE_COLUMNS) == FIGURES
+    assert set(FIGURES) <= sweep.ANGLE_COLUMNS
+
+
+def test_figures_change_with_the_design_and_the_tables_show_e(runner):
+    """A larger wheel at the same module lowers the statistical total and E (fewer arcseconds per
+    micrometre); the table view adds their heat maps."""
+    r = run(runner, CONFIGS / "rotary-table-precision.toml", "--i", "9:9:1", "--l-mm", "200:300:2", "--module-mm", "2",
+            "--figures", "--format", "json")
+    assert r.exit_code == 0, r.stderr
+    small, large = json.loads(r.stdout)["points"]
+    assert large["budget_amplitude_statistical"] < small["budget_amplitude_statistical"]
+    assert large["iso230_E"] < small["iso230_E"]
+    r = run(runner, CONFIGS / "rotary-table-precision.toml", "--i", "9:9:1", "--l-mm", "200:300:2", "--module-mm", "2",
+            "--figures")
+    assert r.exit_code == 0 and "ISO 230-2 E on the [test_plan] (range)" in " ".join(r.stdout.split())
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (("--i", "3:9:4", "--figures"), "--figures needs --module-mm: the budget and ISO 230-2 figures are those of "
+                                    "whole-tooth designs (give the module to snap to, e.g. --module-mm 2)"),
+    (("--param", "worm_pair.lead_error_mm=0:0.05:3", "--figures"),
+     "--figures is for --i/--l-mm sweeps; a --param sweep carries the budget and ISO 230-2 figures already"),
+    (("--i", "2:10:1000", "--l-mm", "100:300:101", "--module-mm", "1", "--figures", "--format", "csv"),
+     "--i x --l-mm: 1000 x 101 = 101000 points are more than the limit of 100000 for --figures (each design is a "
+     "full analysis with its budget and acceptance test, about 50 ms); use fewer values or --shard K/N"),
+])
+def test_figures_refused_where_they_cannot_be_made(runner, mch50_path, args, message):
+    r = run(runner, mch50_path, *args)
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == f"error: {message}\n"

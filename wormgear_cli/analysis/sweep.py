@@ -55,9 +55,14 @@ BASE_COLUMNS = ("i", "l_mm", "gear_transmission_error", "total_transmission_erro
                 "gear_backlash", "gear_te_phi_deg", "gear_deflection_um")
 #: extra columns when snapping to whole teeth (``module``)
 MODULE_COLUMNS = ("z1", "z2", "i_used", "l_used_mm")
+#: extra columns with ``figures`` (snapped designs only): the sign-off figures of each design,
+#: :data:`wormgear_cli.analysis.figures.FIGURE_COLUMNS` (kept equal to it by a test; named here so that
+#: the sweep's columns are known without importing the budget and the acceptance test)
+FIGURE_COLUMNS = ("budget_amplitude_linear", "budget_amplitude_statistical", "budget_amplitude_peak",
+                  "budget_range_peak", "iso230_A", "iso230_E", "iso230_B", "iso230_M")
 #: columns holding angles [rad] (converted to the output unit by the CLI)
 ANGLE_COLUMNS = frozenset({"gear_transmission_error", "total_transmission_error", "total_backlash",
-                           "gear_backlash"})
+                           "gear_backlash", *FIGURE_COLUMNS})
 #: columns holding whole numbers
 INTEGER_COLUMNS = frozenset({"z1", "z2"})
 
@@ -74,6 +79,9 @@ MAX_TOOTH_SUM = 10**6
 MAX_MIN_TEETH = 10**6
 #: points evaluated per vectorised block (bounds memory; ~30 MB of temporaries)
 CHUNK_POINTS = 1 << 16
+#: grid points per block with ``figures`` (each kept design is a full analyze, budget and acceptance
+#: prediction, ~50 ms: small blocks spread them over --jobs and move the progress bar)
+FIGURE_CHUNK_POINTS = 64
 #: the paper's thresholds for its findings: l "beyond 0.2 m", i "below about 6"
 PAPER_L_KNEE_MM = 200.0
 PAPER_I_KNEE = 6.0
@@ -280,10 +288,14 @@ class RatioDistanceSweep:
     ``module`` [mm]: snap each point to whole teeth (:meth:`snap`), skipping designs whose
     smaller gear has fewer than ``min_teeth`` teeth (default :func:`undercut_min_teeth`).
     ``stage``: the spur stage swept (1-based; default the last spur stage, :func:`spur_stage`).
+    ``figures``: with ``module``, add each whole-tooth design's sign-off figures (:data:`FIGURE_COLUMNS`:
+    the budget's totals and the ISO 230-2 figures on the spec's test plan), from
+    :meth:`design_spec` through :func:`wormgear_cli.analysis.figures.figures`, i.e. what ``wormgear
+    analyze --format csv`` prints for that design.
     """
 
     def __init__(self, spec, i_values, l_values, hold: str = "force", module: float | None = None,
-                 min_teeth: int | None = None, stage: int | None = None):
+                 min_teeth: int | None = None, stage: int | None = None, figures: bool = False):
         from wormgear_cli.physics import spur as gear
 
         st = spur_stage(spec, stage)
@@ -291,6 +303,10 @@ class RatioDistanceSweep:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
         if module is not None:
             check_module(module)
+        if figures and module is None:
+            raise UsageError("figures: the budget and ISO 230-2 figures are those of whole-tooth designs, which "
+                             "the sweep makes at a module: give module_mm (or sweep the tooth counts with --param "
+                             "stage.N.gear.teeth=...)", parameter="figures")
         if min_teeth is not None and min_teeth < 1:
             raise UsageError(f"min_pinion_teeth {min_teeth}: expected a whole number >= 1",
                              parameter="min_pinion_teeth")
@@ -306,6 +322,7 @@ class RatioDistanceSweep:
                                  "module or a shorter --l-mm range", parameter="module_mm")
         self.hold = hold
         self.module = module
+        self.figures = bool(figures)
         self.alpha = st.pressure_angle
         self.eccentricity = st.model_eccentricity  # the one the chosen kinematics uses, as analyze
         self.min_teeth = (min_teeth if min_teeth is not None else undercut_min_teeth(self.alpha)) \
@@ -330,7 +347,13 @@ class RatioDistanceSweep:
 
     @property
     def columns(self) -> tuple:
-        return BASE_COLUMNS + (MODULE_COLUMNS if self.module is not None else ())
+        return BASE_COLUMNS + (MODULE_COLUMNS if self.module is not None else ()) + \
+            (FIGURE_COLUMNS if self.figures else ())
+
+    @property
+    def chunk_points(self) -> int:
+        """Grid points per block of work (:meth:`spans`)."""
+        return FIGURE_CHUNK_POINTS if self.figures else CHUNK_POINTS
 
     def grid_index(self, start: int, stop: int):
         """(i index, l index) of points [start, stop)."""
@@ -514,15 +537,54 @@ class RatioDistanceSweep:
             uniq, inverse = np.unique(l_used, return_inverse=True)
             peak = tuple(p[inverse] for p in gear.kinematic_peak(uniq, self.eccentricity, self.alpha))
         metrics = self.evaluate(i_used, l_used, peak=peak, teeth=(z1, z2))
-        return {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64), "z2": z2.astype(np.int64),
-                "i_used": i_used, "l_used_mm": l_used, "_point": point}
+        out = {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64), "z2": z2.astype(np.int64),
+               "i_used": i_used, "l_used_mm": l_used, "_point": point}
+        if self.figures:
+            out.update(self._figures(z1, z2))
+        return out
 
-    def spans(self, start: int = 0, stop: int | None = None, chunk: int = CHUNK_POINTS) -> list[tuple[int, int]]:
-        """The chunks [a, b) of grid points [start, stop), as :meth:`chunks` computes them."""
+    def design_spec(self, z1: int, z2: int):
+        """The drive spec of one whole-tooth design: the swept stage with gear and pinion teeth ``z1``,
+        ``z2`` at the sweep's module, its load and the loads of the stages before it as the sweep holds
+        them (``force``: the spec's; ``torque``: the swept stage's force times R2_spec / R2, the stages
+        before it times i_spec / i), written out so that the loader does not derive them again.
+        ``wormgear analyze`` of this spec gives the row's totals (a test holds them equal)."""
+        from wormgear_cli.spec.loader import with_values
+
+        if self.module is None:
+            raise ValueError("design_spec: the sweep has no module (its designs are not whole-tooth)")
+        ref, k = self.reference, self.stage.index
+        z1, z2 = int(z1), int(z2)
+        ratio, r2 = z1 / z2, self.module * z1 / 2.0
+        torque = self.hold == "torque"
+        changes: dict[str, float | int] = {f"stage.{k}.gear.teeth": z1, f"stage.{k}.pinion.teeth": z2,
+                                            f"stage.{k}.module_mm": float(self.module),
+                                            f"stage.{k}.normal_force_N": ref.gear_force * (ref.r2 / r2 if torque
+                                                                                            else 1.0)}
+        for up, _ in self.reference.upstream:
+            key = "effective_tension_N" if up.kind == "belt" else "normal_force_N"
+            changes[f"stage.{up.index}.{key}"] = _load(up) * (ref.i / ratio if torque else 1.0)
+        return with_values(self.spec, changes)
+
+    def _figures(self, z1, z2) -> dict:
+        """:data:`FIGURE_COLUMNS` arrays [rad] of the snapped designs (z1, z2), one full analysis each."""
+        from wormgear_cli.analysis.figures import figures
+
+        cols: dict[str, list[float]] = {c: [] for c in FIGURE_COLUMNS}
+        for a, b in zip(np.asarray(z1).tolist(), np.asarray(z2).tolist()):
+            f = figures(self.design_spec(a, b))
+            for c in FIGURE_COLUMNS:
+                cols[c].append(f[c])
+        return {c: np.asarray(v, dtype=float) for c, v in cols.items()}
+
+    def spans(self, start: int = 0, stop: int | None = None, chunk: int | None = None) -> list[tuple[int, int]]:
+        """The chunks [a, b) of grid points [start, stop), as :meth:`chunks` computes them (``chunk``:
+        default :attr:`chunk_points`)."""
         stop = self.size if stop is None else stop
+        chunk = self.chunk_points if chunk is None else chunk
         return [(a, min(stop, a + chunk)) for a in range(start, stop, chunk)]
 
-    def chunks(self, start: int = 0, stop: int | None = None, chunk: int = CHUNK_POINTS,
+    def chunks(self, start: int = 0, stop: int | None = None, chunk: int | None = None,
                progress: Callable[[int], None] | None = None, jobs: int = 1) -> Iterator[dict]:
         """Column arrays for grid points [start, stop), in blocks of ``chunk`` points.
 
@@ -571,7 +633,8 @@ def check_train(spec, stage: int | None = None) -> None:
 
 def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | None,
                          hold: str | None = None, module: float | None = None,
-                         min_teeth: int | None = None, stage: int | None = None) -> RatioDistanceSweep:
+                         min_teeth: int | None = None, stage: int | None = None,
+                         figures: bool = False) -> RatioDistanceSweep:
     """The (i, l) sweep of ``spec``'s spur stage ``stage`` (default the last spur stage) over checked
     ranges; an axis not given is the stage's own value (i = z1/z2, l = m (z1 + z2)/2 [mm]).  ``hold``
     None means "force"."""
@@ -580,7 +643,7 @@ def ratio_distance_sweep(spec, i_range: RangeSpec | None, l_range: RangeSpec | N
     l_values = l_range.values() if l_range is not None else \
         np.array([st.module * (st.gear.teeth + st.pinion.teeth) / 2.0])
     return RatioDistanceSweep(spec, i_values, l_values, hold=hold or "force", module=module, min_teeth=min_teeth,
-                              stage=st.index)
+                              stage=st.index, figures=figures)
 
 
 def best_points(data: dict) -> dict:

@@ -7,14 +7,20 @@ the option, the limit and what to do instead.
 
 from __future__ import annotations
 
-from wormgear_cli.analysis.sweep import check_param_axes, param_size, shard_bounds
+from wormgear_cli.analysis.sweep import MAX_PARAM_POINTS, check_param_axes, param_size, shard_bounds
 from wormgear_cli.errors import UsageError
 
 
 def check_options(*, params: list, i: str | None, l_mm: str | None, module_mm: float | None,
                   hold: str | None, min_teeth: int | None, shard: str | None, fmt: str,
-                  plot: bool, stage: int | None = None) -> None:
+                  plot: bool, stage: int | None = None, figures: bool = False) -> None:
     """Refuse option combinations that cannot run (UsageError naming them)."""
+    if figures and params:
+        raise UsageError("--figures is for --i/--l-mm sweeps; a --param sweep carries the budget and ISO 230-2 "
+                         "figures already")
+    if figures and module_mm is None and (i is not None or l_mm is not None):
+        raise UsageError("--figures needs --module-mm: the budget and ISO 230-2 figures are those of whole-tooth "
+                         "designs (give the module to snap to, e.g. --module-mm 2)")
     if params and (i is not None or l_mm is not None or module_mm is not None or hold is not None
                    or min_teeth is not None or stage is not None):
         raise UsageError("--param cannot be combined with --i, --l-mm, --stage, --module-mm, --hold or "
@@ -63,13 +69,18 @@ def ratio_distance_limits(fmt: str, plot: bool) -> list:
 
 
 def check_ratio_distance_size(n_i: int, n_l: int, fmt: str, plot: bool,
-                              shard: tuple[int, int] | None = None) -> None:
+                              shard: tuple[int, int] | None = None, figures: bool = False) -> None:
     """Refuse (UsageError) a run whose point count exceeds the limit of its output (see
-    :func:`ratio_distance_limits`), from the axes' sizes alone: nothing is built."""
+    :func:`ratio_distance_limits`), from the axes' sizes alone: nothing is built.  With ``figures``
+    every design is a full analysis, as a --param point: at most MAX_PARAM_POINTS points."""
     total = n_i * n_l
     start, stop = shard_bounds(total, *shard) if shard else (0, total)
     points = stop - start
     where = f"--i x --l-mm: {n_i} x {n_l} = {total} points" + (f" ({points} in this shard)" if shard else "")
+    if figures and points > MAX_PARAM_POINTS:
+        raise UsageError(f"{where} are more than the limit of {MAX_PARAM_POINTS} for --figures (each design is "
+                         "a full analysis with its budget and acceptance test, about 50 ms); use fewer values or "
+                         "--shard K/N")
     for limit, what, instead in ratio_distance_limits(fmt, plot):
         if points > limit:
             raise UsageError(f"{where} are more than the limit of {limit} for {what}; {instead}")

@@ -46,6 +46,8 @@ _SECONDS_PER_RL_POINT = 3e-6
 #: :mod:`wormgear_cli.analysis.sweep_limits`); CSV on stdout is streamed (constant) [bytes]
 _BYTES_PER_POINT = {"table": 160, "json": 3000, "csv": 115, "plot": 160}
 _SECONDS_PER_PARAM_POINT = 5e-3
+_FIGURES_HELP = ("With --module-mm: add each design's sign-off figures (the budget's totals, the ISO 230-2 A, E, B, "
+                 "M on the [test_plan]) as columns, as analyze --format csv prints them; about 50 ms a design.")
 
 
 class HoldMode(str, Enum):
@@ -83,6 +85,7 @@ def sweep(
         "--min-pinion-teeth", help="With --module-mm: skip designs whose smaller gear has fewer teeth "
                                    "(default: undercut limit 2/sin^2(alpha), 17 at 20 deg).",
         show_default=False, click_type=count_type())] = None,
+    figures: Annotated[bool, typer.Option("--figures", help=_FIGURES_HELP)] = False,
     shard: ShardOption = None,
     jobs: JobsOption = 1,
     plot: Annotated[Path | None, typer.Option(
@@ -111,7 +114,7 @@ def sweep(
     unit = getattr(unit, "value", unit)
     params = list(param or [])
     limits.check_options(params=params, i=i, l_mm=l_mm, module_mm=module_mm, hold=hold, min_teeth=min_pinion_teeth,
-                         shard=shard, fmt=fmt, plot=plot is not None, stage=stage)
+                         shard=shard, fmt=fmt, plot=plot is not None, stage=stage, figures=figures)
     if plot is not None:
         check_plot_path(plot)
         from wormgear_cli.files import refuse_same_outputs
@@ -129,7 +132,7 @@ def sweep(
     if module_mm is not None:
         core.check_module(module_mm)
     n_i, n_l = (i_range.n if i_range is not None else 1), (l_range.n if l_range is not None else 1)
-    limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, k_n)
+    limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, k_n, figures)
     _check_memory(n_i * n_l, k_n, fmt, plot is not None)
     if plot is not None:
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
@@ -144,11 +147,12 @@ def sweep(
                   "module_mm": module_mm, "min_pinion_teeth": min_pinion_teeth, "format": fmt, "unit": unit}
     if stage is not None:
         parameters["stage"] = st.index
+    parameters.update({"figures": True} if figures else {})  # a part's manifest: the old runs' stay the same
     out = PartOutput("sweep", drive, output, part, parameters, start, stop, total)
     if out.done():
         return
     sw = core.ratio_distance_sweep(spec, i_range, l_range, hold=getattr(hold, "value", hold),
-                                   module=module_mm, min_teeth=min_pinion_teeth, stage=st.index)
+                                   module=module_mm, min_teeth=min_pinion_teeth, stage=st.index, figures=figures)
     _ratio_distance_sweep(sw, drive, fmt, unit, out, plot, k_n, jobs)
 
 
@@ -209,7 +213,8 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
 
     output = out.output
     start, stop = sw.run_bounds(k_n)
-    with Progress(stop - start, (stop - start) * _SECONDS_PER_RL_POINT, "sweep") as bar:
+    per_point = _SECONDS_PER_PARAM_POINT * 10 if sw.figures else _SECONDS_PER_RL_POINT
+    with Progress(stop - start, (stop - start) * per_point, "sweep") as bar:
         if fmt == "csv" and plot is None:
             chunks = report.ratio_distance_csv(sw, start, stop, unit, bar.advance, jobs)
             rows = -1  # the header line

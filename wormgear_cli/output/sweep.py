@@ -230,6 +230,10 @@ def ratio_distance_tables(sw, data: dict, unit: str) -> list:
         caption += "; '-' = skipped (too few teeth)"
     g.caption = caption
     out = [g, _heat_table(sw, data, "total_transmission_error", "total TE at the output", unit, rows, cols)]
+    if sw.figures:  # what is signed off: the budget's statistical amplitude and the acceptance test's E
+        out += [_heat_table(sw, data, "budget_amplitude_statistical", "budget, statistical total (amplitude)",
+                            unit, rows, cols),
+                _heat_table(sw, data, "iso230_E", "ISO 230-2 E on the [test_plan] (range)", unit, rows, cols)]
     n = data["_point"].size
     columns = [Column("best by"), Column("i", "right"), Column("l [mm]", "right")]
     if sw.module:
