@@ -93,6 +93,21 @@ def test_output_naming_a_directory_is_one_error_line(tmp_path, runner, make):
     assert r.stderr == f"error: {target}: is a directory, expected a file name for -o\n"
 
 
+@pytest.mark.parametrize("exists", [True, False])
+def test_output_ending_with_a_slash_names_a_folder_and_writes_nothing(tmp_path, runner, exists):
+    """``-o out/``: a folder, whether or not it exists (the path object drops the slash: it had
+    written a file named ``out``)."""
+    target = tmp_path / "out"
+    if exists:
+        target.mkdir()
+    r = runner.invoke(app, ["analyze", str(MCH50), "-o", f"{target}/"])
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {target}/: ends with /, which names a folder; expected a file name for -o "
+                        f"(e.g. {target}/result.json)\n")
+    assert target.is_dir() == exists and not (target.exists() and not exists)
+    assert list(tmp_path.iterdir()) == ([target] if exists else [])
+
+
 def test_output_in_a_missing_folder_is_refused_before_any_work(tmp_path):
     with pytest.raises(UsageError, match=r"folder .*nope does not exist for -o$"):
         check_output_path(tmp_path / "nope" / "x.csv")

@@ -61,6 +61,26 @@ FormatOption = Annotated[TableFormat, typer.Option("--format", "-f", help="Outpu
 UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the angular errors in the "
                                                "output (positions such as target angles stay in deg).",
                                                case_sensitive=False)]
+def _output_type():
+    """The click type of -o: a path, refused at once when it ends with "/" (a folder, which the
+    path would otherwise lose: ``-o out/`` wrote a file named ``out``)."""
+    from typer._click.types import ParamType
+
+    class OutputPath(ParamType):
+        name = "path"
+
+        def convert(self, value, param, ctx):
+            text = os.fspath(value)
+            if text.endswith("/") and text != "/":
+                from wormgear_cli.errors import UsageError, quote
+
+                raise UsageError(f"{quote(text)}: ends with /, which names a folder; expected a file name for -o "
+                                 f"(e.g. {quote(text + 'result.json')})")
+            return Path(text)
+
+    return OutputPath()
+
+
 def _check_output(value: Path | None) -> Path | None:
     """-o: a directory or a missing folder is the project's one-line error, before any work."""
     from wormgear_cli.files import check_output_path
@@ -71,7 +91,7 @@ def _check_output(value: Path | None) -> Path | None:
 
 OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
-                                                      callback=_check_output)]
+                                                      callback=_check_output, click_type=_output_type())]
 
 
 # --- the format a file name asks for -----------------------------------------------------------
