@@ -808,7 +808,7 @@ def _compensation(core) -> Compensation:
 
 def compensate(data, format: str | None = None, *, output: PathLike | None = None, drive=None,
                orders: Sequence[float] | None = None, harmonics: int = 3, points: int | None = None,
-               range_deg: tuple[float, float] | None = None, file_type: int = 1, unit: str = "arcsec",
+               range_deg: tuple[float, float] | None = None, file_type: int | None = None, unit: str = "arcsec",
                max_correction=None, worm_period_s: float | None = None, steps_per_worm: int | None = None,
                column_map: dict | None = None, error_unit: str | None = None,
                angle_unit: str | None = None, input_format: str | None = None, sessions=None,
@@ -831,8 +831,8 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     points, range_deg
         Table points and their span [deg] (default: the writer's points; 0 to 360 for data over a
         full turn, the measured arc rounded out to whole degrees for a partial one).
-    file_type : int
-        LinuxCNC COMP_FILE_TYPE (1: corrections, 0: positions reached).
+    file_type : int or None
+        LinuxCNC COMP_FILE_TYPE (1: corrections, 0: positions reached; None: 1); only for ``linuxcnc``.
     unit : str
         Unit of the CSV values, of ``max_correction`` given as a number, and of ``to_dict``.
     max_correction : Angle, float (in ``unit``) or None
@@ -866,7 +866,7 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
         limit = float(max_correction) if isinstance(max_correction, Angle) else from_unit(float(max_correction), unit)
     options = CompensateOptions(format=format, drive=drive, orders=orders, harmonics=int(harmonics), points=points,
                                 range_deg=(float(range_deg[0]), float(range_deg[1])) if range_deg is not None else None,
-                                file_type=int(file_type),
+                                file_type=None if file_type is None else int(file_type),
                                 unit=unit, max_correction=limit, worm_period_s=worm_period_s,
                                 steps_per_worm=steps_per_worm, output=None if output is None else str(output))
     if isinstance(data, Measurement):

@@ -272,3 +272,25 @@ def test_the_largest_orders_left_are_listed_largest_first(runner, test_csv, tmp_
     line = next(ln for ln in r.stderr.splitlines() if ln.startswith("largest orders left:"))
     amplitudes = [float(a) for a in re.findall(r"\(([-0-9.e+]+)\)", line)]
     assert len(amplitudes) >= 2 and amplitudes == sorted(amplitudes, reverse=True)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (("-f", "csv", "--steps-per-worm", "100"), "--steps-per-worm is an option of a mount's PEC curve (--format "
+                                               "eqmod), not of the csv file being written"),
+    (("-f", "csv", "--type", "0"), "--type is an option of LinuxCNC's table (--format linuxcnc), not of the csv "
+                                   "file being written"),
+    (("-f", "linuxcnc", "--worm-period", "600"), "--worm-period is an option of a mount's PEC curve (--format "
+                                                 "eqmod), not of the linuxcnc file being written"),
+    (("-f", "eqmod", "--points", "100"), "--points is an option of a table (--format linuxcnc or csv), not of the "
+                                         "eqmod file being written"),
+    (("-f", "eqmod", "--range", "0:90"), "--range is an option of a table (--format linuxcnc or csv), not of the "
+                                         "eqmod file being written"),
+])
+def test_an_option_the_file_has_no_use_for_is_refused_not_ignored(runner, tmp_path, args, message):
+    """An option that would change nothing in the file written is refused before the data is read
+    (the data here is not even a measurement)."""
+    given = tmp_path / "not-read.csv"
+    given.write_text("not,a,measurement\n")
+    r = run(runner, given, *args, "-o", tmp_path / "out.x")
+    assert r.exit_code == 2 and list(tmp_path.iterdir()) == [given]
+    assert r.stderr == f"error: {message}; drop it or choose that format (--format, or the -o file's ending)\n"

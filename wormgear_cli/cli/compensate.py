@@ -60,9 +60,10 @@ def compensate(
         "--range", metavar="START:END", help="Angles the table spans [deg] (default: 0:360 for data over a "
         "full turn, both ends covered as LinuxCNC holds the end values and does not wrap; the measured arc "
         "rounded out to whole degrees for a partial one).", show_default=False)] = None,
-    file_type: Annotated[int, typer.Option(
+    file_type: Annotated[int | None, typer.Option(
         "--type", help="LinuxCNC COMP_FILE_TYPE: 1 = nominal, correction forward, correction reverse "
-        "(correction = -error); 0 = nominal, position reached forward, reverse.")] = 1,
+        "(correction = -error); 0 = nominal, position reached forward, reverse.  [default: 1]",
+        show_default=False)] = None,
     unit: UnitOption = AngleUnit.arcsec,
     max_correction: Annotated[float | None, typer.Option(
         "--max-correction", help="Largest correction allowed, in --unit: a larger one is a warning and exit "

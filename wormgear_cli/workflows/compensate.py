@@ -57,7 +57,7 @@ class CompensateOptions:
     ending); ``drive``: spec path; ``orders``: orders to fit [cycles/rev];
     ``harmonics``: with ``drive``; ``points``: table points (None: the
     writer's default); ``range_deg``: (start, end) of the table [deg] (None: :func:`_default_range`);
-    ``file_type``: LinuxCNC COMP_FILE_TYPE; ``unit``: unit of the CSV
+    ``file_type``: LinuxCNC COMP_FILE_TYPE (None: 1); ``unit``: unit of the CSV
     values and the report; ``max_correction`` [rad]: the largest correction
     allowed (None: no limit); ``worm_period_s`` [s] and ``steps_per_worm``:
     a mount's; ``output``: where the file goes (None: stdout), used for the
@@ -70,7 +70,7 @@ class CompensateOptions:
     harmonics: int = DEFAULT_HARMONICS
     points: int | None = None
     range_deg: tuple[float, float] | None = None
-    file_type: int = 1
+    file_type: int | None = None
     unit: str = "arcsec"
     max_correction: float | None = None
     worm_period_s: float | None = None
@@ -92,7 +92,7 @@ class CompensateOptions:
 
     def check(self) -> None:
         problems = []
-        if self.file_type not in (0, 1):
+        if self.file_type not in (None, 0, 1):
             problems.append(f"--type: expected 0 or 1 (LinuxCNC COMP_FILE_TYPE), got {self.file_type}")
         if not 1 <= self.harmonics <= 10:
             problems.append(f"--harmonics: expected an integer in [1, 10], got {self.harmonics}")
@@ -207,7 +207,7 @@ def compensate(data, options: CompensateOptions | None = None, read_options=None
 
     options = options or CompensateOptions()
     options.check()
-    options.writer()  # a bad --format fails before the file is read
+    _check_applies(options, options.writer())  # a bad --format or a stray option fails before the file is read
     return compensate_measurement(read_measurement(data, options=read_options), options)
 
 
@@ -223,6 +223,7 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
     options = options or CompensateOptions()
     options.check()
     writer = options.writer()
+    _check_applies(options, writer)
     choice = choose_orders(options)
     m = measurement
     details: TableDetails | PecDetails
@@ -245,11 +246,30 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
         u = options.unit
         warnings.append(f"the largest correction, {to_unit(largest, u):.4g} {u}, exceeds --max-correction "
                         f"{to_unit(options.max_correction, u):.4g} {u}")
-    wopts = WriteOptions(unit=options.unit, file_type=options.file_type, steps_per_worm=steps, caption=caption,
+    file_type = 1 if options.file_type is None else options.file_type
+    wopts = WriteOptions(unit=options.unit, file_type=file_type, steps_per_worm=steps, caption=caption,
                          path=options.output)
     text = writer.write(written, wopts)
     return CompensateResult(m.source, writer, text, tuple(writer.instructions(wopts)), choice, tuple(warnings),
                             tuple(notes), bool(exceeded), details, options)
+
+
+def _check_applies(options: CompensateOptions, writer) -> None:
+    """UsageError for an option the file being written has no use for (it would be ignored without a
+    word): a table's (--points, --range, --type) with a PEC curve, a mount's (--worm-period,
+    --steps-per-worm) with a table, --type with another table than LinuxCNC's."""
+    from wormgear_cli.output.writers import PEC_CURVE
+
+    pec = writer.accepts == PEC_CURVE
+    table, mount = "a table (--format linuxcnc or csv)", "a mount's PEC curve (--format eqmod)"
+    rules = [("--points", options.points, not pec, table), ("--range", options.range_deg, not pec, table),
+             ("--type", options.file_type, writer.name == "linuxcnc", "LinuxCNC's table (--format linuxcnc)"),
+             ("--worm-period", options.worm_period_s, pec, mount), ("--steps-per-worm", options.steps_per_worm, pec,
+                                                                    mount)]
+    for flag, value, applies, whose in rules:
+        if value is not None and not applies:
+            raise UsageError(f"{flag} is an option of {whose}, not of the {writer.name} file being written; drop it "
+                             "or choose that format (--format, or the -o file's ending)")
 
 
 # --- the table path --------------------------------------------------------------------------------------
