@@ -240,6 +240,27 @@ def test_direction_from_velocity_with_standstill_rows_left_out_and_kept_out_of_t
 # --- encoder counts --------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("unit", ["mm", "µm", "um"])
+def test_a_length_is_never_proposed_nor_read_as_an_angular_error(runner, tmp_path, unit):
+    """An error column in a length (a linear axis's, or a rotary one's measured at a radius) read as
+    arcseconds gives numbers that are all wrong: the hint no longer proposes it, a --map naming it is
+    refused (it had been read as arcsec without a word)."""
+    path = tmp_path / "lengths.csv"
+    path.write_text(f"angle (deg),error ({unit})\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
+    result = runner.invoke(app, ["measure", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: missing required column error_arcsec (header has: angle (deg), "
+                             f"error ({unit})); name the columns with --map CANONICAL=HEADER (\"error ({unit})\" "
+                             "states a length, not an angle: convert it to one, arc length / the radius it was "
+                             "measured at, in a column of its own)\n")
+    result = runner.invoke(app, ["measure", str(path), "--map", f"error_arcsec=error ({unit})"])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: column 'error ({unit})' states a length ({unit}), not an angle: a "
+                             "rotary axis's error is read as an angle; convert it (angle = arc length / the radius "
+                             "it was measured at) in a column of its own and read that as error_arcsec\n")
+
+
+
 def test_counts_are_never_suggested_as_an_angle_nor_accepted_as_degrees(runner, tmp_path):
     path = tmp_path / "counts.csv"
     # 'Pos' is a position by its name, but its cells are whole numbers up to 4098: counts, not degrees

@@ -49,6 +49,8 @@ _UNITS = {
 #: unit spellings of encoder counts: such a column is not an angle in any unit the tool reads
 COUNT_UNITS = ("counts", "count", "cts", "cnt", "inc", "incr", "increments", "ticks", "steps", "pulses", "lsb",
                "digits", "bits", "raw")
+#: unit spellings of lengths: a column in one holds a linear axis's position or error, not an angle
+LENGTH_UNITS = ("mm", "um", "µm", "μm", "micron", "microns", "in", "inch", "mil")
 #: keywords (several languages) that suggest a canonical column, for the --map hint
 _KEYWORDS = {
     "angle_deg": ("angle", "position", "pos", "winkel", "angulo", "ángulo", "posición", "posicion", "angolo",
@@ -125,7 +127,7 @@ def stated_unit(cell: str, canon: str) -> str | None:
 def _guess(cell: str) -> str | None:
     """The canonical column a header cell most likely is (unit suffix first, then keywords), or None."""
     base, unit = split_unit(cell)
-    if unit in COUNT_UNITS:
+    if unit in COUNT_UNITS or unit in LENGTH_UNITS:
         return None
     if unit is not None and unit in _UNITS:
         fits = _UNITS[unit][1]
@@ -269,6 +271,13 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
                 del index[other]
         index[canon] = j
         hunit[canon] = stated_unit(header[j], canon)
+    for canon, j in index.items():
+        unit = split_unit(header[j])[1]
+        if canon in (*_ANGLES, "error_arcsec") and unit in LENGTH_UNITS:
+            problems.append(f"{name}:{line}: column {header[j]!r} states a length ({unit}), not an angle: a rotary "
+                            f"axis's {'error' if canon == 'error_arcsec' else 'position'} is read as an angle; "
+                            "convert it (angle = arc length / the radius it was measured at) in a column of its own "
+                            f"and read that as {canon}")
     for canon in _ANGLES:
         if canon in index and is_counts(header[index[canon]]):
             problems.append(f"{name}:{line}: column {header[index[canon]]!r} holds encoder counts, not an angle: "
@@ -279,8 +288,12 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
     missing = [c for c in required if c not in index and not (c == "error_arcsec" and "actual_deg" in index)]
     if missing:
         guessed = suggest_map(header, index, sample)
+        lengths = [h for h in header if split_unit(h)[1] in LENGTH_UNITS]
         fix = (f"; try {' '.join(guessed)}" if guessed else f"; {hint}" if hint
                else "; name the columns with --map CANONICAL=HEADER")
+        if lengths:  # not proposed: a length read as an angle gives numbers, all wrong
+            fix += (f" ({', '.join(map(quote, lengths))} state{'s' if len(lengths) == 1 else ''} a length, not an "
+                    "angle: convert it to one, arc length / the radius it was measured at, in a column of its own)")
         raise DataError(f"{name}:{line}: missing required column{'s' if len(missing) > 1 else ''} "
                         f"{', '.join(missing)} (header has: "
                         f"{', '.join(_clipped(h) for h in header) or 'nothing'}){fix}")
