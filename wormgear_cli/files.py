@@ -1047,7 +1047,7 @@ def remove_stale_staged(folder: str | Path) -> list[str]:
     host's tag, owned by this user, whose process PID no longer exists.  Returns the names
     removed.  Files of live processes, of other hosts (a shared network folder) or other
     users are left alone."""
-    removed = []
+    removed: list[str] = []
     host, me, uid = _host_tag(), os.getpid(), os.getuid() if hasattr(os, "getuid") else None
     try:
         entries = list(os.scandir(folder))
@@ -1139,6 +1139,7 @@ def atomic_stream(path: str | Path, inputs: tuple = (), option: str | None = Non
     path = Path(path)
     kind, dest, fd = _destination(path, option)
     if kind == "descriptor":  # exactly like "-": no input to protect, nothing to stage
+        assert fd is not None  # (_destination gives a descriptor's number with it)
         yield _descriptor_writer(path, fd)
         return
     refuse_input(path, inputs, option or "-o")
@@ -1175,7 +1176,7 @@ def _staged(path: Path, dest: Path, tx: _Transaction, exclusive: bool):
         old = None if exclusive else os.stat(dest)
     except OSError:
         old = None
-    fd = None
+    fd: int | None = None
     try:
         with signals_deferred():  # the staged file is registered as soon as it exists
             fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
@@ -1184,7 +1185,7 @@ def _staged(path: Path, dest: Path, tx: _Transaction, exclusive: bool):
         if old is not None:
             _keep_owner_and_mode(fd, old)
         os.fsync(fd)  # on disk before it is renamed into place (a power cut leaves old or new)
-        fd, _fd = None, fd
+        _fd, fd = fd, None
         os.close(_fd)  # a deferred write error (NFS, quota) surfaces here
     except BaseException as exc:
         if fd is not None:

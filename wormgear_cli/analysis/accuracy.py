@@ -17,11 +17,14 @@ their replacement, for callers that hold them.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from wormgear_cli.units import to_unit
+
+if TYPE_CHECKING:
+    from wormgear_cli.drive.registry import Registry
 
 #: flat metric columns of a [worm, spur] drive (CSV of analyze, columns of sweep --param); all angles
 METRIC_COLUMNS = (
@@ -159,7 +162,7 @@ class Analysis:
     angles: dict
     info: dict
     stages: tuple = ()
-    registry: object = field(default=None, repr=False, compare=False)
+    registry: Registry | None = field(default=None, repr=False, compare=False)
 
     @property
     def columns(self) -> tuple[tuple, tuple]:
@@ -251,7 +254,7 @@ def _stage_report(r, a: dict, i: dict) -> dict:
     return out
 
 
-def analyze(spec, registry=None) -> Analysis:
+def analyze(spec, registry: Registry | None = None) -> Analysis:
     """Each stage's model and the totals at the output for one drive.
 
     Stage values are at each stage's own output shaft (as the paper reports
@@ -267,7 +270,8 @@ def analyze(spec, registry=None) -> Analysis:
     total_te, total_bl = reg.totals()
     extra = reg.backlash_additions()  # drive-level lost motion: in the total, in no stage's share
     angles: dict = {f"drive_backlash_{k}": v for k, v in extra.items()}
-    info: dict = {"total_ratio": reg.train.total_ratio, "deflection_model": spec.stiffness.model}
+    train: Any = reg.train  # (the registry's train is typed object in drive.registry)
+    info: dict = {"total_ratio": train.total_ratio, "deflection_model": spec.stiffness.model}
     for r, (te_pct, bl_pct) in zip(reg.results, shares(reg.results, total_te, total_bl - sum(extra.values()))):
         n = r.name
         angles[f"{n}_transmission_error"] = r.transmission_error

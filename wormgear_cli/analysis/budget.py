@@ -153,7 +153,7 @@ def statistical_total(amplitudes, orders, static=0.0):
     to 1e-9 relative are one order); ``static``: the static lines' sum.  Vectorised over the
     amplitudes' shape, so a sampler can call it on arrays (docs/budget.md, "How the lines
     combine")."""
-    groups: dict[float, object] = {}
+    groups: dict[float, float | np.ndarray] = {}
     keys: list[float] = []
     for a, o in zip(amplitudes, orders):
         key = next((k for k in keys if abs(k - o) <= 1e-9 * max(abs(k), abs(o), 1.0)), None)
@@ -178,6 +178,7 @@ def budget(spec, analysis=None) -> Budget:
 
     a = analysis if analysis is not None else analyze(spec)
     reg = a.registry
+    assert reg is not None  # (analyze keeps the registry it built)
     sources = reg.periodic(all_budget_sources=True)
     all_lines = tuple(
         BudgetLine(x.name, x.stage, x.kind, 0.0, float(x.amplitude), x.origin, 0.0, x.stage_index, x.stage_kind,

@@ -211,7 +211,7 @@ class _Scan:
     span: float
     full_turn: bool
     d: np.ndarray | None = None  # directions when both occur (then each order has a differential pair too)
-    q: np.ndarray = field(default=None)  # orthonormal basis of base and the accepted peaks
+    q: np.ndarray | None = field(default=None)  # orthonormal basis of base and the accepted peaks
     peaks: list = field(default_factory=list)
     q_peaks: int = 0  # peaks already in q
     normal: tuple | None = None  # (peaks, X'X, X'y) of the last normal equations
@@ -275,6 +275,7 @@ class _Scan:
             x = self.design(a, b)
             g, r = x.T @ x, x.T @ self.y[a:b]
             gram, rhs = (g, r) if gram is None else (gram + g, rhs + r)
+        assert gram is not None and rhs is not None  # (blocks() gives at least one block)
         self.normal = (key, gram, rhs)
         return gram, rhs
 
@@ -710,6 +711,7 @@ def _series_powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray, series: l
     """Sum of squares of ``resid`` explained by the columns of h x k for h in ``series``, for each k of
     ``orders``, the model's basis ``scan.q`` projected out (NaN where the columns are degenerate)."""
     q = scan.q
+    assert q is not None  # (the series are refined on a scan that keeps its basis)
     out = np.full(orders.shape[0], np.nan)
     for i, k in enumerate(orders):
         c = np.hstack([scan.trig(h * float(k)) for h in series])
@@ -737,6 +739,7 @@ def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
     if scan.sw is None:
         resid, unit = scan.y - fitted, None
     else:
+        assert scan.rows is not None  # (rows reduced to units: sw and rows are set together)
         y_rows, unit = scan.rows
         resid = y_rows - (fitted / scan.sw)[unit]
     n = resid.shape[0]
@@ -765,6 +768,7 @@ def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
 
 def _scores(scan: _Scan, serial: SerialBlocks, v: np.ndarray, unit, p: int) -> np.ndarray:
     """Per block, the sum over its rows of x_t v_t (x_t the row's model and peak columns)."""
+    assert serial.block_id is not None  # (called for serial blocks only)
     scores = np.zeros((serial.blocks, p))
     for a, b in scan.blocks():
         x = scan.design(a, b)

@@ -307,14 +307,15 @@ def _params(sec: _Section, number: int, opts: GuideLogOptions, name: str) -> tup
     problems = [p for p in (p1, p2, p3) if p]
     if problems:
         return None, problems
+    assert scale is not None and dec is not None  # (each comes with a problem when it is missing)
     x_angle = _value(sec.header, rf"xAngle = ({_NUMBER})")
     lock = _find(sec.header, rf"Lock position = ({_NUMBER}), ({_NUMBER})")
-    lock_xy = None if lock is None else (_num(lock[1].group(1)), _num(lock[1].group(2)))
+    lock_x, lock_y = (None, None) if lock is None else (_num(lock[1].group(1)), _num(lock[1].group(2)))
     hour = _value(sec.header, rf"Hour angle = ({_NUMBER}) hr")
     pier = _find(sec.header, r"Pier side = (East|West)")
     return _Params(scale, scale_how, dec, dec_how, rate, rate_how,
                    None if x_angle is None else x_angle * DEG,
-                   None if lock_xy is None or None in lock_xy else lock_xy,
+                   None if lock_x is None or lock_y is None else (lock_x, lock_y),
                    hour if hour is not None and abs(hour) <= 24.0 else None,
                    None if pier is None else pier[1].group(1)), []
 
@@ -373,6 +374,7 @@ def _cells(sec: _Section, name: str) -> tuple[dict, tuple | None, np.ndarray, in
     the rows), the rest of each row after them (None when no row has more), the rows' line numbers
     and the line of an incomplete last row left out (0: none)."""
     cols = sec.columns
+    assert cols is not None  # (the sections read have their column line)
     missing = [c for c in NEEDED_COLUMNS if c not in cols]
     if missing:
         raise DataError(f"{name}:{sec.column_line}: the column line lacks {', '.join(missing)}; expected PHD2's "
@@ -397,6 +399,7 @@ def _cells(sec: _Section, name: str) -> tuple[dict, tuple | None, np.ndarray, in
 
 def _flagged(sec: _Section, rest: tuple | None, idx: np.ndarray) -> int:
     """Rows ``idx`` whose ErrorCode (a star warning) is not 0, from the rest of each row."""
+    assert sec.columns is not None  # (the sections read have their column line)
     j = sec.columns.get("ErrorCode")
     need = max(sec.columns[c] for c in NEEDED_COLUMNS) + 1
     if j is None or rest is None or j < need:
@@ -452,6 +455,7 @@ def _fast_frames(sec: _Section) -> _Frames | None:
     Python object per cell); None when anything is out of the ordinary (the exact path then
     finds it and names the line)."""
     cols, rows = sec.columns, sec.rows
+    assert cols is not None  # (the sections read have their column line)
     if not rows or any(c not in cols for c in NEEDED_COLUMNS):
         return None
     need = max(cols[c] for c in NEEDED_COLUMNS) + 1
@@ -548,12 +552,12 @@ def _events(sec: _Section, p: _Params, time: np.ndarray) -> _Events:
     """Lock shifts along RA (dithers, lock-position changes, lock-shift rates) and manual pulses."""
     n = time.shape[0]
     projected = p.x_angle is not None and p.lock is not None
-    cx, sy = (math.cos(p.x_angle), math.sin(p.x_angle)) if projected else (0.0, 0.0)
+    cx, sy = (math.cos(p.x_angle), math.sin(p.x_angle)) if projected and p.x_angle is not None else (0.0, 0.0)
 
     def ra(x, y):
         return x * cx + y * sy
 
-    ra0 = ra(*p.lock) if projected else 0.0
+    ra0 = ra(*p.lock) if projected and p.lock is not None else 0.0
     segments = [(0, ra0, 0.0, 0.0)]  # (first row, RA of the lock [px], at time [s], RA rate [px/s])
     manual, unplaced = [], []
     dithers = moves = 0
@@ -698,7 +702,9 @@ def _place(sessions: list[_Session]) -> tuple[list[float], list[float], list[str
         ref = next((j for j in range(k - 1, -1, -1) if sessions[j].sec.start is not None), None)
         prev_end = times[-1] + float(prev.frames.time[-1]) if prev.frames.time.size else times[-1]
         if s.sec.start is not None and ref is not None:
-            t0 = times[ref] + (s.sec.start - sessions[ref].sec.start).total_seconds()
+            ref_start = sessions[ref].sec.start
+            assert ref_start is not None  # (ref is a session with a start time)
+            t0 = times[ref] + (s.sec.start - ref_start).total_seconds()
             if t0 >= prev_end - 1.0:
                 clock = angles[ref] + rate * (t0 - times[ref])
                 times.append(t0)
@@ -839,11 +845,13 @@ def read_guidelog(text: str, name: str = "<guide log>", options: GuideLogOptions
     notes = (_notes(found, sessions, empty, sign, rel, decided, plus + minus > 0) + place_notes + notes
              + [w for s in sessions for w in _event_notes(s)])
     n = sum(s.time.size for s in sessions)
+    col_index = sessions[0].sec.columns
+    assert col_index is not None  # (the sections read have their column line)
     return Measurement(
         source=name, angle=np.concatenate(angle), error=np.concatenate(error), direction=np.ones(n),
         run=np.concatenate(run), load=np.zeros(n), temperature=np.full(n, 20.0), time=np.concatenate(time),
         present=frozenset({"run", "time_s"}),
-        header=tuple(sorted(sessions[0].sec.columns, key=sessions[0].sec.columns.get)), comments=(),
+        header=tuple(sorted(col_index, key=col_index.__getitem__)), comments=(),
         notes=tuple(notes), warnings=tuple(warnings), input_format="phd2", run_drift=True,
         columns=(("angle_deg", "Time"), ("error_arcsec", "RARawDistance"), ("run", "Guiding Begins"),
                  ("time_s", "Time")))

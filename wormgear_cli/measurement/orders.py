@@ -331,9 +331,9 @@ def _alias_and_fold(state: _Decisions, design: _Design, tol: float, cov: Coverag
         folded = set(_folded(arr, cp, tol))
     else:
         groups, folded = [], set()
-    for g in groups:
-        for k in g:
-            state.group_of[k] = g
+    for grp in groups:
+        for k in grp:
+            state.group_of[k] = grp
     candidates = []
     for k in req.by_priority:
         if k in state.status:
@@ -534,6 +534,7 @@ def _fill_harmonics(blk: np.ndarray, first: int, theta: np.ndarray, ords: np.nda
                 if k & bit:
                     r = squares[bit] if r is None else r * squares[bit]
                 bit *= 2
+            assert r is not None  # (every order here is an integer >= 1)
             blk[:, first + 2 * j] = r.real
             blk[:, first + 2 * j + 1] = r.imag
         return
@@ -641,6 +642,7 @@ def _score_sums(sums: _AngleSums, ords: np.ndarray, resid: np.ndarray, serial: S
     """Per block, the sum over its rows of x_t e_t (x_t: the row's design [B, d B], e_t its residual),
     accumulated over the distinct (block, unit) pairs."""
     u = sums.ut.shape[0]
+    assert serial.block_id is not None  # (called for serial blocks only)
     key = serial.block_id.astype(np.int64) * u + sums.inverse
     pairs, pinv = np.unique(key, return_inverse=True)
     pinv = pinv.reshape(-1)

@@ -147,6 +147,7 @@ def _serial_stderr(theta, orders, cols, fit, run, time) -> tuple[np.ndarray, str
     x = np.hstack([np.ones((n, 1)), harmonic_columns(theta, orders), cols])
     gram_inv = np.linalg.pinv(x.T @ x, hermitian=True)
     scores = np.zeros((serial.blocks, x.shape[1]))
+    assert serial.block_id is not None  # (not independent: the rows are in blocks)
     np.add.at(scores, serial.block_id, x * serial.whiten(fit.residual)[:, None])
     cov = block_covariance(gram_inv, scores, n) * serial.recolour
     a, b = fit.cos, fit.sin
@@ -204,7 +205,7 @@ def periodic_error(theta, y, order: float, *, time=None, run=None, harmonics: in
              if not np.any(np.abs(worm_orders - e) <= 1e-9 * max(abs(e), 1.0))]
     orders = np.concatenate([worm_orders, np.asarray(extra, dtype=float)])
     cols = drift_columns(theta if time is None else as_1d("time", time, n), run, drift_degree)
-    fit = fit_orders(theta, y, orders, design_extra=cols)
+    fit = fit_orders(theta, y, orders.tolist(), design_extra=cols)
     amp_se, serial = _serial_stderr(theta, orders, cols, fit, run, time)
     coef = np.empty(2 * orders.shape[0])
     coef[0::2], coef[1::2] = fit.cos, fit.sin

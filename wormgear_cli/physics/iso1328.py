@@ -214,9 +214,9 @@ def flank_tolerances(grade: int, module: float, diameter: float, face_width: flo
     f_fa = (0.55 * m + 5.0) * s
     f_hb = (0.05 * math.sqrt(d) + 0.35 * math.sqrt(b) + 4.0) * s
     f_fb = (0.07 * math.sqrt(d) + 0.45 * math.sqrt(b) + 4.0) * s
-    r = round_tolerance
-    return FlankTolerances(grade, r(f_pt), r(f_p), r(f_ha), r(f_fa), r(math.hypot(f_ha, f_fa)),
-                           r(f_hb), r(f_fb), r(math.hypot(f_hb, f_fb)), r(0.9 * f_p))
+    rt = round_tolerance
+    return FlankTolerances(grade, rt(f_pt), rt(f_p), rt(f_ha), rt(f_fa), rt(math.hypot(f_ha, f_fa)),
+                           rt(f_hb), rt(f_fb), rt(math.hypot(f_hb, f_fb)), rt(0.9 * f_p))
 
 
 #: the coarsest accuracy used as a plausibility scale: one class beyond ISO 1328-1's coarsest (11),

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from wormgear_cli.tolerance import statistics as stats
 from wormgear_cli.tolerance.quantities import Varied, layout, varied_quantities
 from wormgear_cli.tolerance.sampling import BLOCK, draw
 from wormgear_cli.units import RAD_PER_UNIT, to_unit
+
+if TYPE_CHECKING:
+    from wormgear_cli.spec.loader import Spec
 
 PLANS = ("iso", "dense")
 #: most samples of one run (or one shard)
@@ -120,7 +124,7 @@ class Setup:
     [deg]), the ``metrics`` computed, the samples [``start``, ``stop``), the test
     ``targets_deg`` and the metric :class:`~.metrics.Context`."""
 
-    spec: object
+    spec: Spec
     options: Options
     varied: tuple
     columns: tuple
@@ -129,7 +133,7 @@ class Setup:
     start: int
     stop: int
     targets_deg: np.ndarray
-    context: object = field(repr=False)
+    context: metrics_mod.Context = field(repr=False)
     layout: object = field(default=None, repr=False)
 
 
@@ -256,14 +260,15 @@ class Accumulator:
     :data:`~.statistics.IN_MEMORY_SAMPLES` values per metric and :data:`PLOT_SAMPLES` for plots."""
 
     def __init__(self, s: Setup):
-        self.setup, self.centres = s, None  # sums about the first sample's values (against cancellation)
-        self.moments = None
+        self.setup = s
+        self.centres: dict[str, float] | None = None  # sums about the first sample's values (against cancellation)
+        self.moments: dict[str, stats.Moments] | None = None
         self.order = {m: stats.OrderStatistics() for m in s.metrics}
         self.bins = stats.BinSums(s.columns, s.metrics)
         self.limits = limits(s)
         self.passing = dict.fromkeys(self.limits, 0)
         self.passing_all = 0
-        self.plot = {m: [] for m in s.metrics}
+        self.plot: dict[str, list[np.ndarray]] = {m: [] for m in s.metrics}
         self.n = 0
 
     def add(self, block: Block) -> None:
@@ -272,6 +277,7 @@ class Accumulator:
         if self.centres is None:
             self.centres = {m: float(block.metrics[m][0]) for m in s.metrics}
             self.moments = {m: stats.Moments(self.centres[m]) for m in s.metrics}
+        assert self.moments is not None  # (set with the centres, by the first block)
         for m in s.metrics:
             y = np.asarray(block.metrics[m], dtype=float)
             self.moments[m].add(y)
@@ -302,7 +308,7 @@ class Summary:
     rss: dict
     yields: dict
     sensitivity: dict
-    plot_values: dict = field(default=None, repr=False, compare=False)
+    plot_values: dict | None = field(default=None, repr=False, compare=False)
 
 
 def summarize(s: Setup, source: Callable[[], Iterator[Block]]) -> Summary:
@@ -318,6 +324,7 @@ def summarize(s: Setup, source: Callable[[], Iterator[Block]]) -> Summary:
         for block in source():
             for m, o in acc.order.items():
                 o.collect(block.metrics[m])
+    assert acc.moments is not None  # (set by the first block: a run has at least one sample)
     described = {m: {"mean": acc.moments[m].mean, "std": acc.moments[m].std,
                      "percentiles": acc.order[m].percentiles()} for m in s.metrics}
     yields = {k: stats.binomial_yield(acc.passing[k], acc.n) for k in acc.limits}
@@ -499,10 +506,11 @@ def check_yield(spec, samples: int = CHECK_SAMPLES, seed: int = 0) -> YieldCheck
     target = spec.requirements.min_yield
     if target is None:
         return None
-    if metrics_for_limits(spec) is None:
+    chosen = metrics_for_limits(spec)
+    if chosen is None:
         raise SpecError(f"{spec.source}: requirements.min_yield: needs a limit to count the yield against "
                         f"({LIMIT_KEYS})")
-    est = joint_yield(setup(spec, Options(samples=samples, seed=seed, metrics=metrics_for_limits(spec))))
+    est = joint_yield(setup(spec, Options(samples=samples, seed=seed, metrics=chosen)))
     return YieldCheck(float(target), est, est.verdict(float(target)))
 
 

@@ -49,11 +49,14 @@ All angles [rad], lengths [mm].
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
 from wormgear_cli.physics import spur as gear_model
+
+if TYPE_CHECKING:
+    from wormgear_cli.drive.registry import Registry
 
 PAPER_METRICS = ("total_transmission_error", "total_backlash")
 BUDGET_METRICS = ("budget_linear", "budget_statistical", "budget_rss")
@@ -130,7 +133,7 @@ class StageContext(NamedTuple):
     Delta phi_cc's maximum (``te_max``), of its kinematic maximum (``kin_max``, the budget's line) and
     of the deformation part (``def_part``, the budget's static line)."""
 
-    stage: object
+    stage: Any  # a stage record of the spec (wormgear_cli.spec.stages)
     deflection: float
     columns: dict
     own: object
@@ -148,7 +151,7 @@ class Context:
     theta: np.ndarray  # test targets [rad]
     fixed_up: np.ndarray  # deflection lag + effects, forward [rad]
     fixed_down: np.ndarray
-    registry: object = None  # the drive's registry (wormgear_cli.drive.registry), built once per run
+    registry: Registry | None = None  # the drive's registry (wormgear_cli.drive.registry), built once per run
 
 
 def _own_values(stage):
@@ -240,6 +243,7 @@ def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     (:mod:`wormgear_cli.drive`; a spur stage by its kinematics, paper or involute), added from
     the output back as :meth:`~wormgear_cli.drive.registry.Registry.totals`.
     """
+    assert ctx.registry is not None  # (context() builds it)
     te = bl = 0.0
     for sc, r in zip(reversed(ctx.stages), reversed(ctx.registry.results)):
         t, b = _stage_totals(sc, stage_value(ctx, values, sc.stage), ctx.spec)
@@ -256,11 +260,14 @@ def _sinusoids(ctx: Context, v: dict) -> list:
     the samples (:attr:`wormgear_cli.drive.records.Source.size`); a source that is not a sinusoid
     (the paper kinematics' spur curve) is left out."""
     reg = ctx.registry
-    stages = reg.train.stages
+    assert reg is not None  # (context() builds it)
+    train: Any = reg.train  # (the registry's train is typed object in drive.registry)
+    stages = train.stages
     out = []
     for src in reg.periodic(all_budget_sources=True):
         if getattr(src.curve, "sine", None) is None:
             continue
+        assert src.size is not None  # (a sinusoid's size is a function of the stage's values)
         out.append((src.size(stage_value(ctx, v, stages[src.stage_index - 1])), src.phase_path, src.order,
                     src.phase))
     return out
@@ -276,7 +283,9 @@ def _static(ctx: Context, x, value):
 
         part = sc.def_part(value("eccentricity_mm")) if sc.def_part is not None else \
             sc.deflection / base_radius(st)
-        return part / ctx.registry.train.after(st)
+        assert ctx.registry is not None  # (context() builds it)
+        train: Any = ctx.registry.train  # (the registry's train is typed object in drive.registry)
+        return part / train.after(st)
     return x.amplitude
 
 
@@ -292,7 +301,9 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     from wormgear_cli.analysis.budget import statistical_total
 
     reg = ctx.registry
-    stages = reg.train.stages
+    assert reg is not None  # (context() builds it)
+    train: Any = reg.train  # (the registry's train is typed object in drive.registry)
+    stages = train.stages
     periodic = []
     for src in reg.periodic(all_budget_sources=True):
         sc = ctx.stages[src.stage_index - 1]
@@ -301,8 +312,9 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
             st, de = sc.stage, value("eccentricity_mm")
             mean = gear_model.gear_kinematic_mean(st.module * st.pinion.teeth / 2.0, st.module * st.gear.teeth / 2.0,
                                                   de, st.pressure_angle)  # a constant shift: no line's part
-            periodic.append(np.asarray((sc.kin_max(de) - mean) / reg.train.after(st), dtype=float))
+            periodic.append(np.asarray((sc.kin_max(de) - mean) / train.after(st), dtype=float))
         else:
+            assert src.size is not None  # (a periodic source's size is a function of the stage's values)
             periodic.append(np.asarray(src.size(value), dtype=float))
     static = None
     for x in reg.statics:
@@ -335,7 +347,9 @@ def iso_figures(ctx: Context, values: dict, phases: dict) -> dict[str, np.ndarra
 
 def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     reg = ctx.registry
-    stages = reg.train.stages
+    assert reg is not None  # (context() builds it)
+    train: Any = reg.train  # (the registry's train is typed object in drive.registry)
+    stages = train.stages
     sources = reg.periodic(all_budget_sources=True)
     value = {s.index: stage_value(ctx, v, s) for s in stages}
     n = len(next(iter(v.values())))
@@ -375,6 +389,7 @@ def _iso_chunk(ctx: Context, v: dict, ph: dict) -> dict:
     # lost motion (never negative): each source's (clipped where it can turn negative), then the clearances
     lost = None
     for src in losing:
+        assert src.lost_size is not None  # (losing: the sources with a lost motion)
         c, a, scale, clipped = src.lost_size(value[src.stage_index])
         part = at(src.order, a, np.asarray(ph[src.phase_path], dtype=float), np.broadcast_to(c, (n,)))
         part = np.maximum(part, 0.0) * scale if clipped else part * scale

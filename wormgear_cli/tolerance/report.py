@@ -178,6 +178,7 @@ def read_samples(path: Path, s: Setup) -> Iterator[Block]:
                 mets = {m: v * scale for m, v in mets.items()}
             yield Block(start, expected_next, cols, mets)
             line_no += len(lines)
+        assert expected_next is not None  # (the first chunk holds the first sample's line)
         if expected_next != s.stop:
             raise DataError(f"{name}: {expected_next - first} samples ({first} to {expected_next - 1}), expected "
                             f"{s.stop - s.start} (--samples {s.stop - s.start}): a part is missing at the end, or "
@@ -240,7 +241,9 @@ def _open_npy(path: Path) -> np.ndarray:
 
 def read_npy_header(path: Path) -> SamplesHeader:
     """The metric set and unit of a .npy samples file (its varied columns are not stored: ``()``)."""
-    names = _open_npy(path).dtype.names[1:]
+    fields = _open_npy(path).dtype.names
+    assert fields is not None  # (_open_npy checks that the records have fields)
+    names = fields[1:]
     for unit in ANGLE_UNITS:
         for key, metric_names in sorted(METRIC_SETS.items(), key=lambda kv: -len(kv[1])):
             if names == tuple(f"{n}_{unit}" for n in metric_names):
@@ -255,6 +258,7 @@ def read_npy(path: Path, s: Setup) -> Iterator[Block]:
     name = str(path)
     data = _open_npy(path)
     header = read_npy_header(path)
+    assert header.unit is not None  # (a .npy file's field names state the unit)
     if header.metric_set != s.options.metrics:
         raise DataError(f"{name}: holds the {header.metric_set} metrics, expected {s.options.metrics}")
     scale = 1.0 if header.unit == s.options.unit else RAD_PER_UNIT[header.unit] / RAD_PER_UNIT[s.options.unit]

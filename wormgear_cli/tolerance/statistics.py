@@ -57,7 +57,7 @@ class OrderStatistics:
 
     def __init__(self):
         self.parts: list | None = []
-        self.hist = None
+        self.hist: np.ndarray | None = None
         self.n = 0
 
     def add(self, y: np.ndarray) -> None:
@@ -71,6 +71,7 @@ class OrderStatistics:
                     self.hist += np.bincount(_order_key(part), minlength=1 << _KEY_BITS)
                 self.parts = None
         else:
+            assert self.hist is not None  # (the parts went into the histogram)
             self.hist += np.bincount(_order_key(y), minlength=1 << _KEY_BITS)
 
     @property
@@ -84,10 +85,11 @@ class OrderStatistics:
     def start_second_pass(self) -> None:
         """Prepare :meth:`collect`: the histogram bins that hold the needed order statistics."""
         _, wanted = self._wanted()
+        assert self.hist is not None  # (a second pass is needed: the parts went into the histogram)
         self.cum = np.cumsum(self.hist)
         self.rank_bin = {r: int(np.searchsorted(self.cum, r, side="right")) for r in wanted}
         self.keep = np.array(sorted(set(self.rank_bin.values())), dtype=np.int64)
-        self.got = []
+        self.got: list[np.ndarray] = []
 
     def collect(self, y: np.ndarray) -> None:
         """Second pass: keep the values that fall in the needed bins (same values, same order as the first)."""

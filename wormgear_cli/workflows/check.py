@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from wormgear_cli.analysis.requirements import evaluate
+
+if TYPE_CHECKING:
+    from wormgear_cli.tolerance.engine import YieldCheck
 
 #: ISO 230-2 requirement attribute -> the tolerance engine's metric that samples it
 ISO_YIELD = {"max_iso230_A": "iso230_A", "max_iso230_E": "iso230_E", "max_iso230_B": "iso230_B",
@@ -31,7 +35,7 @@ class FileCheck:
     passed: bool
     problems: tuple = ()
     requirements: tuple = ()
-    yield_check: object = None
+    yield_check: YieldCheck | None = None
     findings: tuple = ()
     warnings: tuple = ()
 

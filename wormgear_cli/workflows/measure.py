@@ -23,6 +23,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,6 +33,14 @@ from wormgear_cli.measurement.checks import (  # noqa: F401  (re-exported)
     guide_log_findings,
     structure_findings,
 )
+
+if TYPE_CHECKING:  # the records' types only: the modules are imported where they are used
+    from wormgear_cli.measurement.dominant import Dominant
+    from wormgear_cli.measurement.iso230 import Iso230Figures
+    from wormgear_cli.measurement.orders import OrdersAnalysis
+    from wormgear_cli.measurement.reader import Measurement
+    from wormgear_cli.measurement.resolution import Resolution
+    from wormgear_cli.workflows.guidelog import GuideResult
 
 #: default orders without a drive spec
 DEFAULT_ORDERS = (1.0, 2.0, 3.0, 4.0)
@@ -56,16 +65,16 @@ class MeasureResult:
     ``figures`` and ``resolution`` are None: ISO 230-2 does not apply).
     """
 
-    measurement: object
-    figures: object
-    analysis: object
+    measurement: Measurement
+    figures: Iso230Figures | None
+    analysis: OrdersAnalysis
     drive_name: str | None
     findings: tuple
     mixed_directions: bool
-    dominant: object = None
+    dominant: Dominant | None = None
     outside: tuple = ()
-    resolution: object = None
-    guide: object = None
+    resolution: Resolution | None = None
+    guide: GuideResult | None = None
 
     @property
     def verdict(self) -> str:
@@ -78,6 +87,7 @@ class MeasureResult:
 
             return guide_verdict(m, self.guide) + ("; " + "; ".join(flags) if flags else "")
         cov = a.coverage
+        assert cov is not None  # (analyse_orders always measures the coverage)
         nt = len(self.figures.targets)
         span = ("full turn" if cov.full_turn else "one angle" if cov.distinct < 2
                 else f"partial span {math.degrees(cov.span):.4g} deg")
@@ -387,6 +397,7 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
     else:
         notes = list(figures.notes) + _resolution_notes(result, unit) + _order_notes(analysis)
     cov = analysis.coverage
+    assert cov is not None  # (analyse_orders always measures the coverage)
     return {
         "source": m.source,
         "drive": result.drive_name,
@@ -485,6 +496,7 @@ def _target_rows(t, unit: str, part: slice = slice(None)) -> list[dict]:
 def _resolution_doc(result: MeasureResult, a) -> dict | None:
     """``resolution`` of the document: the step of the readings (in the document's unit), whether they
     are quantised, how the step was found, the axis figures and the cells below it."""
+    assert result.figures is not None  # (a measurement with ISO 230-2 figures)
     res, t = result.resolution, result.figures.targets
     up = int(np.count_nonzero(t.equal_up)) if t.equal_up is not None else 0
     dn = int(np.count_nonzero(t.equal_down)) if t.equal_down is not None else 0
@@ -500,6 +512,7 @@ def _resolution_notes(result: MeasureResult, unit: str) -> list[str]:
     """A sentence for the cells whose readings are all equal: their s and R are below the resolution."""
     from wormgear_cli.units import to_unit
 
+    assert result.figures is not None  # (a measurement with ISO 230-2 figures)
     t = result.figures.targets
     if t.equal_up is None or not (np.any(t.equal_up) or np.any(t.equal_down)):
         return []
@@ -508,7 +521,7 @@ def _resolution_notes(result: MeasureResult, unit: str) -> list[str]:
             else f"one step = {float(to_unit(res.step, unit)):.6g} {unit}: {res.basis}")
     parts = []
     for name, eq, n in (("forward", t.equal_up, t.n_up), ("reverse", t.equal_down, t.n_down)):
-        k = int(np.count_nonzero(eq))
+        k = 0 if eq is None else int(np.count_nonzero(eq))
         if not k:
             continue
         if len(t) == 1:

@@ -95,9 +95,9 @@ def is_counts(cell: str) -> bool:
 def recognise(cell: str) -> tuple[str | None, str | None]:
     """(canonical column, unit) of a header cell recognised without a map, else (None, None)."""
     low = cell.strip().lower()
-    for canon in CANONICAL:  # the canonical names in any case; angle_deg and error_arcsec state a unit too
-        if low == canon.lower():
-            return canon, {"angle_deg": "deg", "actual_deg": "deg", "error_arcsec": "arcsec", "time_s": "s"}.get(canon)
+    for known in CANONICAL:  # the canonical names in any case; angle_deg and error_arcsec state a unit too
+        if low == known.lower():
+            return known, {"angle_deg": "deg", "actual_deg": "deg", "error_arcsec": "arcsec", "time_s": "s"}.get(known)
     base, unit = split_unit(cell)
     canon = _BASES.get(base)
     if canon is None:
@@ -261,16 +261,16 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
             hunit[canon] = stated_unit(cell, canon)
     for canon, cell in column_map:
         cell = cell.strip()
-        j = _find_mapped(header, counts, cell)
-        if isinstance(j, str):
-            problems.append(f"{name}:{line}: " + (j or f"--map {canon}={quote(cell)}: no such column (header has: "
-                                                  f"{', '.join(header) or 'nothing'})"))
+        at = _find_mapped(header, counts, cell)
+        if isinstance(at, str):
+            problems.append(f"{name}:{line}: " + (at or f"--map {canon}={quote(cell)}: no such column (header has: "
+                                                   f"{', '.join(header) or 'nothing'})"))
             continue
         for other, k in list(index.items()):
-            if k == j and other != canon:
+            if k == at and other != canon:
                 del index[other]
-        index[canon] = j
-        hunit[canon] = stated_unit(header[j], canon)
+        index[canon] = at
+        hunit[canon] = stated_unit(header[at], canon)
     for canon, j in index.items():
         unit = split_unit(header[j])[1]
         if canon in (*_ANGLES, "error_arcsec") and unit in LENGTH_UNITS:

@@ -264,7 +264,9 @@ def _passes(src: TableSource, values: dict, n: int, kept, notes: list, present: 
     run = np.zeros(n, dtype=np.int64)
     if "time_s" not in values or n < 2:
         return run
-    back = np.flatnonzero(time_restarts(values["time_s"])) - 1
+    restarts = time_restarts(values["time_s"])
+    assert restarts is not None  # (a time column is given)
+    back = np.flatnonzero(restarts) - 1
     if not back.size:
         return run
     run[back + 1] = 1
@@ -327,9 +329,9 @@ def build_measurement(src: TableSource, options: ReadOptions) -> Measurement:
     if has_error and "error" in u.stated:
         how = ("as the positions it is formed from" if not read_error else
                "as --error-unit says" if options.error_unit else "as the header states")
-        said = size_note(error, u.error, how)
-        if said:
-            notes.append(said)
+        sized = size_note(error, u.error, how)
+        if sized:
+            notes.append(sized)
 
     def col(c):  # an absent column: its default, one value seen n times (no memory per row; read-only)
         return values[c] if c in values else np.broadcast_to(np.float64(DEFAULTS[c]), (n,))

@@ -103,6 +103,8 @@ class Columns(NamedTuple):
 class _Collected:
     """The columns of a table, filled block by block into arrays allocated once (no object per row)."""
 
+    rotation: np.ndarray | None
+
     def __init__(self, k: int, direction: int | None, capacity: int):
         self.values = [np.empty(capacity) for _ in range(k)]
         self.direction, self.n, self.rotation, self.plain = direction, 0, None, True
@@ -131,6 +133,7 @@ class _Collected:
     def directions(self, cells, decimal_comma: bool) -> None:
         """The direction column's cells of the next rows as written (numbers or words)."""
         value, rotation, plain, odd, bad = direction_cells(cells, decimal_comma)
+        assert self.direction is not None  # (direction cells are read for a table with a direction column)
         self.numbers(self.direction, value, odd, bad)
         self.plain = self.plain and plain
         if np.any(rotation):
@@ -293,6 +296,7 @@ class DelimitedBody:
                                 usecols=[cols[i] for i in numeric], comments=None, quotechar=None)
             cells = None
             if words:
+                assert direction is not None  # (words: the direction column's cells)
                 cells = np.loadtxt(io.StringIO(text), delimiter=self.delim, dtype=str, ndmin=1,
                                    usecols=[cols[direction]], comments=None, quotechar=None)
         except ValueError:
@@ -446,7 +450,7 @@ class Rows(Sequence):
             return NotImplemented
         return len(self) == len(other) and all(a == tuple(b) for a, b in zip(self, other))
 
-    __hash__ = None
+    __hash__ = None  # type: ignore[assignment]  # (unhashable as a list is: it defines __eq__)
 
 def split_lines(text: str) -> list[str]:
     r"""Lines as an editor counts them (split at \n, \r\n or \r only), so line numbers match."""
