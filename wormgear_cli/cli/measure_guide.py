@@ -36,7 +36,9 @@ def periodic_error_tables(doc: dict, view) -> list:
         ht.add_row(*_cells(it, a), "worm" if it["harmonic"] == 1 else f"worm x {it['harmonic']}")
     for it in pe["fitted_alongside"]:
         ht.add_row(*_cells(it, a), escape(it["label"] or "a strong period found"))
-    ht.caption = escape(f"amplitudes zero to peak; standard errors: {pe['standard_errors']}")
+    ht.caption = escape(f"amplitudes zero to peak; standard errors: {pe['standard_errors']}; the periodic error's own "
+                        "fit (the worm's harmonics and these orders): the other tables fit other terms beside an "
+                        "order, so its amplitude there may differ within the +/-")
     ht.caption_justify = "left"
     out = [ft, said, ht]
     if len(pe["sessions"]) > 1:
