@@ -36,6 +36,31 @@ import numpy as np
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
 from wormgear_cli.spec.stages import record_values
 
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("driving pulley", "driven pulley")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the driven pulley, teeth of the driving pulley): the stage's ratio as whole numbers."""
+    return stage.driven.teeth, stage.driver.teeth
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the belt's tooth mesh at z_driven per
+    driven turn, and once per belt revolution (order z_driven / z_belt per driven turn)."""
+    return [(stage.driven.teeth * after, "mesh", f"belt tooth mesh{of}"),
+            (stage.driven.teeth * after / stage.belt_teeth, "belt", f"belt revolution{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(radius [mm], teeth) of the driven pulley (its pitch radius: a belt acts on its pitch line)."""
+    return stage.output_radius, stage.driven.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """0: a belt's teeth do not deflect in this model (its stretch is the belt's compliance)."""
+    return 0.0
+
 
 def stretch(stage, tension) -> float:
     """x = T L / (2 E A) [mm] on the pitch line under an effective tension ``tension`` [N]; 0 for a

@@ -35,6 +35,28 @@ from wormgear_cli.physics import spur as model
 
 #: the paper's names of the spur stage's TE and backlash
 SYMBOLS = ("Delta phi_cc", "Delta phi_ch")
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("pinion", "gear")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the gear, teeth of the pinion): the stage's ratio as whole numbers."""
+    return stage.gear.teeth, stage.pinion.teeth
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the spur mesh at z_gear per gear turn."""
+    return [(stage.gear.teeth * after, "mesh", f"spur mesh{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(base radius [mm], teeth) of the gear."""
+    return stage.module * stage.gear.teeth * math.cos(stage.pressure_angle) / 2.0, stage.gear.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """The mesh's tooth deflection under the stage's load [mm] (:func:`~wormgear_cli.drive.stiffness.deflection`)."""
+    return float(stiffness.deflection(spec, stage, stages=stages))
 
 
 def radii(stage) -> tuple[float, float]:

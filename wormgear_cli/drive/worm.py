@@ -33,6 +33,28 @@ from wormgear_cli.spec.stages import record_values
 
 #: the paper's names of the worm stage's TE and backlash
 SYMBOLS = ("Delta phi_wc", "Delta phi_wh")
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("worm", "wheel")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the wheel, starts of the worm): the stage's ratio as whole numbers."""
+    return stage.wheel.teeth, stage.worm.starts
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the worm mesh at z_wheel per wheel turn."""
+    return [(stage.wheel.teeth * after, "mesh", f"worm mesh{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(base radius [mm], teeth) of the wheel (in its transverse plane)."""
+    return stage.module * stage.wheel.teeth * math.cos(stage.transverse_pressure_angle) / 2.0, stage.wheel.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """The mesh's tooth deflection under the stage's load [mm] (:func:`~wormgear_cli.drive.stiffness.deflection`)."""
+    return float(stiffness.deflection(spec, stage, stages=stages))
 
 
 class WormParts(NamedTuple):
