@@ -193,7 +193,7 @@ def _teeth(source, stage, problems: list, warnings: list) -> None:
 
 def _shapes(source, stage, warnings: list) -> None:
     """Angles and proportions against the ranges gears are made in (:data:`SHAPES`)."""
-    if stage.kind == "belt":
+    if stage.kind not in ("worm", "spur"):  # the shapes of gear meshes
         return
     checks = [("face_width_ratio", stage.face_width / stage.module, stage.paths["face_width_mm"])]
     if stage.kind == "worm":
