@@ -107,6 +107,12 @@ def totals(stage, value=None) -> tuple:
     return s + periodic_size(stage, v), v("backlash_mm") / r + 2.0 * s
 
 
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the driven pulley's shaft [rad] of sampled drives (:func:`totals`): every
+    model's entry for the tolerance analysis."""
+    return totals(stage, value)
+
+
 def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:
     """The stage's TE and backlash at the driven pulley's shaft (:func:`totals`), with their parts."""
     r = stage.output_radius

@@ -101,6 +101,12 @@ def totals(stage, deflection, value=None, te_max=None) -> tuple:
     return te, bl + shaft_windup(stage)
 
 
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the gear shaft [rad] of sampled drives (:func:`totals`; ``te_max`` the paper
+    kinematics' interpolant of the TE maximum): every model's entry for the tolerance analysis."""
+    return totals(stage, deflection, value, te_max)
+
+
 def shaft_windup(stage) -> float:
     """The gear shaft's wind-up under the gear's torque F_N r_b2, both ways [rad at the gear shaft]:
     2 F_N r_b2 / k_s (0 without a torsional stiffness k_s)."""

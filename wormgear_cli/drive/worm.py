@@ -159,6 +159,12 @@ def totals(stage, deflection, value=None, spec=None) -> tuple:
     return te + sum(extra_te.values()), np.maximum(bl + sum(extra_bl.values()), 0.0)
 
 
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the wheel shaft [rad] of sampled drives (:func:`totals` with its additions
+    beyond the paper, which are not sampled): every model's entry for the tolerance analysis."""
+    return totals(stage, deflection, value, spec)  # the worm stage's one definition
+
+
 def evaluate(spec, stage, t, deflection: float) -> StageResult:
     """The stage's TE and backlash at the wheel shaft, with their parts (``spec``: the drive-level
     settings; ``t``: the train); the parts beyond the paper (:func:`additions`) only when given."""
