@@ -10,7 +10,7 @@ these; the drive layer's model of the kind is :mod:`wormgear_cli.drive` ``/<kind
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from wormgear_cli.spec.fields import FORCE, MISSING, Field, field_
 
@@ -31,6 +31,19 @@ class Toleranced(NamedTuple):
     since: int = 1
 
 
+class Plausible(NamedTuple):
+    """A tolerance key held against the drive's own scale (:mod:`wormgear_cli.spec.plausibility`):
+    implausible (a warning) above ``factor`` x the scale ``scale``, impossible (an error) above the
+    scale ``limit`` (None: never).  Scales: ISO 1328 grade 12's ``F_pT``, ``f_pT``, ``F_alphaT``,
+    ``F_rT``, ``F_i2T`` at the part's size, ``tooth`` (pi m / 2), ``depth`` (2 m), ``radius`` (the
+    part's pitch radius), ``pitch`` (the stage's pitch)."""
+
+    key: str
+    scale: str
+    factor: float
+    limit: str | None
+
+
 class StageKind(NamedTuple):
     """One stage kind on the spec side (module docstring).
 
@@ -43,7 +56,9 @@ class StageKind(NamedTuple):
     its output shaft into that load (None while a key it needs is missing); ``derive(values, label,
     problems)``: fills its derived defaults in place; ``examples``: the template's values (key units)
     with their sources; ``toleranced``: the keys tolerance varies, in a fixed order (append only);
-    ``listed``: (parts' tolerance keys, assembly keys) that ``analyze`` lists as values used."""
+    ``listed``: (parts' tolerance keys, assembly keys) that ``analyze`` lists as values used;
+    ``plausible``: its tolerance keys held against the drive's scale; ``part_size(stage, key)``: the
+    (reference diameter, pitch radius) [mm] of the part a stage key belongs to (its scales')."""
 
     name: str
     fields: tuple[Field, ...]
@@ -58,6 +73,8 @@ class StageKind(NamedTuple):
     examples: dict[str, tuple]
     toleranced: tuple[Toleranced, ...]
     listed: tuple[tuple[str, ...], tuple[str, ...]]
+    plausible: tuple[Plausible, ...]
+    part_size: Callable[[Any, str], tuple[float, float]]
 
 
 def _limit(key: str, attr: str, what: str) -> Field:
@@ -99,4 +116,4 @@ def missing(values: dict, *keys: str) -> bool:
     return any(values[k] is MISSING for k in keys)
 
 
-__all__ = ["StageKind", "Toleranced", "limit_fields", "mesh_fields", "missing"]
+__all__ = ["Plausible", "StageKind", "Toleranced", "limit_fields", "mesh_fields", "missing"]

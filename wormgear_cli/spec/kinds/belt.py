@@ -15,7 +15,7 @@ import math
 from typing import Any, NamedTuple
 
 from wormgear_cli.spec.fields import FORCE, MISSING, Field, field_, phase_field, teeth_field, tol_field
-from wormgear_cli.spec.kinds.base import StageKind, Toleranced, limit_fields
+from wormgear_cli.spec.kinds.base import Plausible, StageKind, Toleranced, limit_fields
 
 FIELDS: tuple[Field, ...] = (
     *limit_fields(),
@@ -137,6 +137,15 @@ def _load_radius(v: dict) -> float | None:
     return pulley_radius(v["driven.teeth"], v["pitch_mm"])
 
 
+def _part_size(stage, key: str) -> tuple[float, float]:
+    """(pitch diameter, pitch radius) [mm] of the pulley ``key`` belongs to (the driving pulley's for a
+    key of the belt)."""
+    head = key.split(".", 1)[0] if "." in key else ""
+    part = stage.driver if head == "driver" else stage.driven
+    r = pulley_radius(part.teeth, stage.pitch) if head else pulley_radius(stage.driver.teeth, stage.pitch)
+    return 2.0 * r, r
+
+
 R, U = "radial", "unknown"
 
 KIND = StageKind(
@@ -162,4 +171,11 @@ KIND = StageKind(
     ),
     listed=(("pitch_error_mm", "tooth_mesh_error_mm", "driver.eccentricity_mm", "driven.eccentricity_mm",
              "backlash_mm"), ()),
+    plausible=(
+        Plausible("backlash_mm", "pitch", 0.5, "pitch"),
+        Plausible("pitch_error_mm", "pitch", 0.5, "radius"),
+        Plausible("tooth_mesh_error_mm", "pitch", 0.25, "pitch"),
+        *(Plausible(f"{m}.eccentricity_mm", "pitch", 0.5, "radius") for m in ("driver", "driven")),
+    ),
+    part_size=_part_size,
 )

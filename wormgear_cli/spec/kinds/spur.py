@@ -25,7 +25,7 @@ from wormgear_cli.spec.fields import (
     teeth_field,
     tol_field,
 )
-from wormgear_cli.spec.kinds.base import StageKind, Toleranced, limit_fields, mesh_fields
+from wormgear_cli.spec.kinds.base import Plausible, StageKind, Toleranced, limit_fields, mesh_fields
 
 ANTI_BACKLASH = ("none", "split_pinion")
 #: the members, input shaft's first
@@ -140,6 +140,15 @@ def _load_radius(v: dict) -> float | None:
     return v["module_mm"] * v["gear.teeth"] / 2.0 * math.cos(v["pressure_angle_deg"])
 
 
+def _part_size(stage, key: str) -> tuple[float, float]:
+    """(reference diameter, pitch radius) [mm] of the member ``key`` belongs to (the pinion's radius for
+    a key of the pair)."""
+    head = key.split(".", 1)[0] if "." in key else ""
+    part = stage.pinion if head == "pinion" else stage.gear
+    d = stage.module * part.teeth
+    return d, (stage.module * stage.pinion.teeth / 2.0 if head == "" else d / 2.0)
+
+
 R, S, U, T = "radial", "signed", "unknown", "allowance"
 
 KIND = StageKind(
@@ -168,4 +177,13 @@ KIND = StageKind(
     listed=(tuple(f"{m}.{k}" for m in ("gear", "pinion") for k in (
         "cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm", "thickness_deviation_mm")),
         ("centre_distance_error_mm", "eccentricity_mm")),
+    plausible=(
+        Plausible("centre_distance_error_mm", "F_rT", 10.0, "depth"),
+        *(Plausible(f"{m}.profile_error_mm", "F_alphaT", 10.0, "depth") for m in MEMBERS),
+        *(Plausible(f"{m}.thickness_deviation_mm", "tooth", 0.2, "tooth") for m in MEMBERS),
+        Plausible("eccentricity_mm", "F_rT", 10.0, "depth"),
+        *(Plausible(f"{m}.cumulative_pitch_deviation_mm", "F_pT", 10.0, "radius") for m in MEMBERS),
+        *(Plausible(f"{m}.single_pitch_deviation_mm", "f_pT", 10.0, "radius") for m in MEMBERS),
+    ),
+    part_size=_part_size,
 )

@@ -22,7 +22,7 @@ from wormgear_cli.spec.fields import (
     teeth_field,
     tol_field,
 )
-from wormgear_cli.spec.kinds.base import StageKind, Toleranced, limit_fields, mesh_fields
+from wormgear_cli.spec.kinds.base import Plausible, StageKind, Toleranced, limit_fields, mesh_fields
 
 ANTI_BACKLASH = ("none", "duplex")
 
@@ -207,6 +207,16 @@ def _load_radius(v: dict) -> float | None:
             * math.cos(v["lead_angle_deg"]))
 
 
+def _part_size(stage, key: str) -> tuple[float, float]:
+    """(reference diameter of the wheel, pitch radius of the part ``key`` belongs to: the worm's, the
+    wheel's, the smaller of the two for a key of the pair) [mm]."""
+    head = key.split(".", 1)[0] if "." in key else ""
+    d_wheel = stage.module * stage.wheel.teeth
+    d_worm = stage.worm.starts * stage.module / math.tan(stage.lead_angle)
+    return d_wheel, (d_worm / 2.0 if head == "worm" else min(d_worm, d_wheel) / 2.0 if head == "" else
+                     d_wheel / 2.0)
+
+
 R, S, U, T = "radial", "signed", "unknown", "allowance"
 
 KIND = StageKind(
@@ -241,4 +251,18 @@ KIND = StageKind(
         Toleranced("wheel.cumulative_pitch_deviation_mm", R),
     ),
     listed=(("lead_error_mm", "wheel.radial_composite_error_mm", "wheel.cumulative_pitch_deviation_mm"), ()),
+    plausible=(
+        Plausible("lead_error_mm", "F_pT", 10.0, "radius"),
+        Plausible("centre_distance_error_mm", "F_rT", 10.0, "depth"),
+        Plausible("alignment_errors_mm", "F_rT", 10.0, "depth"),
+        *(Plausible(f"{m}.profile_error_mm", "F_alphaT", 10.0, "depth") for m in ("worm", "wheel")),
+        *(Plausible(f"{m}.thickness_deviation_mm", "tooth", 0.2, "tooth") for m in ("worm", "wheel")),
+        *(Plausible(f"{m}.{key}", "F_rT", 10.0, "depth") for m in ("worm", "wheel")
+          for key in ("runout_mm", "bearing_clearance_mm")),
+        Plausible("worm.axial_play_mm", "F_rT", 10.0, "depth"),
+        Plausible("worm.axial_runout_mm", "F_rT", 10.0, "depth"),
+        Plausible("wheel.radial_composite_error_mm", "F_i2T", 10.0, "depth"),
+        Plausible("wheel.cumulative_pitch_deviation_mm", "F_pT", 10.0, "radius"),
+    ),
+    part_size=_part_size,
 )
