@@ -31,6 +31,8 @@ the belt makers' design manuals, shared by the two spans).  Tooth deflection is 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
@@ -91,7 +93,7 @@ def periodic_size(stage, value):
     """The periodic part of the stage's TE at the driven pulley's shaft [rad]: the sum over orders of the
     root-sum-square of the sources at one order (sources of one order add as vectors, different orders
     peak together somewhere in a turn), from ``value(key)`` (numbers or arrays of sampled drives)."""
-    by_order: dict[float, object] = {}
+    by_order: dict[float, Any] = {}
     for _, _, key, order, scale, *_ in _amplitudes(stage, 1.0):
         amp = value(key) * scale
         by_order[order] = by_order.get(order, 0.0) + amp * amp

@@ -19,7 +19,7 @@ additions, then its mesh-order ones.  A name used by two stages is prefixed ``st
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from wormgear_cli.drive import spur
 from wormgear_cli.drive import train as train_mod
@@ -30,7 +30,7 @@ from wormgear_cli.drive.records import Clearance, Compliance, Source, StageResul
 class Registry(NamedTuple):
     """Everything the commands read about a drive's errors (module docstring).  Angles [rad]."""
 
-    train: object
+    train: Any  # a drive.train.Train
     results: tuple
     sources: tuple
     statics: tuple

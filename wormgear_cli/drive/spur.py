@@ -26,6 +26,7 @@ the mesh order z1 A.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -176,7 +177,8 @@ def _eccentricity_source(stage, t, origin) -> Source:
     r1, r2 = radii(stage)
     de, alpha = stage.model_eccentricity, stage.pressure_angle
     o_p, after = t.before(stage), t.after(stage)
-    keys = ("eccentricity_mm", "centre_distance_error_mm")
+    keys: tuple[str, ...] = ("eccentricity_mm", "centre_distance_error_mm")
+    curve_at: Callable | None
     lost_clear = stage.anti_backlash == "none"
     if stage.kinematics == "paper":
         def curve(theta, phase):
@@ -190,13 +192,14 @@ def _eccentricity_source(stage, t, origin) -> Source:
             return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
                 / after
 
-        def curve_at(v, theta, phase):  # the curve of sampled drives (Delta e an array)
+        def curve_at_paper(v, theta, phase):  # the curve of sampled drives (Delta e an array)
             return model.gear_kinematic_te(o_p * theta + phase, r1, r2, v("eccentricity_mm"), alpha) / after
 
         def lost_size(v):  # Delta e tan(alpha) (1 + sin) / R2, never negative (no clipping needed)
             c = v("eccentricity_mm") * (math.tan(alpha) / r2) / after
             return c, c, 1.0, False
 
+        curve_at = curve_at_paper
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
         offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
         peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset

@@ -19,7 +19,7 @@ Delta phi = sum_h Delta phi_h / i_h).
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from wormgear_cli.drive.models import MODELS
 from wormgear_cli.spec.kinds import KINDS
@@ -148,7 +148,7 @@ def drive_geometry(spec, t: Train | None = None):
     labels = () if legacy else tuple((o.order, o.label) for o in orders(t))
     # the intermediate shaft: the output stage's input shaft, unless it is a worm shaft (worm_runout's)
     inter = t.turns[-2] if last.kind != "worm" else 0.0
-    extra = {} if legacy else {"kinds": t.kinds, "intermediate": inter}
+    extra: dict[str, Any] = {} if legacy else {"kinds": t.kinds, "intermediate": inter}
     if worms:
         w = worms[-1]
         worm_diameter = w.worm.starts * w.module / math.tan(w.lead_angle)

@@ -21,7 +21,7 @@ The wheel's cumulative pitch deviation F_p / (2 r_w) / A at A (the full budget).
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -63,13 +63,13 @@ class WormParts(NamedTuple):
     ``te_halfwidth`` h, ``backlash_halfwidth`` h_j; ``backlash_deformation``, ``backlash_profile``,
     ``backlash_thickness`` (the central backlash's parts)."""
 
-    transmission_error: object
-    backlash: object
-    te_halfwidth: object
-    backlash_halfwidth: object
-    backlash_deformation: object
-    backlash_profile: object
-    backlash_thickness: object
+    transmission_error: Any
+    backlash: Any
+    te_halfwidth: Any
+    backlash_halfwidth: Any
+    backlash_deformation: Any
+    backlash_profile: Any
+    backlash_thickness: Any
 
 
 def values(stage):

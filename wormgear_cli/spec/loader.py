@@ -232,7 +232,7 @@ class Section(SimpleNamespace):
     def __delattr__(self, name):
         raise FrozenInstanceError(f"cannot delete field {name!r}")
 
-    def __hash__(self):
+    def __hash__(self):  # type: ignore[override]  # SimpleNamespace is unhashable; a frozen record is
         return hash((type(self).__name__, tuple(sorted(self.__dict__.items(), key=lambda kv: kv[0]))))
 
     def _replace(self, **changes):
@@ -750,7 +750,8 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     v = _defaults(_STAGE_FORM, values)
     v["drive.name"] = default_name if v["drive.name"] is MISSING else v["drive.name"]
     v["stiffness.contact_ratio"] = None if v["stiffness.contact_ratio"] is MISSING else v["stiffness.contact_ratio"]
-    stages = _stages.build_stages(checked, source, problems, v["stiffness.model"], _torque(v))
+    stages = _stages.build_stages([c for c in checked if c is not None], source, problems, v["stiffness.model"],
+                                  _torque(v))  # every table is checked by now (problems raised above)
     _effects_in_train(effects, stages, source, problems)
     if problems:
         raise SpecError(problems)
@@ -758,9 +759,10 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     legacy = _legacy_views(v, stages) if _stages.is_legacy_train(stages) else None
     requirements = (legacy or {}).get("requirements") or _SECTION_CLASSES["requirements"](**{
         **{f.attr: None for f in FIELDS if f.section == "requirements"}, **top["requirements"].__dict__})
+    tables_of_legacy: dict[str, Any] = {t: (legacy or {}).get(t) for t in LEGACY_TABLES}
     return _reviewed(Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
                           requirements=requirements, test_plan=top["test_plan"],
-                          **{t: (legacy or {}).get(t) for t in LEGACY_TABLES}, effects=MappingProxyType(effects),
+                          **tables_of_legacy, effects=MappingProxyType(effects),
                           source=source, raw=_freeze(data), stages=stages, form="stages"))
 
 

@@ -115,7 +115,7 @@ class StageInput(NamedTuple):
     """One ``[[stage]]`` table as checked: ``values`` stage key -> internal value (or MISSING),
     ``written``: the keys the file gives, ``grade_keys``: keys set from an accuracy grade."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # a field named as tuple.index, by design
     kind: str
     values: dict
     written: frozenset
@@ -414,8 +414,9 @@ def legacy_path(stages, path: str) -> str:
     train (``gear_pair.module_mm``); other paths, and any path of another train, unchanged."""
     parts = path.split(".", 2)
     if len(parts) == 3 and parts[0] == "stage" and parts[1].isdigit() and is_legacy_train(stages):
-        kind = LEGACY_TRAIN[int(parts[1]) - 1] if 1 <= int(parts[1]) <= 2 else None
-        return STAGE_TO_LEGACY.get((kind, parts[2]), path)
+        if not 1 <= int(parts[1]) <= len(LEGACY_TRAIN):
+            return path
+        return STAGE_TO_LEGACY.get((LEGACY_TRAIN[int(parts[1]) - 1], parts[2]), path)
     return path
 
 
