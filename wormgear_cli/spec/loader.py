@@ -16,7 +16,6 @@ one line each: ``FILE: KEY: what is expected``.
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
@@ -440,31 +439,13 @@ _NOT_COVERED = {f"worm_pair.{key}": message for key, message in _stages.NOT_COVE
 
 def _apply_grades(values: dict, bad) -> None:
     """Fill the spur gears' pitch deviations (and profile error) from ``accuracy_grade``
-    where the spec does not give them (ISO 1328-1:2013; explicit keys win).  A gear
-    outside the standard's scope is a problem naming the grade key and the range."""
-    module = values["gear_pair.module_mm"]
-    if module is MISSING:
+    where the spec does not give them (:func:`wormgear_cli.spec.stages.fill_from_grades`, the
+    stage form's rule).  A gear outside the standard's scope is a problem naming the grade key and
+    the range."""
+    if values["gear_pair.module_mm"] is MISSING:
         return
-    face = values["gear_pair.face_width_mm"]
-    face = 10.0 * module if face is MISSING else face
-    for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
-        grade = values[f"{sec}.accuracy_grade"]
-        if grade is MISSING or grade is None:
-            continue
-        teeth = values[f"{sec}.teeth"]
-        if teeth is MISSING:
-            continue
-        from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
-
-        try:
-            tol = flank_tolerances(grade, module, module * teeth, face, teeth)
-        except GradeError as exc:
-            bad(f"{sec}.accuracy_grade", f"{exc}; give the deviations explicitly instead")
-            continue
-        for key, um in (("cumulative_pitch_deviation_mm", tol.F_pT), ("single_pitch_deviation_mm", tol.f_pT),
-                        ("profile_error_mm", tol.F_alphaT)):
-            if values[f"{sec}.{key}"] is MISSING:
-                values[f"{sec}.{key}"] = um * 1e-3
+    _stages.fill_from_grades(values, values["gear_pair.module_mm"], values["gear_pair.face_width_mm"],
+                             ("gear_pair.output_gear", "gear_pair.pinion"), bad)
 
 
 def value_origin(spec: Spec, path: str) -> str:
@@ -636,8 +617,8 @@ def _legacy_derived(v: dict) -> None:
     v["gear_pair.face_width_mm"] = take("gear_pair.face_width_mm", 10.0 * v["gear_pair.module_mm"])
     v["worm_pair.face_width_mm"] = take("worm_pair.face_width_mm", 10.0 * v["worm_pair.module_mm"])
     if v["worm_pair.transverse_pressure_angle_deg"] is MISSING:
-        an, lam = v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"]
-        v["worm_pair.transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
+        v["worm_pair.transverse_pressure_angle_deg"] = _stages.wheel_transverse_pressure_angle(
+            v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"])
     if v["assembly.gear_eccentricity_mm"] is MISSING:
         v["assembly.gear_eccentricity_mm"] = v["assembly.gear_centre_distance_error_mm"]
     for sec in ("gear_pair.output_gear", "gear_pair.pinion"):

@@ -205,17 +205,28 @@ def _other_kind(rel: str, kind: str) -> str:
 
 def _apply_grades(kind: str, values: dict, problems: list[str], label: str) -> set[str]:
     """Fill the pitch deviations (and profile errors) of a stage's members that have an
-    ``accuracy_grade`` key (a spur stage's gears) from their grade where the stage does not give them
-    (ISO 1328-1:2013; explicit keys win).  Returns the keys set."""
-    out: set[str] = set()
+    ``accuracy_grade`` key (a spur stage's gears) from their grade (:func:`fill_from_grades`).
+    Returns the keys set."""
     graded = [m for m in MEMBERS[kind] if f"{m}.accuracy_grade" in STAGE_FIELD_BY_KEY[kind]]
     if not graded or values["module_mm"] is MISSING:
-        return out
-    module = values["module_mm"]
-    face = values["face_width_mm"]
+        return set()
+
+    def bad(key: str, message: str) -> None:
+        problems.append(f"{label}: {key}: {message}")
+
+    return fill_from_grades(values, values["module_mm"], values["face_width_mm"], graded, bad)
+
+
+def fill_from_grades(values: dict, module: float, face, parts, bad) -> set[str]:
+    """Fill each part's pitch deviations (and profile error) from its ``accuracy_grade`` where
+    ``values`` (key -> internal value or MISSING) does not give them (ISO 1328-1:2013; explicit keys
+    win); the one rule of both forms of a drive file.  ``parts``: the key prefix of each graded part
+    (``gear``, ``gear_pair.output_gear``); ``face``: the face width [mm] (MISSING: 10 x ``module``);
+    ``bad(key, message)`` for a part outside the standard's scope.  Returns the keys set."""
+    out: set[str] = set()
     face = 10.0 * module if face is MISSING else face
-    for member in graded:
-        grade, teeth = values[f"{member}.accuracy_grade"], values[f"{member}.teeth"]
+    for part in parts:
+        grade, teeth = values[f"{part}.accuracy_grade"], values[f"{part}.teeth"]
         if grade in (MISSING, None) or teeth is MISSING:
             continue
         from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
@@ -223,13 +234,13 @@ def _apply_grades(kind: str, values: dict, problems: list[str], label: str) -> s
         try:
             tol = flank_tolerances(grade, module, module * teeth, face, teeth)
         except GradeError as exc:
-            problems.append(f"{label}: {member}.accuracy_grade: {exc}; give the deviations explicitly instead")
+            bad(f"{part}.accuracy_grade", f"{exc}; give the deviations explicitly instead")
             continue
         for key, um in (("cumulative_pitch_deviation_mm", tol.F_pT), ("single_pitch_deviation_mm", tol.f_pT),
                         ("profile_error_mm", tol.F_alphaT)):
-            if values[f"{member}.{key}"] is MISSING:
-                values[f"{member}.{key}"] = um * 1e-3
-                out.add(f"{member}.{key}")
+            if values[f"{part}.{key}"] is MISSING:
+                values[f"{part}.{key}"] = um * 1e-3
+                out.add(f"{part}.{key}")
     return out
 
 
