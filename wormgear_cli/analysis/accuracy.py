@@ -215,7 +215,9 @@ def _info_keys(r) -> tuple[str, ...]:
         return ("ratio", "te_phi_deg", "load_share_pct", "deflection_um")
     if r.kind == "worm":
         return ("ratio", "deflection_um")
-    return ("ratio", "stretch_um")
+    if r.kind == "belt":
+        return ("ratio", "stretch_um")
+    return ("ratio",)  # another kind: its ratio (its model's info is in the JSON stage entry)
 
 
 def _stage_report(r, a: dict, i: dict) -> dict:
@@ -243,10 +245,9 @@ def _stage_report(r, a: dict, i: dict) -> dict:
                     "deflection_um": r.info["deflection_um"]})
     elif r.kind == "worm":
         out.update({"deflection_um": r.info["deflection_um"], "line_load_N_per_mm": r.info["line_load_N_per_mm"]})
-    else:
-        out.update({k: r.info[k] for k in ("effective_tension_N", "stretch_um", "span_length_mm",
-                                           "centre_distance_mm")})
-    if r.kind != "belt" and r.info["anti_backlash"] != "none":
+    else:  # a belt stage (effective tension, stretch, span length, centre distance) or another kind: its model's
+        out.update(r.info)
+    if r.info.get("anti_backlash", "none") != "none":
         out["anti_backlash"] = r.info["anti_backlash"]
     out["contribution"] = {"transmission_error": te / r.after, "backlash": bl / r.after,
                            "transmission_error_pct": i[f"{n}_te_share_pct"],

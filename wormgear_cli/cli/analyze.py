@@ -179,6 +179,18 @@ def _belt_table(r: dict, st: dict, unit: str, title: str) -> list:
     return [bt, note]
 
 
+def _parts_table(r: dict, st: dict, unit: str, title: str) -> list:
+    """The table of a stage of another kind: its TE and backlash, their parts by name."""
+    a = lambda x: fmt_angle(x, unit)  # noqa: E731
+    c = st["contribution"]
+    t = _table(title, ("quantity", "parts", "value", "at output", "share of total"), left=(0, 1))
+    for q, parts in (("transmission_error", st["transmission_error_parts"]), ("backlash", st["backlash_parts"])):
+        shown = ", ".join(f"{k} {a(v)}" for k, v in parts.items())
+        t.add_row(q.replace("_", " "), shown, a(st[q]), a(c[q]), f"{c[q + '_pct']:.1f} %")
+    return [t]
+
+
+#: stage kind -> its table; a kind not listed gets :func:`_parts_table`
 _STAGE_TABLES = {"spur": _spur_table, "worm": _worm_table, "belt": _belt_table}
 
 
@@ -188,7 +200,7 @@ def _tables(r: dict, unit: str) -> list:
     back = r["stages"][::-1]  # from the output back to the motor
     for k, st in enumerate(back):
         title = f"{_stage_title(r, st)} [{unit}]"
-        out += _STAGE_TABLES[st["kind"]](r, st, unit, f"{r['drive']}: {title}" if k == 0 else title)
+        out += _STAGE_TABLES.get(st["kind"], _parts_table)(r, st, unit, f"{r['drive']}: {title}" if k == 0 else title)
     labels = []
     for st in back:
         if _legacy(r):

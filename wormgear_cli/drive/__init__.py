@@ -9,7 +9,8 @@ command reads:
 * :mod:`~wormgear_cli.drive.stiffness`: each gear mesh's tooth deflection under its load;
 * :mod:`~wormgear_cli.drive.worm`, :mod:`~wormgear_cli.drive.spur`, :mod:`~wormgear_cli.drive.belt`:
   the per-kind stage models (TE and lost motion at the stage's own output shaft, its sources at
-  the output, its compliance);
+  the output, its compliance, its members, ratio and orders), and :mod:`~wormgear_cli.drive.models`,
+  their registry (``MODELS``: kind -> model);
 * :mod:`~wormgear_cli.drive.registry`: :func:`~wormgear_cli.drive.registry.build`, the registry.
 
 Imports point one way: this layer reads spec records and physics, and the analyses read it.

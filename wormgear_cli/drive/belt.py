@@ -31,10 +31,37 @@ the belt makers' design manuals, shared by the two spans).  Tooth deflection is 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
 from wormgear_cli.spec.stages import record_values
+
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("driving pulley", "driven pulley")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the driven pulley, teeth of the driving pulley): the stage's ratio as whole numbers."""
+    return stage.driven.teeth, stage.driver.teeth
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the belt's tooth mesh at z_driven per
+    driven turn, and once per belt revolution (order z_driven / z_belt per driven turn)."""
+    return [(stage.driven.teeth * after, "mesh", f"belt tooth mesh{of}"),
+            (stage.driven.teeth * after / stage.belt_teeth, "belt", f"belt revolution{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(radius [mm], teeth) of the driven pulley (its pitch radius: a belt acts on its pitch line)."""
+    return stage.output_radius, stage.driven.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """0: a belt's teeth do not deflect in this model (its stretch is the belt's compliance)."""
+    return 0.0
 
 
 def stretch(stage, tension) -> float:
@@ -66,7 +93,7 @@ def periodic_size(stage, value):
     """The periodic part of the stage's TE at the driven pulley's shaft [rad]: the sum over orders of the
     root-sum-square of the sources at one order (sources of one order add as vectors, different orders
     peak together somewhere in a turn), from ``value(key)`` (numbers or arrays of sampled drives)."""
-    by_order: dict[float, object] = {}
+    by_order: dict[float, Any] = {}
     for _, _, key, order, scale, *_ in _amplitudes(stage, 1.0):
         amp = value(key) * scale
         by_order[order] = by_order.get(order, 0.0) + amp * amp
@@ -80,6 +107,12 @@ def totals(stage, value=None) -> tuple:
     r = stage.output_radius
     s = stretch(stage, stage.effective_tension) / r
     return s + periodic_size(stage, v), v("backlash_mm") / r + 2.0 * s
+
+
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the driven pulley's shaft [rad] of sampled drives (:func:`totals`): every
+    model's entry for the tolerance analysis."""
+    return totals(stage, value)
 
 
 def evaluate(spec, stage, t, deflection: float = 0.0) -> StageResult:

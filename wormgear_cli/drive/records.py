@@ -19,7 +19,7 @@ class StageResult(NamedTuple):
     ``info``: name -> number (deflection_um, line_load_N_per_mm, ...); ``symbols``: the paper's
     names of its TE and backlash, or ("", "")."""
 
-    index: int
+    index: int  # type: ignore[assignment]  # a field named as tuple.index, by design
     name: str
     kind: str
     ratio: float
@@ -138,7 +138,7 @@ def sine(amplitude, order):
     def curve(theta, phase):
         return amplitude * np.sin(order * theta + phase)
 
-    curve.sine = (amplitude, order)  # a pure sinusoid: the budget's peak adds these as phasors
+    curve.sine = (amplitude, order)  # type: ignore[attr-defined]  # a pure sinusoid: the budget's peak adds these as phasors
     return curve
 
 

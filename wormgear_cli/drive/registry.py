@@ -19,20 +19,18 @@ additions, then its mesh-order ones.  A name used by two stages is prefixed ``st
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
-from wormgear_cli.drive import belt, spur, stiffness, worm
+from wormgear_cli.drive import spur
 from wormgear_cli.drive import train as train_mod
+from wormgear_cli.drive.models import MODELS
 from wormgear_cli.drive.records import Clearance, Compliance, Source, StageResult, Static
-
-#: stage kind -> its model (evaluate, sources, compliance)
-MODELS = {"worm": worm, "spur": spur, "belt": belt}
 
 
 class Registry(NamedTuple):
     """Everything the commands read about a drive's errors (module docstring).  Angles [rad]."""
 
-    train: object
+    train: Any  # a drive.train.Train
     results: tuple
     sources: tuple
     statics: tuple
@@ -77,9 +75,9 @@ def origin_of(stage, keys) -> str:
 
 
 def deflections(spec, stages=None) -> tuple:
-    """Each stage's tooth deflection under its load [mm] (0 for a belt stage)."""
+    """Each stage's tooth deflection under its load [mm] (its model's; 0 for a belt stage)."""
     stages = spec.stages if stages is None else stages
-    return tuple(0.0 if s.kind == "belt" else float(stiffness.deflection(spec, s, stages=stages)) for s in stages)
+    return tuple(MODELS[s.kind].tooth_deflection(spec, s, stages) for s in stages)
 
 
 def build(spec) -> Registry:
@@ -146,5 +144,5 @@ def aligned_phases(spec, quantity: str = "error", registry: Registry | None = No
     return out
 
 
-__all__ = ["Registry", "Source", "Static", "Clearance", "Compliance", "StageResult", "build", "aligned_phases",
-           "deflections", "origin_of"]
+__all__ = ["MODELS", "Registry", "Source", "Static", "Clearance", "Compliance", "StageResult", "build",
+           "aligned_phases", "deflections", "origin_of"]

@@ -26,6 +26,7 @@ the mesh order z1 A.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -35,6 +36,28 @@ from wormgear_cli.physics import spur as model
 
 #: the paper's names of the spur stage's TE and backlash
 SYMBOLS = ("Delta phi_cc", "Delta phi_ch")
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("pinion", "gear")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the gear, teeth of the pinion): the stage's ratio as whole numbers."""
+    return stage.gear.teeth, stage.pinion.teeth
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the spur mesh at z_gear per gear turn."""
+    return [(stage.gear.teeth * after, "mesh", f"spur mesh{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(base radius [mm], teeth) of the gear."""
+    return stage.module * stage.gear.teeth * math.cos(stage.pressure_angle) / 2.0, stage.gear.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """The mesh's tooth deflection under the stage's load [mm] (:func:`~wormgear_cli.drive.stiffness.deflection`)."""
+    return float(stiffness.deflection(spec, stage, stages=stages))
 
 
 def radii(stage) -> tuple[float, float]:
@@ -77,6 +100,12 @@ def totals(stage, deflection, value=None, te_max=None) -> tuple:
     if stage.anti_backlash != "none":
         bl = 0.0 + bl_def + float(stage.residual_lost_motion)
     return te, bl + shaft_windup(stage)
+
+
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the gear shaft [rad] of sampled drives (:func:`totals`; ``te_max`` the paper
+    kinematics' interpolant of the TE maximum): every model's entry for the tolerance analysis."""
+    return totals(stage, deflection, value, te_max)
 
 
 def shaft_windup(stage) -> float:
@@ -148,7 +177,8 @@ def _eccentricity_source(stage, t, origin) -> Source:
     r1, r2 = radii(stage)
     de, alpha = stage.model_eccentricity, stage.pressure_angle
     o_p, after = t.before(stage), t.after(stage)
-    keys = ("eccentricity_mm", "centre_distance_error_mm")
+    keys: tuple[str, ...] = ("eccentricity_mm", "centre_distance_error_mm")
+    curve_at: Callable | None
     lost_clear = stage.anti_backlash == "none"
     if stage.kinematics == "paper":
         def curve(theta, phase):
@@ -162,13 +192,14 @@ def _eccentricity_source(stage, t, origin) -> Source:
             return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
                 / after
 
-        def curve_at(v, theta, phase):  # the curve of sampled drives (Delta e an array)
+        def curve_at_paper(v, theta, phase):  # the curve of sampled drives (Delta e an array)
             return model.gear_kinematic_te(o_p * theta + phase, r1, r2, v("eccentricity_mm"), alpha) / after
 
         def lost_size(v):  # Delta e tan(alpha) (1 + sin) / R2, never negative (no clipping needed)
             c = v("eccentricity_mm") * (math.tan(alpha) / r2) / after
             return c, c, 1.0, False
 
+        curve_at = curve_at_paper
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
         offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
         peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset

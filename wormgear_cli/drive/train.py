@@ -19,7 +19,10 @@ Delta phi = sum_h Delta phi_h / i_h).
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
+
+from wormgear_cli.drive.models import MODELS
+from wormgear_cli.spec.kinds import KINDS
 
 
 # an immutable named record built as a NamedTuple, not a frozen dataclass: it is created when
@@ -62,12 +65,8 @@ def train(stages) -> Train:
 
 
 def _teeth(stage) -> tuple[int, int]:
-    """(teeth of the output member, teeth or starts of the input member) of a stage."""
-    if stage.kind == "worm":
-        return stage.wheel.teeth, stage.worm.starts
-    if stage.kind == "spur":
-        return stage.gear.teeth, stage.pinion.teeth
-    return stage.driven.teeth, stage.driver.teeth
+    """(teeth of the output member, teeth or starts of the input member) of a stage (its model's)."""
+    return MODELS[stage.kind].teeth(stage)
 
 
 def of(spec) -> Train:
@@ -77,8 +76,8 @@ def of(spec) -> Train:
 
 # --- orders ---------------------------------------------------------------------------------------------------
 
-#: what sits on a stage's input and output shaft, by kind
-MEMBER_NAMES = {"worm": ("worm", "wheel"), "spur": ("pinion", "gear"), "belt": ("driving pulley", "driven pulley")}
+#: what sits on a stage's input and output shaft, by kind (its model's ``MEMBER_NAMES``)
+MEMBER_NAMES = {kind: model.MEMBER_NAMES for kind, model in MODELS.items()}
 
 
 class Order(NamedTuple):
@@ -93,7 +92,8 @@ class Order(NamedTuple):
 
 
 #: words a stage's name cannot stand for it in a label (``gear of gear``): the members' and the default names
-_PLAIN_NAMES = frozenset({"worm", "wheel", "pinion", "gear", "belt", "driving pulley", "driven pulley"})
+_PLAIN_NAMES = frozenset({n for names in MEMBER_NAMES.values() for n in names}
+                         | {k.default_name for k in KINDS.values()})
 
 
 def _of(t: Train, st) -> str:
@@ -123,13 +123,7 @@ def orders(t: Train) -> list[Order]:
     out = [Order(t.turns[s], "shaft", s, shaft_label(t, s)) for s in range(len(t.stages), -1, -1)]
     for st in t.stages[::-1]:
         after, of = t.after(st), _of(t, st)
-        if st.kind == "worm":
-            out.append(Order(st.wheel.teeth * after, "mesh", st.index, f"worm mesh{of}"))
-        elif st.kind == "spur":
-            out.append(Order(st.gear.teeth * after, "mesh", st.index, f"spur mesh{of}"))
-        else:
-            out.append(Order(st.driven.teeth * after, "mesh", st.index, f"belt tooth mesh{of}"))
-            out.append(Order(st.driven.teeth * after / st.belt_teeth, "belt", st.index, f"belt revolution{of}"))
+        out += [Order(o, kind, st.index, label) for o, kind, label in MODELS[st.kind].mesh_orders(st, after, of)]
     return out
 
 
@@ -148,19 +142,13 @@ def drive_geometry(spec, t: Train | None = None):
     t = t or of(spec)
     last = t.stages[-1]
     r_out = last.output_radius
-    if last.kind == "spur":
-        r_base, teeth = last.module * last.gear.teeth * math.cos(last.pressure_angle) / 2.0, last.gear.teeth
-    elif last.kind == "worm":
-        r_base = last.module * last.wheel.teeth * math.cos(last.transverse_pressure_angle) / 2.0
-        teeth = last.wheel.teeth
-    else:
-        r_base, teeth = r_out, last.driven.teeth
+    r_base, teeth = MODELS[last.kind].base_circle(last)
     worms = [s for s in t.stages if s.kind == "worm"]
     legacy = t.kinds == ("worm", "spur")
     labels = () if legacy else tuple((o.order, o.label) for o in orders(t))
     # the intermediate shaft: the output stage's input shaft, unless it is a worm shaft (worm_runout's)
     inter = t.turns[-2] if last.kind != "worm" else 0.0
-    extra = {} if legacy else {"kinds": t.kinds, "intermediate": inter}
+    extra: dict[str, Any] = {} if legacy else {"kinds": t.kinds, "intermediate": inter}
     if worms:
         w = worms[-1]
         worm_diameter = w.worm.starts * w.module / math.tan(w.lead_angle)

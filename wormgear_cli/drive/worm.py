@@ -21,7 +21,7 @@ The wheel's cumulative pitch deviation F_p / (2 r_w) / A at A (the full budget).
 """
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -33,6 +33,28 @@ from wormgear_cli.spec.stages import record_values
 
 #: the paper's names of the worm stage's TE and backlash
 SYMBOLS = ("Delta phi_wc", "Delta phi_wh")
+#: what sits on the stage's input and output shaft
+MEMBER_NAMES = ("worm", "wheel")
+
+
+def teeth(stage) -> tuple[int, int]:
+    """(teeth of the wheel, starts of the worm): the stage's ratio as whole numbers."""
+    return stage.wheel.teeth, stage.worm.starts
+
+
+def mesh_orders(stage, after: float, of: str) -> list[tuple[float, str, str]]:
+    """(order at the output, kind, label) of the stage's meshes: the worm mesh at z_wheel per wheel turn."""
+    return [(stage.wheel.teeth * after, "mesh", f"worm mesh{of}")]
+
+
+def base_circle(stage) -> tuple[float, int]:
+    """(base radius [mm], teeth) of the wheel (in its transverse plane)."""
+    return stage.module * stage.wheel.teeth * math.cos(stage.transverse_pressure_angle) / 2.0, stage.wheel.teeth
+
+
+def tooth_deflection(spec, stage, stages) -> float:
+    """The mesh's tooth deflection under the stage's load [mm] (:func:`~wormgear_cli.drive.stiffness.deflection`)."""
+    return float(stiffness.deflection(spec, stage, stages=stages))
 
 
 class WormParts(NamedTuple):
@@ -41,13 +63,13 @@ class WormParts(NamedTuple):
     ``te_halfwidth`` h, ``backlash_halfwidth`` h_j; ``backlash_deformation``, ``backlash_profile``,
     ``backlash_thickness`` (the central backlash's parts)."""
 
-    transmission_error: object
-    backlash: object
-    te_halfwidth: object
-    backlash_halfwidth: object
-    backlash_deformation: object
-    backlash_profile: object
-    backlash_thickness: object
+    transmission_error: Any
+    backlash: Any
+    te_halfwidth: Any
+    backlash_halfwidth: Any
+    backlash_deformation: Any
+    backlash_profile: Any
+    backlash_thickness: Any
 
 
 def values(stage):
@@ -135,6 +157,12 @@ def totals(stage, deflection, value=None, spec=None) -> tuple:
         return te, bl
     extra_bl, extra_te = additions(spec, stage)
     return te + sum(extra_te.values()), np.maximum(bl + sum(extra_bl.values()), 0.0)
+
+
+def sampled_totals(stage, deflection, value, spec, te_max=None) -> tuple:
+    """(TE, backlash) at the wheel shaft [rad] of sampled drives (:func:`totals` with its additions
+    beyond the paper, which are not sampled): every model's entry for the tolerance analysis."""
+    return totals(stage, deflection, value, spec)  # the worm stage's one definition
 
 
 def evaluate(spec, stage, t, deflection: float) -> StageResult:

@@ -5,6 +5,8 @@ Core code, shared by the CLI and the Python API (:func:`wormgear_cli.api.analyze
 
 from __future__ import annotations
 
+from wormgear_cli.spec.kinds import KINDS
+
 
 def document(spec, result, unit: str) -> dict:
     """The JSON document of ``wormgear analyze`` (angles in ``unit``): each stage's and the total
@@ -15,15 +17,9 @@ def document(spec, result, unit: str) -> dict:
     return {**result.report(unit), **budget(spec, result).report(unit), "values_used": values_used(spec)}
 
 
-#: stage keys whose value and origin analyze lists, per kind: (the parts' tolerances, the assembly's)
-LISTED_STAGE_KEYS = {
-    "spur": (tuple(f"{m}.{k}" for m in ("gear", "pinion") for k in (
-        "cumulative_pitch_deviation_mm", "single_pitch_deviation_mm", "profile_error_mm", "thickness_deviation_mm")),
-        ("centre_distance_error_mm", "eccentricity_mm")),
-    "worm": (("lead_error_mm", "wheel.radial_composite_error_mm", "wheel.cumulative_pitch_deviation_mm"), ()),
-    "belt": (("pitch_error_mm", "tooth_mesh_error_mm", "driver.eccentricity_mm", "driven.eccentricity_mm",
-              "backlash_mm"), ()),
-}
+#: stage keys whose value and origin analyze lists, per kind: (the parts' tolerances, the assembly's); the
+#: kinds' ``listed`` (:mod:`wormgear_cli.spec.kinds`)
+LISTED_STAGE_KEYS = {name: k.listed for name, k in KINDS.items()}
 
 
 def values_used(spec) -> list:

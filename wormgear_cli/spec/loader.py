@@ -16,7 +16,6 @@ one line each: ``FILE: KEY: what is expected``.
 from __future__ import annotations
 
 import copy
-import math
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
@@ -26,14 +25,8 @@ from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.physics.deformation import DEFORMATION_MODELS
 from wormgear_cli.spec import stages as _stages
 from wormgear_cli.spec.fields import (
-    FACE_WIDTH,
     FACTOR,
-    FORCE,
-    KINEMATICS,
     MISSING,
-    MODULE,
-    PRESSURE_ANGLE,
-    TOLERANCE,
     UNIT_SCALE,
     Field,
     check_value,
@@ -42,100 +35,81 @@ from wormgear_cli.spec.fields import (
     gear_grade_fields,
     get_path,
     number_problem,
-    phase_field,
     quote,
-    teeth_field,
-    tol_field,
     type_name,
 )
+
+
+def _legacy(path: str, **changes) -> Field:
+    """The legacy key ``path`` as a field: its stage key's field (kind, unit, default, range, choices: one
+    definition, :data:`wormgear_cli.spec.stages.LEGACY_KEYS`) under the legacy path and attribute name (the
+    legacy key less the stage key's unit suffix), with ``changes`` (the legacy form's own wording)."""
+    kind, key = _stages.LEGACY_KEYS[path]
+    f = _stages.STAGE_FIELD_BY_KEY[kind][key]
+    suffix = f.key[len(f.attr):]  # "_mm" of runout_mm (attr runout), "" of teeth
+    name = path.rsplit(".", 1)[-1]
+    return f._replace(path=path, attr=name[:len(name) - len(suffix)] if suffix else name, **changes)
+
 
 #: The drive-spec schema.  Order = order in the template and the key reference (docs/reference/spec.md).
 FIELDS: tuple[Field, ...] = (
     Field("drive.name", "name", "str", "", "derived", "name shown in reports (default: the file name without .toml)"),
     Field("drive.description", "description", "str", "", "", "free text"),
     # --- stage 2: spur gear pair -------------------------------------------------
-    field_("gear_pair.module_mm", "module", "mm", None, "module m1 of the spur pair", **MODULE, table1="2.5"),
-    field_("gear_pair.pressure_angle_deg", "pressure_angle", "deg", None, "pressure angle alpha", **PRESSURE_ANGLE,
-       table1="20"),
-    field_("gear_pair.face_width_mm", "face_width", "mm", "derived",
-       "face width b of the spur mesh (default: 10 x module)", **FACE_WIDTH),
-    Field("gear_pair.kinematics", "kinematics", "str", "", "paper",
-          "gear-stage kinematics: paper (the paper's Delta phi_cc/Delta phi_ch as printed) or involute "
-          "(eccentricity e -> TE e/r_b; centre-distance error -> backlash 2 Delta a tan(alpha), no TE; "
-          "tooth-thickness allowances in the backlash; see docs/budget.md)",
-          choices=KINEMATICS),
-    teeth_field("gear_pair.output_gear.teeth", "teeth", "teeth z1 of the output gear (gear 1)", "144"),
+    _legacy("gear_pair.module_mm"),
+    _legacy("gear_pair.pressure_angle_deg"),
+    _legacy("gear_pair.face_width_mm"),
+    _legacy("gear_pair.kinematics",
+            doc="gear-stage kinematics: paper (the paper's Delta phi_cc/Delta phi_ch as printed) or involute "
+            "(eccentricity e -> TE e/r_b; centre-distance error -> backlash 2 Delta a tan(alpha), no TE; "
+            "tooth-thickness allowances in the backlash; see docs/budget.md)"),
+    _legacy("gear_pair.output_gear.teeth", doc="teeth z1 of the output gear (gear 1)"),
     *gear_grade_fields("gear_pair.output_gear", "gear 1"),
-    tol_field("gear_pair.output_gear.profile_error_mm", "profile_error",
-         "profile error of gear 1 (not used by the paper's gear-stage equations)", "0.007"),
-    tol_field("gear_pair.output_gear.thickness_deviation_mm", "thickness_deviation",
-         "tooth thickness deviation of gear 1 (not used by the paper's gear-stage equations)", "0.055"),
-    teeth_field("gear_pair.pinion.teeth", "teeth", "teeth z2 of the pinion (gear 2)", "18"),
+    _legacy("gear_pair.output_gear.profile_error_mm",
+            doc="profile error of gear 1 (not used by the paper's gear-stage equations)"),
+    _legacy("gear_pair.output_gear.thickness_deviation_mm",
+            doc="tooth thickness deviation of gear 1 (not used by the paper's gear-stage equations)"),
+    _legacy("gear_pair.pinion.teeth", doc="teeth z2 of the pinion (gear 2)"),
     *gear_grade_fields("gear_pair.pinion", "gear 2"),
-    tol_field("gear_pair.pinion.profile_error_mm", "profile_error", "profile error of gear 2 (not used by the paper's "
-         "gear-stage equations)", "0.008"),
-    tol_field("gear_pair.pinion.thickness_deviation_mm", "thickness_deviation",
-         "tooth thickness deviation of gear 2 (not used by the paper's gear-stage equations)", "0.045"),
+    _legacy("gear_pair.pinion.profile_error_mm",
+            doc="profile error of gear 2 (not used by the paper's gear-stage equations)"),
+    _legacy("gear_pair.pinion.thickness_deviation_mm",
+            doc="tooth thickness deviation of gear 2 (not used by the paper's gear-stage equations)"),
     # --- stage 1: worm pair ------------------------------------------------------
-    field_("worm_pair.module_mm", "module", "mm", None, "axial module m2 (= wheel transverse module)", **MODULE,
-       table1="2.5"),
-    field_("worm_pair.normal_pressure_angle_deg", "normal_pressure_angle", "deg", None, "normal pressure angle alpha_n",
-       **PRESSURE_ANGLE, table1="20"),
-    field_("worm_pair.lead_angle_deg", "lead_angle", "deg", None, "lead angle lambda of the worm", lo=0.1, hi=45.0,
-       hi_open=True, table1="3.178"),
-    field_("worm_pair.transverse_pressure_angle_deg", "transverse_pressure_angle", "deg", "derived",
-       "wheel transverse pressure angle alpha_2 (default: atan(tan alpha_n / cos lambda), DIN 3975)",
-       **PRESSURE_ANGLE),
-    field_("worm_pair.face_width_mm", "face_width", "mm", "derived", "face width of the wheel (default: 10 x module)",
-       **FACE_WIDTH),
-    tol_field("worm_pair.lead_error_mm", "lead_error", "worm lead error f_hL", "0.030"),
-    phase_field("worm_pair.lead_error_phase_deg", "lead_error_phase", "phase of the lead error (once per worm turn)"),
-    Field("worm_pair.worm.starts", "starts", "int", "-", None, "number of worm starts (threads)", 1, 100,
-          table1="1"),
-    tol_field("worm_pair.worm.profile_error_mm", "profile_error", "worm profile error f_t1", "0.036"),
-    tol_field("worm_pair.worm.thickness_deviation_mm", "thickness_deviation", "worm thickness deviation T_s1", "0.045"),
-    teeth_field("worm_pair.wheel.teeth", "teeth", "teeth z3 of the worm wheel", "30"),
-    tol_field("worm_pair.wheel.profile_error_mm", "profile_error", "wheel profile error f_t2", "0.011"),
-    tol_field("worm_pair.wheel.thickness_deviation_mm", "thickness_deviation", "wheel thickness deviation T_s2",
-         "0.090"),
-    tol_field("worm_pair.wheel.radial_composite_error_mm", "radial_composite_error", "wheel radial composite error F_i",
-         "0.036"),
-    phase_field("worm_pair.wheel.radial_composite_phase_deg", "radial_composite_phase",
-           "phase of the radial composite error (once per wheel turn)"),
-    tol_field("worm_pair.wheel.cumulative_pitch_deviation_mm", "cumulative_pitch_deviation",
-         "cumulative pitch deviation F_p of the wheel (budget source, order i_c; part of what F_i "
-         "measures, so leave 0 unless measured separately)"),
-    phase_field("worm_pair.wheel.cumulative_pitch_phase_deg", "cumulative_pitch_phase",
-           "phase of the wheel's cumulative pitch deviation (once per wheel turn)"),
+    _legacy("worm_pair.module_mm"),
+    _legacy("worm_pair.normal_pressure_angle_deg"),
+    _legacy("worm_pair.lead_angle_deg"),
+    _legacy("worm_pair.transverse_pressure_angle_deg"),
+    _legacy("worm_pair.face_width_mm"),
+    _legacy("worm_pair.lead_error_mm"),
+    _legacy("worm_pair.lead_error_phase_deg"),
+    _legacy("worm_pair.worm.starts"),
+    _legacy("worm_pair.worm.profile_error_mm"),
+    _legacy("worm_pair.worm.thickness_deviation_mm"),
+    _legacy("worm_pair.wheel.teeth"),
+    _legacy("worm_pair.wheel.profile_error_mm"),
+    _legacy("worm_pair.wheel.thickness_deviation_mm"),
+    _legacy("worm_pair.wheel.radial_composite_error_mm"),
+    _legacy("worm_pair.wheel.radial_composite_phase_deg"),
+    _legacy("worm_pair.wheel.cumulative_pitch_deviation_mm",
+            doc="cumulative pitch deviation F_p of the wheel (budget source, order i_c; part of what F_i measures, "
+            "so leave 0 unless measured separately)"),
+    _legacy("worm_pair.wheel.cumulative_pitch_phase_deg"),
     # --- assembly ----------------------------------------------------------------
-    tol_field("assembly.gear_centre_distance_error_mm", "gear_centre_distance_error",
-         "centre-distance error of the spur pair", "0.030"),
-    field_("assembly.gear_eccentricity_mm", "gear_eccentricity", "mm", "derived",
-       "the paper's Delta e (default: gear_centre_distance_error_mm)", **TOLERANCE),
-    phase_field("assembly.gear_eccentricity_phase_deg", "gear_eccentricity_phase",
-           "phase of Delta e (once per pinion turn)"),
-    tol_field("assembly.worm_centre_distance_error_mm", "worm_centre_distance_error",
-         "centre-distance error f_a of the worm pair", "0.035"),
-    tol_field("assembly.worm_eccentricity_mm", "worm_eccentricity",
-              "the paper's S1: radial runout of the worm (total indicator reading, 2 x the eccentricity of an "
-              "eccentric worm; docs/models.md)"),
-    phase_field("assembly.worm_eccentricity_phase_deg", "worm_eccentricity_phase",
-                "phase of S1 (once per worm turn)"),
-    tol_field("assembly.worm_bearing_clearance_mm", "worm_bearing_clearance", "worm bearing clearance C1"),
-    tol_field("assembly.wheel_eccentricity_mm", "wheel_eccentricity",
-              "the paper's S2: radial runout of the wheel (total indicator reading, 2 x the eccentricity of an "
-              "eccentric wheel; docs/models.md)"),
-    phase_field("assembly.wheel_eccentricity_phase_deg", "wheel_eccentricity_phase",
-                "phase of S2 (once per wheel turn)"),
-    tol_field("assembly.wheel_bearing_clearance_mm", "wheel_bearing_clearance", "wheel bearing clearance C2"),
-    Field("assembly.worm_pair_errors_mm", "worm_pair_errors", "floats", "mm", (0.0,) * 6,
-          "the paper's six e_i of the worm pair (shaft-position and alignment errors entering Delta j)",
-          0.0, 10.0, length=6),
+    _legacy("assembly.gear_centre_distance_error_mm"),
+    _legacy("assembly.gear_eccentricity_mm", doc="the paper's Delta e (default: gear_centre_distance_error_mm)"),
+    _legacy("assembly.gear_eccentricity_phase_deg"),
+    _legacy("assembly.worm_centre_distance_error_mm"),
+    _legacy("assembly.worm_eccentricity_mm"),
+    _legacy("assembly.worm_eccentricity_phase_deg"),
+    _legacy("assembly.worm_bearing_clearance_mm", doc="worm bearing clearance C1"),
+    _legacy("assembly.wheel_eccentricity_mm"),
+    _legacy("assembly.wheel_eccentricity_phase_deg"),
+    _legacy("assembly.wheel_bearing_clearance_mm", doc="wheel bearing clearance C2"),
+    _legacy("assembly.worm_pair_errors_mm"),
     # --- loads -------------------------------------------------------------------
-    field_("loads.gear_normal_force_N", "gear_normal_force", "N", 0.0, "normal force F_N on the spur teeth", **FORCE,
-       table1="666 (text)"),
-    field_("loads.worm_normal_force_N", "worm_normal_force", "N", 0.0, "normal force F_N on the worm mesh", **FORCE,
-       table1="85 (text)"),
+    _legacy("loads.gear_normal_force_N", default=0.0, table1="666 (text)", doc="normal force F_N on the spur teeth"),
+    _legacy("loads.worm_normal_force_N", default=0.0, table1="85 (text)", doc="normal force F_N on the worm mesh"),
     # --- stiffness (deformation model) -------------------------------------------
     Field("stiffness.model", "model", "str", "", "iso6336",
           "deflection model: iso6336 (ISO 6336-1 c') or empirical (the paper's form)",
@@ -257,7 +231,7 @@ class Section(SimpleNamespace):
     def __delattr__(self, name):
         raise FrozenInstanceError(f"cannot delete field {name!r}")
 
-    def __hash__(self):
+    def __hash__(self):  # type: ignore[override]  # SimpleNamespace is unhashable; a frozen record is
         return hash((type(self).__name__, tuple(sorted(self.__dict__.items(), key=lambda kv: kv[0]))))
 
     def _replace(self, **changes):
@@ -465,31 +439,13 @@ _NOT_COVERED = {f"worm_pair.{key}": message for key, message in _stages.NOT_COVE
 
 def _apply_grades(values: dict, bad) -> None:
     """Fill the spur gears' pitch deviations (and profile error) from ``accuracy_grade``
-    where the spec does not give them (ISO 1328-1:2013; explicit keys win).  A gear
-    outside the standard's scope is a problem naming the grade key and the range."""
-    module = values["gear_pair.module_mm"]
-    if module is MISSING:
+    where the spec does not give them (:func:`wormgear_cli.spec.stages.fill_from_grades`, the
+    stage form's rule).  A gear outside the standard's scope is a problem naming the grade key and
+    the range."""
+    if values["gear_pair.module_mm"] is MISSING:
         return
-    face = values["gear_pair.face_width_mm"]
-    face = 10.0 * module if face is MISSING else face
-    for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
-        grade = values[f"{sec}.accuracy_grade"]
-        if grade is MISSING or grade is None:
-            continue
-        teeth = values[f"{sec}.teeth"]
-        if teeth is MISSING:
-            continue
-        from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
-
-        try:
-            tol = flank_tolerances(grade, module, module * teeth, face, teeth)
-        except GradeError as exc:
-            bad(f"{sec}.accuracy_grade", f"{exc}; give the deviations explicitly instead")
-            continue
-        for key, um in (("cumulative_pitch_deviation_mm", tol.F_pT), ("single_pitch_deviation_mm", tol.f_pT),
-                        ("profile_error_mm", tol.F_alphaT)):
-            if values[f"{sec}.{key}"] is MISSING:
-                values[f"{sec}.{key}"] = um * 1e-3
+    _stages.fill_from_grades(values, values["gear_pair.module_mm"], values["gear_pair.face_width_mm"],
+                             ("gear_pair.output_gear", "gear_pair.pinion"), bad)
 
 
 def value_origin(spec: Spec, path: str) -> str:
@@ -661,8 +617,8 @@ def _legacy_derived(v: dict) -> None:
     v["gear_pair.face_width_mm"] = take("gear_pair.face_width_mm", 10.0 * v["gear_pair.module_mm"])
     v["worm_pair.face_width_mm"] = take("worm_pair.face_width_mm", 10.0 * v["worm_pair.module_mm"])
     if v["worm_pair.transverse_pressure_angle_deg"] is MISSING:
-        an, lam = v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"]
-        v["worm_pair.transverse_pressure_angle_deg"] = math.atan(math.tan(an) / math.cos(lam))
+        v["worm_pair.transverse_pressure_angle_deg"] = _stages.wheel_transverse_pressure_angle(
+            v["worm_pair.normal_pressure_angle_deg"], v["worm_pair.lead_angle_deg"])
     if v["assembly.gear_eccentricity_mm"] is MISSING:
         v["assembly.gear_eccentricity_mm"] = v["assembly.gear_centre_distance_error_mm"]
     for sec in ("gear_pair.output_gear", "gear_pair.pinion"):
@@ -775,7 +731,8 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     v = _defaults(_STAGE_FORM, values)
     v["drive.name"] = default_name if v["drive.name"] is MISSING else v["drive.name"]
     v["stiffness.contact_ratio"] = None if v["stiffness.contact_ratio"] is MISSING else v["stiffness.contact_ratio"]
-    stages = _stages.build_stages(checked, source, problems, v["stiffness.model"], _torque(v))
+    stages = _stages.build_stages([c for c in checked if c is not None], source, problems, v["stiffness.model"],
+                                  _torque(v))  # every table is checked by now (problems raised above)
     _effects_in_train(effects, stages, source, problems)
     if problems:
         raise SpecError(problems)
@@ -783,9 +740,10 @@ def _stage_form(data: dict, source: str, default_name: str) -> Spec:
     legacy = _legacy_views(v, stages) if _stages.is_legacy_train(stages) else None
     requirements = (legacy or {}).get("requirements") or _SECTION_CLASSES["requirements"](**{
         **{f.attr: None for f in FIELDS if f.section == "requirements"}, **top["requirements"].__dict__})
+    tables_of_legacy: dict[str, Any] = {t: (legacy or {}).get(t) for t in LEGACY_TABLES}
     return _reviewed(Spec(drive=top["drive"], stiffness=top["stiffness"], materials=top["materials"],
                           requirements=requirements, test_plan=top["test_plan"],
-                          **{t: (legacy or {}).get(t) for t in LEGACY_TABLES}, effects=MappingProxyType(effects),
+                          **tables_of_legacy, effects=MappingProxyType(effects),
                           source=source, raw=_freeze(data), stages=stages, form="stages"))
 
 

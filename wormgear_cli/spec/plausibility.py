@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+from wormgear_cli.spec.kinds import KINDS
 from wormgear_cli.spec.stages import record_values
 
 
@@ -50,31 +51,9 @@ SCALE_WORDS = {
     "pitch": "the belt's pitch",
 }
 
-_W, _S, _B = ("worm",), ("spur",), ("belt",)
-
-#: the tolerance keys and their scales (keys of one member share the member's scale)
-RULES = (
-    Rule("lead_error_mm", _W, "F_pT", 10.0, "radius"),
-    Rule("centre_distance_error_mm", _W + _S, "F_rT", 10.0, "depth"),
-    Rule("alignment_errors_mm", _W, "F_rT", 10.0, "depth"),
-    *(Rule(f"{m}.profile_error_mm", k, "F_alphaT", 10.0, "depth")
-      for m, k in (("worm", _W), ("wheel", _W), ("pinion", _S), ("gear", _S))),
-    *(Rule(f"{m}.thickness_deviation_mm", k, "tooth", 0.2, "tooth")
-      for m, k in (("worm", _W), ("wheel", _W), ("pinion", _S), ("gear", _S))),
-    *(Rule(f"{m}.{key}", _W, "F_rT", 10.0, "depth") for m in ("worm", "wheel")
-      for key in ("runout_mm", "bearing_clearance_mm")),
-    Rule("worm.axial_play_mm", _W, "F_rT", 10.0, "depth"),
-    Rule("worm.axial_runout_mm", _W, "F_rT", 10.0, "depth"),
-    Rule("wheel.radial_composite_error_mm", _W, "F_i2T", 10.0, "depth"),
-    Rule("wheel.cumulative_pitch_deviation_mm", _W, "F_pT", 10.0, "radius"),
-    Rule("eccentricity_mm", _S, "F_rT", 10.0, "depth"),
-    *(Rule(f"{m}.cumulative_pitch_deviation_mm", _S, "F_pT", 10.0, "radius") for m in ("pinion", "gear")),
-    *(Rule(f"{m}.single_pitch_deviation_mm", _S, "f_pT", 10.0, "radius") for m in ("pinion", "gear")),
-    Rule("backlash_mm", _B, "pitch", 0.5, "pitch"),
-    Rule("pitch_error_mm", _B, "pitch", 0.5, "radius"),
-    Rule("tooth_mesh_error_mm", _B, "pitch", 0.25, "pitch"),
-    *(Rule(f"{m}.eccentricity_mm", _B, "pitch", 0.5, "radius") for m in ("driver", "driven")),
-)
+#: the tolerance keys and their scales (keys of one member share the member's scale): each kind's
+#: ``plausible`` (:mod:`wormgear_cli.spec.kinds`)
+RULES = tuple(Rule(p.key, (name,), p.scale, p.factor, p.limit) for name, k in KINDS.items() for p in k.plausible)
 
 #: teeth of a spur gear or worm wheel at or below which it cannot work (pointed, undercut away)
 FEWEST_TEETH = 3
@@ -90,22 +69,8 @@ SHAPES = {
 
 
 def _member(stage, key: str):
-    """(reference diameter [mm], pitch radius [mm]) of the part a stage key belongs to."""
-    head = key.split(".", 1)[0] if "." in key else ""
-    if stage.kind == "spur":
-        part = stage.pinion if head == "pinion" else stage.gear
-        d = stage.module * part.teeth
-        return d, (stage.module * stage.pinion.teeth / 2.0 if head == "" else d / 2.0)
-    if stage.kind == "worm":
-        d_wheel = stage.module * stage.wheel.teeth
-        d_worm = stage.worm.starts * stage.module / math.tan(stage.lead_angle)
-        return d_wheel, (d_worm / 2.0 if head == "worm" else min(d_worm, d_wheel) / 2.0 if head == "" else
-                         d_wheel / 2.0)
-    from wormgear_cli.spec.stages import pulley_radius
-
-    part = stage.driver if head == "driver" else stage.driven
-    r = pulley_radius(part.teeth, stage.pitch) if head else pulley_radius(stage.driver.teeth, stage.pitch)
-    return 2.0 * r, r
+    """(reference diameter [mm], pitch radius [mm]) of the part a stage key belongs to (its kind's)."""
+    return KINDS[stage.kind].part_size(stage, key)
 
 
 def _scale(stage, key: str, name: str) -> float:
@@ -193,7 +158,7 @@ def _teeth(source, stage, problems: list, warnings: list) -> None:
 
 def _shapes(source, stage, warnings: list) -> None:
     """Angles and proportions against the ranges gears are made in (:data:`SHAPES`)."""
-    if stage.kind == "belt":
+    if stage.kind not in ("worm", "spur"):  # the shapes of gear meshes
         return
     checks = [("face_width_ratio", stage.face_width / stage.module, stage.paths["face_width_mm"])]
     if stage.kind == "worm":

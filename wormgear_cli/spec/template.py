@@ -20,41 +20,11 @@ from __future__ import annotations
 import json
 
 from wormgear_cli.spec import stages as st
+from wormgear_cli.spec.kinds import KINDS
 from wormgear_cli.spec.loader import DRIVE_FIELDS, UNIT_SCALE, Field
 
-#: example values per stage kind (key units) and where each comes from
-STAGE_EXAMPLES: dict[str, dict[str, tuple]] = {
-    "worm": {
-        "module_mm": (2.5, "Table 1"), "normal_pressure_angle_deg": (20.0, "Table 1"),
-        "lead_angle_deg": (3.178, "Table 1"), "face_width_mm": (37.5, "MCH50 assumption"),
-        "lead_error_mm": (0.030, "Table 1"), "centre_distance_error_mm": (0.035, "Table 1"),
-        "alignment_errors_mm": ((0.030, 0.030, 0.030, 0.030, 0.040, 0.040), "MCH50 assumption"),
-        "normal_force_N": (85.0, "the paper's text"), "worm.starts": (1, "Table 1"),
-        "worm.profile_error_mm": (0.036, "Table 1"), "worm.thickness_deviation_mm": (0.045, "Table 1"),
-        "worm.runout_mm": (0.012, "MCH50 assumption"), "worm.bearing_clearance_mm": (0.010, "MCH50 assumption"),
-        "wheel.teeth": (30, "Table 1"), "wheel.profile_error_mm": (0.011, "Table 1"),
-        "wheel.thickness_deviation_mm": (0.090, "Table 1"), "wheel.radial_composite_error_mm": (0.036, "Table 1"),
-        "wheel.runout_mm": (0.016, "MCH50 assumption"), "wheel.bearing_clearance_mm": (0.015, "MCH50 assumption"),
-    },
-    "spur": {
-        "module_mm": (2.5, "Table 1"), "pressure_angle_deg": (20.0, "Table 1"),
-        "face_width_mm": (50.0, "MCH50 assumption"), "kinematics": ("paper", "the paper's equations"),
-        "centre_distance_error_mm": (0.030, "Table 1"), "normal_force_N": (666.0, "the paper's text"),
-        "pinion.teeth": (18, "Table 1"), "pinion.profile_error_mm": (0.008, "Table 1"),
-        "pinion.thickness_deviation_mm": (0.045, "Table 1"), "gear.teeth": (144, "Table 1"),
-        "gear.profile_error_mm": (0.007, "Table 1"), "gear.thickness_deviation_mm": (0.055, "Table 1"),
-    },
-    "belt": {
-        "pitch_mm": (2.0, "assumption: a GT2 belt"),
-        "belt_teeth": (80, "assumption: about 49 mm between motor and worm shaft"),
-        "backlash_mm": (0.02, "assumption: GT2 profile, no tensioner play"),
-        "pitch_error_mm": (0.05, "assumption: pitch variation over a 160 mm belt"),
-        "tooth_mesh_error_mm": (0.002, "assumption"),
-        "tensile_stiffness_N": (20000.0, "assumption: 6 mm glass-cord belt, E A ~ 20 kN; measure it"),
-        "driver.teeth": (12, "EQ6 class: 47:12 motor reduction"), "driver.eccentricity_mm": (0.010, "assumption"),
-        "driven.teeth": (47, "EQ6 class: 47:12 motor reduction"), "driven.eccentricity_mm": (0.015, "assumption"),
-    },
-}
+#: example values per stage kind (key units) and where each comes from (the kinds' ``examples``)
+STAGE_EXAMPLES: dict[str, dict[str, tuple]] = {name: k.examples for name, k in KINDS.items()}
 #: the drive-level tables: values of the MCH50 (configs/mch50.toml)
 DRIVE_EXAMPLES: dict[str, tuple] = {
     "stiffness.model": ("iso6336", "ISO 6336-1"),

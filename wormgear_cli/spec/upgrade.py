@@ -153,6 +153,7 @@ def _split_trailing(block: list[str]) -> tuple[list, list]:
 def _rename(line: str, old: str, new: str) -> str:
     """``line`` (a key line) with its key ``old`` written as ``new``, the rest verbatim."""
     m = _KEY.match(line)
+    assert m is not None, line  # called on key lines only
     return line[:m.start(1)] + (f'"{new}"' if m.group(1).startswith('"') else new) + line[m.end(1):]
 
 

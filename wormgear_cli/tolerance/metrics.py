@@ -224,14 +224,9 @@ def stage_value(ctx: Context, v: dict, stage):
 def _stage_totals(sc: StageContext, value, spec) -> tuple:
     """(TE, backlash) [rad] at the stage's own output shaft per sample, by its kind's model (a worm
     stage with its additions beyond the paper, which are not sampled)."""
-    from wormgear_cli.drive import belt, spur, worm
+    from wormgear_cli.drive.models import MODELS
 
-    st = sc.stage
-    if st.kind == "worm":
-        return worm.totals(st, sc.deflection, value, spec)  # the worm stage's one definition
-    if st.kind == "spur":
-        return spur.totals(st, sc.deflection, value, sc.te_max)
-    return belt.totals(st, value)
+    return MODELS[sc.stage.kind].sampled_totals(sc.stage, sc.deflection, value, spec, sc.te_max)
 
 
 def paper_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:

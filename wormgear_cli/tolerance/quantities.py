@@ -41,6 +41,7 @@ from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 from wormgear_cli.errors import SpecError, did_you_mean
+from wormgear_cli.spec.kinds import KINDS
 from wormgear_cli.tolerance.distributions import DISTRIBUTIONS, Kind
 
 #: default distribution per kind
@@ -90,44 +91,13 @@ class StageQuantity(NamedTuple):
     since: int = 1
 
 
-R, S, U, T = Kind.radial, Kind.signed, Kind.unknown, Kind.allowance
-
-#: stage kind -> its toleranced keys, in a fixed order (append new keys at the end with a higher
-#: ``since``, never reorder)
+#: stage kind -> its toleranced keys, in a fixed order (the kind's ``toleranced``,
+#: :class:`wormgear_cli.spec.kinds.base.StageKind`: append new keys at the end with a higher ``since``,
+#: never reorder)
 STAGE_QUANTITIES: dict[str, tuple[StageQuantity, ...]] = {
-    "worm": (
-        StageQuantity("lead_error_mm", S, True),
-        StageQuantity("worm.profile_error_mm", U, True),
-        StageQuantity("worm.thickness_deviation_mm", T),
-        StageQuantity("wheel.profile_error_mm", U, True),
-        StageQuantity("wheel.thickness_deviation_mm", T),
-        StageQuantity("wheel.radial_composite_error_mm", R, True),
-        StageQuantity("centre_distance_error_mm", S),
-        StageQuantity("worm.runout_mm", R),
-        StageQuantity("worm.bearing_clearance_mm", R),
-        StageQuantity("wheel.runout_mm", R),
-        StageQuantity("wheel.bearing_clearance_mm", R),
-        StageQuantity("alignment_errors_mm", U, length=6),
-        StageQuantity("wheel.cumulative_pitch_deviation_mm", R),
-    ),
-    "spur": (
-        StageQuantity("eccentricity_mm", R, True),
-        StageQuantity("gear.cumulative_pitch_deviation_mm", R, True),
-        StageQuantity("pinion.cumulative_pitch_deviation_mm", R, True),
-        StageQuantity("gear.single_pitch_deviation_mm", U, True),
-        StageQuantity("pinion.single_pitch_deviation_mm", U, True),
-        # read only by the involute reading (physics.spur.involute_stage)
-        StageQuantity("centre_distance_error_mm", S, kinematics="involute"),
-        StageQuantity("gear.thickness_deviation_mm", T, kinematics="involute"),
-        StageQuantity("pinion.thickness_deviation_mm", T, kinematics="involute"),
-    ),
-    "belt": (
-        StageQuantity("driver.eccentricity_mm", R),
-        StageQuantity("driven.eccentricity_mm", R),
-        StageQuantity("pitch_error_mm", R),
-        StageQuantity("tooth_mesh_error_mm", U),
-        StageQuantity("backlash_mm", R),
-    ),
+    name: tuple(StageQuantity(t.key, Kind(t.kind), t.grade_driven, t.length, t.kinematics, t.since)
+                for t in k.toleranced)
+    for name, k in KINDS.items()
 }
 STAGE_QUANTITY_BY_KEY = {kind: {q.key: q for q in qs} for kind, qs in STAGE_QUANTITIES.items()}
 
