@@ -549,6 +549,7 @@ class RatioDistanceSweep:
         them (``force``: the spec's; ``torque``: the swept stage's force times R2_spec / R2, the stages
         before it times i_spec / i), written out so that the loader does not derive them again.
         ``wormgear analyze`` of this spec gives the row's totals (a test holds them equal)."""
+        from wormgear_cli.spec.kinds import KINDS
         from wormgear_cli.spec.loader import with_values
 
         if self.module is None:
@@ -562,8 +563,7 @@ class RatioDistanceSweep:
                                             f"stage.{k}.normal_force_N": ref.gear_force * (ref.r2 / r2 if torque
                                                                                             else 1.0)}
         for up, _ in self.reference.upstream:
-            key = "effective_tension_N" if up.kind == "belt" else "normal_force_N"
-            changes[f"stage.{up.index}.{key}"] = _load(up) * (ref.i / ratio if torque else 1.0)
+            changes[f"stage.{up.index}.{KINDS[up.kind].load_key}"] = _load(up) * (ref.i / ratio if torque else 1.0)
         return with_values(self.spec, changes)
 
     def _figures(self, z1, z2) -> dict:
