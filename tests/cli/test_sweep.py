@@ -596,3 +596,25 @@ def test_figures_refused_where_they_cannot_be_made(runner, mch50_path, args, mes
     r = run(runner, mch50_path, *args)
     assert r.exit_code == 2 and r.stdout == ""
     assert r.stderr == f"error: {message}\n"
+
+
+def test_figures_skip_a_design_the_drive_file_does_not_hold_for_and_say_why(runner, tmp_path):
+    """A graded gear of 1067 teeth is beyond ISO 1328-1's scope (at most 1000): that design has no
+    figures, so it is left out with a note naming the first one (it had stopped the whole run); the
+    other designs' rows are those of the same sweep without --figures."""
+    drive = tmp_path / "graded.toml"
+    assert runner.invoke(app, ["new", str(drive)]).exit_code == 0
+    text = drive.read_text()
+    assert text.count("# accuracy_grade = 6") == 2
+    drive.write_text(text.replace("# accuracy_grade = 6", "accuracy_grade = 5"))
+    args = (drive, "--i", "8:8:1", "--l-mm", "100:400:4", "--module-mm", "0.5", "-f", "csv")
+    plain = list(csv.DictReader(io.StringIO(run(runner, *args).stdout)))
+    r = run(runner, *args, "--figures")
+    assert r.exit_code == 0
+    rows = list(csv.DictReader(io.StringIO(r.stdout)))
+    assert [(row["z1"], row["z2"]) for row in rows] == [("356", "44"), ("711", "89")]
+    assert [{k: row[k] for k in plain[0]} for row in rows] == plain[:2]
+    assert r.stderr == (f"note: 2 designs skipped by --figures: the drive file does not hold for them (narrow "
+                        f"--i/--l-mm to the designs it does); the first, i = 8, l = 300 mm (1067/133 teeth): {drive}: "
+                        "stage 2 (spur): gear.accuracy_grade: teeth 1067 outside ISO 1328-1:2013's scope [5, 1000] "
+                        "(its formulas are not extrapolated); give the deviations explicitly instead\n")

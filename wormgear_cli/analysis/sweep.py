@@ -323,6 +323,9 @@ class RatioDistanceSweep:
         self.hold = hold
         self.module = module
         self.figures = bool(figures)
+        #: (i, l, z1, z2, why) of the first design --figures left out as an invalid drive (None: none
+        #: seen in this process)
+        self.first_invalid: tuple | None = None
         self.alpha = st.pressure_angle
         self.eccentricity = st.model_eccentricity  # the one the chosen kinematics uses, as analyze
         self.min_teeth = (min_teeth if min_teeth is not None else undercut_min_teeth(self.alpha)) \
@@ -540,7 +543,12 @@ class RatioDistanceSweep:
         out = {"i": i_nom, "l_mm": l_nom, **metrics, "z1": z1.astype(np.int64), "z2": z2.astype(np.int64),
                "i_used": i_used, "l_used_mm": l_used, "_point": point}
         if self.figures:
-            out.update(self._figures(z1, z2))
+            figures, valid, first = self._figures(z1, z2)
+            out = {k: v[valid] for k, v in out.items()}  # a design the spec does not hold for is left out
+            out.update(figures)
+            if first is not None and self.first_invalid is None:
+                k = int(np.flatnonzero(~valid)[0])
+                self.first_invalid = (float(i_nom[k]), float(l_nom[k]), int(z1[k]), int(z2[k]), first)
         return out
 
     def design_spec(self, z1: int, z2: int):
@@ -566,16 +574,27 @@ class RatioDistanceSweep:
             changes[f"stage.{up.index}.{KINDS[up.kind].load_key}"] = _load(up) * (ref.i / ratio if torque else 1.0)
         return with_values(self.spec, changes)
 
-    def _figures(self, z1, z2) -> dict:
-        """:data:`FIGURE_COLUMNS` arrays [rad] of the snapped designs (z1, z2), one full analysis each."""
+    def _figures(self, z1, z2) -> tuple[dict, np.ndarray, str | None]:
+        """:data:`FIGURE_COLUMNS` arrays [rad] of the snapped designs (z1, z2), one full analysis each,
+        of the designs the drive spec holds for (``valid``; e.g. a wheel beyond ISO 1328's scope of
+        teeth for its accuracy grade is not), and the first other's SpecError message (None: none)."""
         from wormgear_cli.analysis.figures import figures
+        from wormgear_cli.errors import SpecError
 
         cols: dict[str, list[float]] = {c: [] for c in FIGURE_COLUMNS}
-        for a, b in zip(np.asarray(z1).tolist(), np.asarray(z2).tolist()):
-            f = figures(self.design_spec(a, b))
+        valid = np.ones(np.size(z1), dtype=bool)
+        first = None
+        for k, (a, b) in enumerate(zip(np.asarray(z1).tolist(), np.asarray(z2).tolist())):
+            try:
+                design = self.design_spec(a, b)
+            except SpecError as exc:
+                valid[k] = False
+                first = first or exc.problems[0]
+                continue
+            f = figures(design)
             for c in FIGURE_COLUMNS:
                 cols[c].append(f[c])
-        return {c: np.asarray(v, dtype=float) for c, v in cols.items()}
+        return {c: np.asarray(v, dtype=float) for c, v in cols.items()}, valid, first
 
     def spans(self, start: int = 0, stop: int | None = None, chunk: int | None = None) -> list[tuple[int, int]]:
         """The chunks [a, b) of grid points [start, stop), as :meth:`chunks` computes them (``chunk``:

@@ -201,11 +201,23 @@ def _require_matplotlib() -> None:
     pyplot()
 
 
-def _note_skipped(sw, skipped: int) -> None:
-    """Say on stderr how many designs --module-mm skipped (the CSV has no row for them)."""
-    if sw.module is not None and skipped > 0:
-        say(f"note: {skipped} design{'s' if skipped != 1 else ''} skipped: at m = {sw.module:g} mm the smaller "
+def _note_skipped(sw, skipped: int, start: int, stop: int) -> None:
+    """Say on stderr how many designs --module-mm skipped (the CSV has no row for them): too few teeth,
+    and with --figures those the drive file does not hold for (the first one's reason, when known)."""
+    if sw.module is None or skipped <= 0:
+        return
+    teeth = (stop - start) - sw.kept_count(start, stop)
+    if teeth:
+        say(f"note: {teeth} design{'s' if teeth != 1 else ''} skipped: at m = {sw.module:g} mm the smaller "
             f"gear would have fewer than {sw.min_teeth} teeth (--min-pinion-teeth)")
+    invalid = skipped - teeth
+    if invalid:
+        why = ""
+        if sw.first_invalid is not None:
+            i, l, z1, z2, problem = sw.first_invalid
+            why = f"; the first, i = {i:g}, l = {l:g} mm ({z1}/{z2} teeth): {problem}"
+        say(f"note: {invalid} design{'s' if invalid != 1 else ''} skipped by --figures: the drive file does not "
+            f"hold for {'them' if invalid != 1 else 'it'} (narrow --i/--l-mm to the designs it does){why}")
 
 
 def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
@@ -223,7 +235,7 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
                 for data in chunks:  # streamed block by block: memory stays constant
                     rows += data.count(b"\n")
                     emit(data, None)
-                _note_skipped(sw, stop - start - rows)
+                _note_skipped(sw, stop - start - rows, start, stop)
                 return
             from wormgear_cli.files import atomic_stream
 
@@ -234,10 +246,10 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
                     write_part(data)
             announce_written(file)
             out.finish([drive])
-            _note_skipped(sw, stop - start - rows)
+            _note_skipped(sw, stop - start - rows, start, stop)
             return
         data = sw.collect(start, stop, progress=bar.advance, jobs=jobs)
-    _note_skipped(sw, stop - start - int(data["_point"].size))
+    _note_skipped(sw, stop - start - int(data["_point"].size), start, stop)
     from wormgear_cli.analysis.sweep import ANGLE_COLUMNS
 
     warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)
