@@ -294,3 +294,18 @@ def test_an_option_the_file_has_no_use_for_is_refused_not_ignored(runner, tmp_pa
     r = run(runner, given, *args, "-o", tmp_path / "out.x")
     assert r.exit_code == 2 and list(tmp_path.iterdir()) == [given]
     assert r.stderr == f"error: {message}; drop it or choose that format (--format, or the -o file's ending)\n"
+
+
+def test_a_worm_period_taken_from_the_record_says_how_little_the_record_fixes_it(runner, tmp_path):
+    """The CGE log's 4.2 worm cycles cannot tell its strongest period (476.2 s) from 449-507 s (the group
+    measure reports as order 170 to 192); the mount's 180-tooth wheel gives 478.7 s.  Written, with a
+    warning asking for the mount's own; with the drive, no such warning."""
+    log = CONFIGS.parent / "tests" / "data" / "telescope" / "cge-pro-180.guidelog.txt"
+    r = run(runner, log, "-o", tmp_path / "found.pec")
+    assert r.exit_code == 0 and (tmp_path / "found.pec").exists()
+    assert ("warning: the worm period, 476.2 s, is the strongest in the record, which cannot tell it from 449.2 to "
+            "506.7 s (4.2 worm cycles): a PEC curve of a period even 1 % off is half a cycle out of phase after 50 "
+            "worm turns; give the mount's own, --drive or --worm-period\n") in r.stderr
+    r = run(runner, log, "--drive", CONFIGS / "cge-pro-ra.toml", "-o", tmp_path / "drive.pec")
+    assert r.exit_code == 0 and "is the strongest in the record" not in r.stderr
+    assert "!WormPeriod=479" in (tmp_path / "drive.pec").read_text()

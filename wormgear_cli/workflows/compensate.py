@@ -468,27 +468,29 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
 # --- the PEC path ----------------------------------------------------------------------------------------
 
 
-def _worm_order(m, th, run, options: CompensateOptions, choice: OrderChoice) -> tuple[float, str]:
-    """(worm order [cycles per axis turn], where it comes from) of the tracking rows ``m``; DataError when
-    none can be had.  Without a drive or orders, the strongest period ``measure`` finds
+def _worm_order(m, th, run, options: CompensateOptions,
+                choice: OrderChoice) -> tuple[float, str, tuple[float, float] | None]:
+    """(worm order [cycles per axis turn], where it comes from, the orders the record cannot tell it from
+    (None: not taken from the record)) of the tracking rows ``m``; DataError when none can be had.
+    Without a drive or orders, the strongest period ``measure`` finds
     (:func:`~wormgear_cli.workflows.measure.strongest_orders`)."""
     from wormgear_cli.compensation import pec
     from wormgear_cli.workflows.measure import strongest_orders
 
     if options.worm_period_s is not None:
-        return pec.order_of(options.worm_period_s), f"--worm-period {options.worm_period_s:g} s"
+        return pec.order_of(options.worm_period_s), f"--worm-period {options.worm_period_s:g} s", None
     if choice.worm_order is not None:
-        return choice.worm_order, f"the drive's worm ({choice.drive_name})"
+        return choice.worm_order, f"the drive's worm ({choice.drive_name})", None
     if choice.orders:
         whole = [k for k in choice.orders if pec.cycles_covered(th, run, k) >= 1.0]
         if whole:
-            return min(whole), "the lowest of --orders with a whole cycle in the record"
-    found = [p.order for p in strongest_orders(m).significant
+            return min(whole), "the lowest of --orders with a whole cycle in the record", None
+    found = [p for p in strongest_orders(m).significant
              if pec.cycles_covered(th, run, p.order) >= 1.0 and pec.period_of(p.order) >= pec.MIN_WORM_PERIOD_S]
     if not found:
         raise DataError(f"{m.source}: no period of {pec.MIN_WORM_PERIOD_S:g} s or longer stands out of the noise in "
                         "the record, or it is too short to find a worm period in it; give --worm-period or --drive")
-    return found[0], "the strongest period found in the record"
+    return found[0].order, "the strongest period found in the record", found[0].group
 
 
 def _rows(m, keep: np.ndarray):
@@ -513,9 +515,15 @@ def _pec_path(m, options: CompensateOptions,
         notes.append("the record holds both directions: the PEC curve is made from the forward (tracking) rows")
     theta, y, run = m.angle[keep], m.error[keep], m.run[keep]
     th = pec.continuous(theta, run)
-    worm, where = _worm_order(_rows(m, keep), th, run, options, choice)
+    worm, where, group = _worm_order(_rows(m, keep), th, run, options, choice)
     period = pec.period_of(worm)
     cycles = pec.cycles_covered(th, run, worm)
+    if group is not None:  # a curve of a period a few per cent off drifts out of phase within a night
+        slow, fast = pec.period_of(group[0]), pec.period_of(group[1])
+        warnings.append(f"the worm period, {period:.4g} s, is the strongest in the record, which cannot tell it from "
+                        f"{fast:.4g} to {slow:.4g} s ({cycles:.2g} worm cycles): a PEC curve of a period even 1 % off "
+                        "is half a cycle out of phase after 50 worm turns; give the mount's own, --drive or "
+                        "--worm-period")
     if cycles < 1.0:
         raise DataError(f"{m.source}: the record covers {cycles * period:.4g} s of tracking, less than one worm "
                         f"period ({period:.4g} s, order {worm:.6g}): no PEC curve can be made from it")
