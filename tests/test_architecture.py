@@ -24,9 +24,7 @@ TOP_LEVEL = {"__init__.py", "__main__.py", "_docgen.py", "api.py", "angles.py", 
 MAX_FUNCTION_LINES = 100
 
 #: functions still longer than MAX_FUNCTION_LINES, to be split; this list only shrinks
-KNOWN_LONG: set[str] = {
-    "wormgear_cli/measurement/harmonics.py::_solve_blocks_each",
-}
+KNOWN_LONG: set[str] = set()
 
 
 def _modules() -> list[str]:
@@ -98,7 +96,7 @@ def test_every_module_imports_on_its_own():
 
 #: modules mypy still checks with their errors ignored (pyproject's type-check debt); the number only
 #: goes down: lower it when a module comes off the list
-TYPE_DEBT_MODULES = 30
+TYPE_DEBT_MODULES = 29
 
 
 def test_the_type_check_debt_only_shrinks():
