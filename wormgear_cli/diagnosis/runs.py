@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from wormgear_cli.measurement.iso230 import group_targets
 from wormgear_cli.measurement.reader import time_restarts
 
 
@@ -173,8 +174,6 @@ class Cells:
 
 def make_cells(theta: np.ndarray, direction: np.ndarray) -> Cells:
     """Cells of a measurement: rows at the same target (angles within 1e-6 deg) and direction."""
-    from wormgear_cli.measurement.iso230 import group_targets
-
     tgt, _ = group_targets(theta)
     key = tgt.astype(np.int64) * 2 + (np.asarray(direction) < 0)
     _, cell = np.unique(key, return_inverse=True)

@@ -22,6 +22,13 @@ from wormgear_cli.diagnosis.thresholds import (
     MIN_SCAN_SHARE,
     MIN_TEMPERATURE_RANGE,
 )
+from wormgear_cli.measurement.coverage import coverage
+from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+from wormgear_cli.measurement.drift import slow_model
+from wormgear_cli.measurement.harmonics import physical_orders
+from wormgear_cli.measurement.iso230 import group_targets
+from wormgear_cli.measurement.separation import SEPARATION_CORR, canonical_correlations
+from wormgear_cli.physics.effects import EFFECTS, train_effects
 
 if TYPE_CHECKING:
     from wormgear_cli.measurement.coverage import Coverage
@@ -32,8 +39,6 @@ if TYPE_CHECKING:
 
 #: the catalogue effect whose signature a pattern of the residual scan is
 def _signature_of(item: dict, geometry) -> str | None:
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
-
     if item["kind"] == "reversal":
         return "bearing_clearance"
     if item["kind"] == "trend":
@@ -49,8 +54,6 @@ def _signature_of(item: dict, geometry) -> str | None:
 
 def _pattern(name: str, geometry) -> tuple[str, str]:
     """(mode, words) of a catalogue effect's signature."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     eff = EFFECTS[name]
     if name == "thermal_backlash":
         return "differential", "a differential-mode trend with temperature (the reversal changing as it warms)"
@@ -177,10 +180,6 @@ def scan_residual(state: ModelFit, ctx: ScanContext) -> list[dict]:
 
 
 def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
-    from wormgear_cli.measurement.coverage import coverage
-    from wormgear_cli.measurement.drift import slow_model
-    from wormgear_cli.measurement.harmonics import physical_orders
-
     sig, info, cache = ctx.sig, ctx.info, ctx.cache if ctx.cache is not None else {}
     if "coverage" not in cache:
         cov = coverage(sig.theta)
@@ -217,9 +216,6 @@ def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
 
 def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: dict) -> tuple[list, dict, float]:
     """(the orders to test, {order added by the scan of every order: its adjusted p}, the Nyquist limit)."""
-    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
-    from wormgear_cli.measurement.iso230 import group_targets
-
     sig = ctx.sig
     if "targets" not in cache:
         cache["targets"] = int(group_targets(sig.theta)[1].shape[0])
@@ -250,8 +246,6 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
 
 def _separable_from(orders: list, owned: list, theta, cov, cache: dict) -> list:
     """``orders`` without those the arc cannot tell from a different owned order (separation rule)."""
-    from wormgear_cli.measurement.separation import SEPARATION_CORR, canonical_correlations
-
     key = ("separable", tuple(orders), tuple(owned))
     if key in cache:
         return cache[key]

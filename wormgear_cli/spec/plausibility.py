@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
-from wormgear_cli.spec.stages import record_values
+from wormgear_cli.physics.iso1328 import coarse_scale
+from wormgear_cli.spec.stages import pulley_radius, record_values
 
 
 class Rule(NamedTuple):
@@ -101,7 +102,6 @@ def _member(stage, key: str):
         d_worm = stage.worm.starts * stage.module / math.tan(stage.lead_angle)
         return d_wheel, (d_worm / 2.0 if head == "worm" else min(d_worm, d_wheel) / 2.0 if head == "" else
                          d_wheel / 2.0)
-    from wormgear_cli.spec.stages import pulley_radius
 
     part = stage.driver if head == "driver" else stage.driven
     r = pulley_radius(part.teeth, stage.pitch) if head else pulley_radius(stage.driver.teeth, stage.pitch)
@@ -119,7 +119,6 @@ def _scale(stage, key: str, name: str) -> float:
         return math.pi * stage.module / 2.0
     if name == "depth":
         return 2.0 * stage.module
-    from wormgear_cli.physics.iso1328 import coarse_scale
 
     return coarse_scale(stage.module, d)[name] * 1e-3
 
