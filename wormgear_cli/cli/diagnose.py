@@ -212,11 +212,13 @@ class _View:
 def _head(doc: dict, v: _View) -> list:
     from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
+    from wormgear_cli.physics.signals import SIGNALS  # lazy: keeps physics off `--help`'s start-up
+
     sig = doc["signals"]
     runs = doc["noise"]["before"]["runs"]
     parts = [f"{doc['rows']} rows", f"{runs} run{'s' if runs != 1 else ''}",
              "both directions" if len(sig["directions"]) == 2 else "one direction"]
-    for key, name, u in (("temperature_C", "temperature", "degC"), ("load_Nm", "load", "N m")):
+    for key, name, u in ((SIGNALS[s].column, s, SIGNALS[s].unit) for s in ("temperature", "load")):
         if sig.get(key):
             lo, hi = sig[key]
             parts.append(f"{name} {lo:g} to {hi:g} {u}" if hi > lo else f"{name} {lo:g} {u}")

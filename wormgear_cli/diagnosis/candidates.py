@@ -124,7 +124,7 @@ def needs_problem(name: str, needs: str | None, info: DataInfo) -> str | None:
             return "no load_Nm column: measure at two or more output torques (load steps)"
         if info.load_range <= 0:
             return "the load does not vary: measure at two or more output torques (load steps)"
-    if needs in ("direction", "temperature") and name in ("bearing_clearance", "thermal_backlash"):
+    if needs is not None and name in EFFECTS and EFFECTS[name].mode == "differential":
         if len(info.directions) < 2:
             return "only one direction measured: lost motion shows only between forward and reverse runs"
     if needs == "direction" and len(info.directions) < 2:
@@ -170,12 +170,8 @@ def physical_problem(name: str, params: dict) -> str | None:
     return None
 
 
-#: what a significant but unphysical fit of an effect says about the spec
-UNPHYSICAL_HINT = {
-    "bearing_clearance": "the table shows less lost motion than the spec predicts: the spec's backlash terms "
-                         "(thickness deviations, clearances) are larger than the table's",
-    "torsional_compliance": "the table winds up less under load than the spec's tooth stiffness predicts",
-}
+#: what a significant but unphysical fit of an effect says about the spec (each effect's ``unphysical_hint``)
+UNPHYSICAL_HINT = {name: eff.unphysical_hint for name, eff in EFFECTS.items() if eff.unphysical_hint}
 
 
 def order_aliases(theta, cands: dict, sources, geometry) -> dict:

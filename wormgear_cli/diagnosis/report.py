@@ -33,6 +33,7 @@ from wormgear_cli.measurement.guidelog_options import is_guide_log
 from wormgear_cli.measurement.iso230 import group_targets
 from wormgear_cli.measurement.reader import ERROR_UNITS
 from wormgear_cli.physics.effects import EFFECTS, geometry_absent_reason, params_to_keys, train_effects
+from wormgear_cli.physics.signals import SIGNALS
 from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
 
@@ -218,14 +219,18 @@ def _keys(name, params) -> dict:
 
 
 def _separate_hint(names) -> str:
-    s = set(names)
-    if s >= {"thermal_backlash", "thermal_drift"}:
-        return "measure both directions during the warm-up"
-    if "thermal_drift" in s or "thermal_backlash" in s:
-        return "vary temperature independently of the other signals (heat and cool, or hold it during load steps)"
-    if "torsional_compliance" in s:
-        return "apply load steps at constant temperature and in both signs"
-    return "measure with irregular target spacing or a dense scan, in both directions"
+    """How to measure so that the catalogue effects among ``names`` can be told apart: both directions while
+    a signal varies when two of them need it in different modes, else the first one's ``separate_hint``."""
+    effs = [eff for name, eff in EFFECTS.items() if name in set(names)]
+    modes: dict[str, set] = {}
+    for eff in effs:
+        if eff.needs is not None:
+            modes.setdefault(eff.needs, set()).add(eff.mode)
+    for needs, seen in modes.items():
+        if len(seen) > 1 and SIGNALS[needs].varied_by:
+            return f"measure both directions during {SIGNALS[needs].varied_by}"
+    return next((eff.separate_hint for eff in effs if eff.separate_hint),
+                "measure with irregular target spacing or a dense scan, in both directions")
 
 
 def over_prediction(diag: Diagnosis, order: float, data_rows: list | None) -> tuple[float, float] | None:

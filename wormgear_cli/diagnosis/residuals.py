@@ -15,6 +15,7 @@ from wormgear_cli.diagnosis.thresholds import MIN_RUNS
 from wormgear_cli.measurement.harmonics import fit_modes_each, physical_orders
 from wormgear_cli.measurement.iso230 import group_targets, iso230_figures
 from wormgear_cli.measurement.serial import point_noise
+from wormgear_cli.physics.signals import SIGNALS
 from wormgear_cli.units import ARCSEC
 
 
@@ -140,7 +141,7 @@ def versus(meas, resid, info: DataInfo, bins: int = 5) -> dict:
     least-squares slopes of the common and differential mode and binned means per direction."""
     out = {}
     both = len(info.directions) == 2
-    for name, values in (("temperature_C", meas.temperature), ("load_Nm", meas.load), ("time_s", meas.time)):
+    for name, values in ((SIGNALS[s].column, getattr(meas, s)) for s in ("temperature", "load", "time")):
         if np.ptp(values) <= 0:
             continue
         x = values - np.mean(values)

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wormgear_cli.diagnosis.augment import augment
-from wormgear_cli.diagnosis.candidates import UNPHYSICAL_HINT, candidate, order_aliases, physical_problem
+from wormgear_cli.diagnosis.candidates import candidate, order_aliases, physical_problem
 from wormgear_cli.diagnosis.inference import Accepted, final_inference, likely_effect, same_order_range
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.residuals import noise_floor_rms
@@ -21,7 +21,7 @@ from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR, NEARLY
 from wormgear_cli.errors import DataError, UsageError
 from wormgear_cli.measurement.drift import drift_columns
-from wormgear_cli.physics.effects import train_effects
+from wormgear_cli.physics.effects import EFFECTS, train_effects
 from wormgear_cli.units import ARCSEC
 
 if TYPE_CHECKING:
@@ -412,7 +412,7 @@ def _decide(run: _Run, step: Step) -> Stop | None:
     assert sc.params is not None  # (a tested candidate's parameters are set)
     problem = physical_problem(best, sc.params)
     if problem:
-        return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=UNPHYSICAL_HINT.get(best, ""))
+        return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=EFFECTS[best].unphysical_hint or "")
     return None
 
 

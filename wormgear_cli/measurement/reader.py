@@ -29,18 +29,21 @@ from wormgear_cli.errors import DataError, UsageError, moved
 from wormgear_cli.files import read_text_file
 from wormgear_cli.measurement.guidelog_options import GuideLogOptions
 from wormgear_cli.physics.effects import Signals
+from wormgear_cli.physics.signals import CONDITIONS, SIGNALS
 from wormgear_cli.units import RAD_PER_UNIT
 
 #: 1 arcsec [rad] (re-exported from :mod:`wormgear_cli.units`)
 ARCSEC = RAD_PER_UNIT["arcsec"]
 REQUIRED = ("angle_deg", "error_arcsec")
-OPTIONAL = ("direction", "run", "load_Nm", "temperature_C", "time_s")
+#: the optional columns: the direction, the run, and a column per operating condition (physics.signals)
+OPTIONAL = (SIGNALS["direction"].column, "run", *(s.column for s in CONDITIONS))
 #: columns read only to form others: the actual position (-> error) and the velocity (-> direction)
 FORMING = ("actual_deg", "velocity")
 CANONICAL = REQUIRED + OPTIONAL + FORMING
 
 #: default value of an optional column that is absent
-DEFAULTS = {"direction": 1.0, "run": 0.0, "load_Nm": 0.0, "temperature_C": 20.0, "time_s": 0.0}
+DEFAULTS = {SIGNALS["direction"].column: SIGNALS["direction"].default, "run": 0.0,
+            **{s.column: s.default for s in CONDITIONS}}
 
 #: units accepted for the error and the angle columns
 ERROR_UNITS = ("arcsec", "arcmin", "deg", "urad")
