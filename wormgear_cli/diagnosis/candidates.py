@@ -21,6 +21,7 @@ from wormgear_cli.diagnosis.runs import DataInfo, Groups
 from wormgear_cli.diagnosis.thresholds import JOINT_MIN_SINGULAR_VALUE, MIN_TEMPERATURE_RANGE, MONOTONIC
 from wormgear_cli.measurement.harmonics import alias_groups, aliasing, physical_orders
 from wormgear_cli.physics.effects import EFFECTS, params_to_keys, train_effects
+from wormgear_cli.physics.signals import SIGNALS
 from wormgear_cli.units import ARCSEC
 
 
@@ -114,14 +115,14 @@ def needs_problem(name: str, needs: str | None, info: DataInfo) -> str | None:
     """Why the data cannot show an effect that needs a varying signal (None: they can)."""
     if needs == "temperature":
         if not info.temperature_present:
-            return ("no temperature_C column: record the drive temperature (a sensor on the housing) during a "
-                    "warm-up, ideally heating and cooling")
+            return (f"no {SIGNALS['temperature'].column} column: record the drive temperature (a sensor on the "
+                    "housing) during a warm-up, ideally heating and cooling")
         if info.temperature_range < MIN_TEMPERATURE_RANGE:
             return (f"the temperature varies by only {info.temperature_range:.3g} K: measure through a warm-up "
                     "(several kelvin), ideally heating and cooling")
     if needs == "load":
         if not info.load_present:
-            return "no load_Nm column: measure at two or more output torques (load steps)"
+            return f"no {SIGNALS['load'].column} column: measure at two or more output torques (load steps)"
         if info.load_range <= 0:
             return "the load does not vary: measure at two or more output torques (load steps)"
     if needs is not None and name in EFFECTS and EFFECTS[name].mode == "differential":

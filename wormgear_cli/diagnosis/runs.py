@@ -14,6 +14,7 @@ import numpy as np
 
 from wormgear_cli.measurement.iso230 import group_targets
 from wormgear_cli.measurement.reader import time_restarts
+from wormgear_cli.physics.signals import SIGNALS
 
 
 @dataclass(frozen=True)
@@ -212,5 +213,6 @@ def data_info(meas, groups: Groups) -> DataInfo:
     tt = math.nan
     if t_rng > 0 and np.ptp(meas.time) > 0:
         tt = float(np.corrcoef(meas.temperature, meas.time)[0, 1])
-    return DataInfo(d, t_rng, "temperature_C" in meas.present, float(np.ptp(meas.load)), "load_Nm" in meas.present,
+    present = {s for s in SIGNALS if SIGNALS[s].column in meas.present}
+    return DataInfo(d, t_rng, "temperature" in present, float(np.ptp(meas.load)), "load" in present,
                     float(np.ptp(meas.time)), tt, groups.passes / max(len(d), 1))
