@@ -24,9 +24,7 @@ TOP_LEVEL = {"__init__.py", "__main__.py", "_docgen.py", "api.py", "angles.py", 
 MAX_FUNCTION_LINES = 100
 
 #: functions still longer than MAX_FUNCTION_LINES, to be split; this list only shrinks
-KNOWN_LONG: set[str] = {
-    "wormgear_cli/measurement/harmonics.py::_solve_blocks_each",
-}
+KNOWN_LONG: set[str] = set()
 
 
 def _modules() -> list[str]:
@@ -83,6 +81,48 @@ def test_known_long_functions_are_still_long():
     assert not (KNOWN_LONG - set(long)), f"no longer long, remove from KNOWN_LONG: {sorted(KNOWN_LONG - set(long))}"
 
 
+#: files whose in-function imports still wait for their reason (owned by a parallel change when this
+#: check was written); this set only shrinks
+IMPORT_REASON_PENDING: set[str] = {
+    "wormgear_cli/drive/registry.py", "wormgear_cli/drive/spur.py", "wormgear_cli/drive/train.py",
+    "wormgear_cli/drive/worm.py", "wormgear_cli/spec/loader.py",
+    "wormgear_cli/spec/stages.py", "wormgear_cli/spec/template.py", "wormgear_cli/tolerance/quantities.py",
+}
+
+
+def _unexplained_function_imports() -> dict[str, list[int]]:
+    """In-function imports with no reason: a comment on the import's lines or on the line above; a run of
+    imports on consecutive lines shares the comment above its first."""
+    out: dict[str, list[int]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        lines = path.read_text().splitlines()
+        tree = ast.parse("\n".join(lines))
+        imports = sorted({id(n): n for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
+                          for n in ast.walk(f) if isinstance(n, (ast.Import, ast.ImportFrom))}.values(),
+                         key=lambda n: n.lineno)
+        explained_ends: set[int] = set()
+        for node in imports:
+            own = any("#" in lines[i] for i in range(node.lineno - 1, node.end_lineno))
+            above = node.lineno - 1
+            if own or (above and lines[above - 1].strip().startswith("#")) or above in explained_ends:
+                explained_ends.add(node.end_lineno)
+            else:
+                out.setdefault(path.relative_to(ROOT).as_posix(), []).append(node.lineno)
+    return out
+
+
+def test_every_function_import_says_why():
+    """Imports inside functions only where they buy start-up time or a layering need, each saying which."""
+    missing = {k: v for k, v in _unexplained_function_imports().items() if k not in IMPORT_REASON_PENDING}
+    assert not missing, f"in-function imports without a reason comment (file: lines): {missing}"
+
+
+def test_pending_import_reasons_are_still_pending():
+    """A file whose imports all say why leaves IMPORT_REASON_PENDING (the set only shrinks)."""
+    done = IMPORT_REASON_PENDING - set(_unexplained_function_imports())
+    assert not done, f"remove from IMPORT_REASON_PENDING: {sorted(done)}"
+
+
 @pytest.mark.slow  # one fresh interpreter per module
 def test_every_module_imports_on_its_own():
     failed = {}
@@ -98,7 +138,7 @@ def test_every_module_imports_on_its_own():
 
 #: modules mypy still checks with their errors ignored (pyproject's type-check debt); the number only
 #: goes down: lower it when a module comes off the list
-TYPE_DEBT_MODULES = 2
+TYPE_DEBT_MODULES = 0
 
 
 def test_the_type_check_debt_only_shrinks():

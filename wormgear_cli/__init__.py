@@ -9,6 +9,10 @@ not re-exported: those names are the core modules ``wormgear_cli.analysis.sweep`
 ``wormgear_cli.api.tolerance``.
 """
 
+import importlib
+import importlib.util
+import sys
+
 __version__ = "0.1.0"
 
 #: names of :mod:`wormgear_cli.api` available as ``wormgear_cli.NAME`` (never the name of a submodule)
@@ -20,7 +24,7 @@ __all__ = ["__version__", *_API]
 
 def __getattr__(name):
     if name in _API:
-        from wormgear_cli import api
+        from wormgear_cli import api  # lazy: the API and all it loads, on first use of one of its names
 
         return getattr(api, name)
     raise AttributeError(f"module 'wormgear_cli' has no attribute {name!r}")
@@ -77,7 +81,6 @@ class _MovedFinder:
         new = MOVED_MODULES.get(fullname)
         if new is None:
             return None
-        import importlib.util
 
         # (a PEP 451 loader, create_module/exec_module; typeshed's LoaderProtocol asks for the legacy load_module)
         return importlib.util.spec_from_loader(fullname, _MovedLoader(fullname, new))  # type: ignore[arg-type]
@@ -88,9 +91,7 @@ class _MovedLoader:
         self.old, self.new = old, new
 
     def create_module(self, spec):
-        import importlib
-
-        from wormgear_cli.errors import moved
+        from wormgear_cli.errors import moved  # lazy: errors (and difflib) only when an old path is used
 
         moved(self.old, self.new, stacklevel=6)
         return importlib.import_module(self.new)
@@ -100,8 +101,6 @@ class _MovedLoader:
 
 
 def _install_finder() -> None:
-    import sys
-
     if not any(isinstance(f, _MovedFinder) or f is _MovedFinder for f in sys.meta_path):
         sys.meta_path.append(_MovedFinder)
 

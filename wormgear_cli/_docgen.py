@@ -28,9 +28,13 @@ Run from the project root::
 from __future__ import annotations
 
 import argparse
+import contextlib
 import inspect
 import re
+import shlex
+import shutil
 import sys
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -62,10 +66,11 @@ def command_help() -> dict[str, str]:
         Command name -> help text as click renders it at :data:`HELP_WIDTH`
         columns, with ``Usage: wormgear NAME``; sorted by name.
     """
+    # lazy: typer's internals and the whole CLI, only for the pages that need them
     from typer.core import TyperGroup
     from typer.main import get_command
 
-    from wormgear_cli.cli import app
+    from wormgear_cli.cli import app  # lazy: the whole CLI, only for the reference pages
 
     group = get_command(app)
     assert isinstance(group, TyperGroup)  # (the app has several commands)
@@ -156,6 +161,7 @@ def _rows(fields, key=lambda f: f.key, extra=None) -> list[str]:
 def render_spec() -> str:
     """The drive-spec key reference page (Markdown): the drive-level tables, each stage kind's keys,
     then the legacy two-table form with where each of its keys goes in the stage form."""
+    # lazy: spec.loader, spec.stages pull in numpy, ctypes; this module loads without them
     from wormgear_cli.spec.loader import DRIVE_FIELDS, FIELDS, LEGACY_TABLES
     from wormgear_cli.spec.stages import LEGACY_KEYS, MEMBERS, STAGE_FIELDS
 
@@ -215,6 +221,7 @@ def _stage_form(field, legacy_keys) -> str:
 
 def render_effects() -> str:
     """The effect catalogue reference page (Markdown), one section per effect, sorted by name."""
+    # lazy: physics.effects pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.physics.effects import EFFECTS
 
     names = sorted(EFFECTS)
@@ -293,14 +300,9 @@ def refresh_session(text: str, root: Path) -> str:
         The page with every run/show block refreshed; the same text when
         nothing changed.
     """
-    import contextlib
-    import shlex
-    import shutil
-    import tempfile
+    from typer.testing import CliRunner  # lazy: typer.testing only on this path
 
-    from typer.testing import CliRunner
-
-    from wormgear_cli.cli import app
+    from wormgear_cli.cli import app  # lazy: the whole CLI, only for the worked sessions
 
     env = {"COLUMNS": "80", "NO_COLOR": "1", "TERM": "dumb"}
     out, pos = [], 0

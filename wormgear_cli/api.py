@@ -27,14 +27,20 @@ Documented with examples in docs/api.md.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Union
 
+import numpy as np
+
 from wormgear_cli.angles import Angle, AngleArray
+from wormgear_cli.errors import UsageError
+from wormgear_cli.files import atomic_write
+from wormgear_cli.units import from_unit
 
 if TYPE_CHECKING:
     from wormgear_cli.analysis.sweep import RatioDistanceSweep
@@ -64,6 +70,7 @@ def _fs(path) -> str | Path:
 
 def _analyze_report(spec, core, unit) -> dict:
     """The JSON document of ``wormgear analyze`` (stages, totals, budget, values used)."""
+    # lazy: keeps output.analyze off `import wormgear_cli.api`'s start-up
     from wormgear_cli.output.analyze import document
 
     return document(spec, core, unit)
@@ -71,6 +78,7 @@ def _analyze_report(spec, core, unit) -> dict:
 
 def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate`` (dense scan)."""
+    # lazy: keeps workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.simulate import dense
 
     r = dense(spec, points, revs, unit, "json", temperature_c, load_nm, phases, effects)
@@ -79,6 +87,7 @@ def _simulate_report(spec, points, revs, unit, temperature_c, load_nm, phases, e
 
 def _simulate_at_report(spec, at, unit, temperature_c, load_nm, phases, effects):
     """(JSON text, curves) of ``wormgear simulate --at``."""
+    # lazy: keeps workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.simulate import at_rows
 
     r = at_rows(spec, at, unit, "json", temperature_c, load_nm, phases, effects)
@@ -97,6 +106,7 @@ def _simulate_at_text(spec, at, temperature_c, load_nm, phases, effects, unit: s
 
 def _sweep_report(sw, data, unit) -> dict:
     """The JSON document of ``wormgear sweep --i/--l-mm`` (whole grid, no shard)."""
+    # lazy: keeps output.sweep off `import wormgear_cli.api`'s start-up
     from wormgear_cli.output.sweep import ratio_distance_json
 
     return ratio_distance_json(sw, data, unit, None, 0, sw.size)
@@ -105,6 +115,7 @@ def _sweep_report(sw, data, unit) -> dict:
 def _plain(doc) -> dict:
     """The document exactly as the CLI writes it, parsed back: NaN -> None, numpy scalars ->
     Python numbers, tuples -> lists (the CLI's ``json_text``)."""
+    # lazy: keeps output.formats off `import wormgear_cli.api`'s start-up
     from wormgear_cli.output.formats import json_text
 
     return json.loads(json_text(doc))
@@ -115,14 +126,12 @@ def _angle(x, unit: str = "rad") -> Angle | None:
 
 
 def _spec(spec):
-    from wormgear_cli.spec.loader import Spec
+    from wormgear_cli.spec.loader import Spec  # lazy: keeps spec.loader off `import wormgear_cli.api`'s start-up
 
     return spec if isinstance(spec, Spec) else load_spec(spec)
 
 
 def _choice(name: str, value: str, choices: Sequence[str]) -> str:
-    from wormgear_cli.errors import UsageError
-
     if value not in choices:
         raise UsageError(f"{name}={value!r}: expected one of {', '.join(choices)}")
     return value
@@ -156,7 +165,7 @@ def load_spec(source: PathLike | str):
     >>> spec.drive.name, spec.gear_pair.output_gear.teeth
     ('MCH50 rotary table', 144)
     """
-    from wormgear_cli.spec import loader as core
+    from wormgear_cli.spec import loader as core  # lazy: keeps spec.loader off `import wormgear_cli.api`'s start-up
 
     if isinstance(source, str) and "\n" in source:
         return core.loads_spec(source)
@@ -268,6 +277,7 @@ def analyze(spec) -> Analysis:
     >>> [s.kind for s in r.stages]
     ['worm', 'spur']
     """
+    # lazy: keeps analysis.accuracy off `import wormgear_cli.api`'s start-up
     from wormgear_cli.analysis.accuracy import analyze as run
 
     spec = _spec(spec)
@@ -302,6 +312,7 @@ def analyze(spec) -> Analysis:
 def _effects(spec, effects: dict | None):
     """The effects to simulate: None (the spec's) or the spec's merged with ``effects``
     (name -> {catalogue key: value}), as ``--effect NAME:key=value`` does."""
+    # lazy: keeps workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.simulate import effect_params
 
     return effect_params(spec, {name: dict(values or {}) for name, values in (effects or {}).items()})
@@ -309,10 +320,6 @@ def _effects(spec, effects: dict | None):
 
 def _check_conditions(temperature_c: float, load_nm: float, revs: float | None = None) -> None:
     """The option checks of ``wormgear simulate`` (same bounds, same messages)."""
-    import math
-
-    from wormgear_cli.errors import UsageError
-
     for name, value in (("temperature_c", temperature_c), ("load_nm", load_nm)):
         if not math.isfinite(value):
             raise UsageError(f"{name}: expected a finite number, got {value}")
@@ -409,9 +416,8 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None
     >>> s.lost_motion.max() <= analyze("configs/mch50.toml").backlash
     True
     """
-    from wormgear_cli.errors import UsageError
-
     spec = _spec(spec)
+    # lazy: keeps workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.simulate import PHASE_CHOICES
 
     _choice("phases", phases, PHASE_CHOICES)
@@ -432,6 +438,7 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None
     # checks that both give the same curve
     import numpy as np
 
+    # lazy: keeps analysis.simulate, physics.effects, workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.analysis.simulate import simulate as run
     from wormgear_cli.physics.effects import Signals
     from wormgear_cli.workflows.simulate import phase_map as phase_map_of
@@ -478,11 +485,13 @@ class Measurement:
 
 
 def _read_options(column_map, error_unit, angle_unit, input_format=None, guide: dict | None = None):
+    # lazy: keeps measurement.guidelog_options, measurement.reader off `import wormgear_cli.api`'s start-up
     from wormgear_cli.measurement.guidelog_options import GuideLogOptions
     from wormgear_cli.measurement.reader import ReadOptions
 
     pairs = tuple((str(k), str(v)) for k, v in (column_map or {}).items())
     if input_format is not None and input_format != "auto":
+        # lazy: keeps measurement.readers off `import wormgear_cli.api`'s start-up
         from wormgear_cli.measurement.readers import find_format
 
         find_format(input_format)
@@ -534,6 +543,7 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
     >>> len(m), round(float(m.temperature_C.max()), 1)
     (720, 44.2)
     """
+    # lazy: keeps measurement.readers off `import wormgear_cli.api`'s start-up
     from wormgear_cli.measurement import readers as core
 
     options = _read_options(column_map, error_unit, angle_unit, input_format,
@@ -640,6 +650,7 @@ class MeasureResult:
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear measure --format json --unit UNIT``."""
+        # lazy: keeps workflows.measure off `import wormgear_cli.api`'s start-up
         from wormgear_cli.workflows.measure import report
 
         if self.core is None:
@@ -683,7 +694,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     >>> round(pe.worm_period_s, 1), round(pe.harmonics[0]["amplitude"].arcsec, 2), round(pe.peak_to_peak.arcsec, 1)
     (478.7, 8.28, 16.8)
     """
-    from wormgear_cli.errors import UsageError
+    # lazy: keeps workflows.measure off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.measure import measure as run
     from wormgear_cli.workflows.measure import report
 
@@ -698,6 +709,7 @@ def measure(data, drive=None, orders: Sequence[float] | None = None, *, harmonic
     if isinstance(harmonics, bool) or not 1 <= int(harmonics) <= 10:
         raise UsageError(f"harmonics: expected an integer in [1, 10], got {harmonics}")
     if orders is not None:
+        # lazy: keeps workflows.measure off `import wormgear_cli.api`'s start-up
         from wormgear_cli.workflows.measure import parse_orders
 
         orders = parse_orders(",".join(repr(float(k)) for k in orders))
@@ -723,7 +735,6 @@ def _periodic(pe: dict | None) -> PeriodicError | None:
     """The :class:`PeriodicError` of measure's document (angles in rad), None without one."""
     if not pe or pe.get("worm_order") is None:
         return None
-    import numpy as np
 
     def entry(it: dict) -> dict:
         return {"order": it["order"], "period_s": it["period_s"], "amplitude": _angle(it["amplitude"]),
@@ -775,18 +786,18 @@ class Compensation:
 
     def to_dict(self, unit: str = "arcsec") -> dict:
         """The document of ``wormgear compensate --report FILE --unit UNIT``."""
+        # lazy: keeps workflows.compensate off `import wormgear_cli.api`'s start-up
         from wormgear_cli.workflows.compensate import report
 
         return _plain(report(self.core, unit))
 
     def write(self, path: PathLike) -> None:
         """Write the file to ``path`` atomically."""
-        from wormgear_cli.files import atomic_write
-
         atomic_write(_fs(path), self.text)
 
 
 def _compensation(core) -> Compensation:
+    # lazy: keeps workflows.compensate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.compensate import TableDetails, report
 
     doc = report(core, "rad")
@@ -852,12 +863,13 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     >>> c.format, len(c.text.splitlines()), c.method
     ('linuxcnc', 256, 'cross-validated')
     """
-    from wormgear_cli.units import from_unit
+    # lazy: keeps workflows.compensate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.compensate import CompensateOptions, compensate_measurement
     from wormgear_cli.workflows.compensate import compensate as run
 
     _choice("unit", unit, ("deg", "arcmin", "arcsec", "urad"))
     if orders is not None:
+        # lazy: keeps workflows.measure off `import wormgear_cli.api`'s start-up
         from wormgear_cli.workflows.measure import parse_orders
 
         orders = tuple(parse_orders(",".join(repr(float(k)) for k in orders)))
@@ -938,6 +950,7 @@ class Diagnosis:
     def augmented_spec(self) -> str:
         """The augmented drive spec (TOML text: fitted phases, an ``[effects.NAME]`` table per
         named effect), as ``wormgear diagnose`` writes it."""
+        # lazy: keeps diagnosis off `import wormgear_cli.api`'s start-up
         from wormgear_cli.diagnosis import augmented_toml
 
         return augmented_toml(self.core, self._data_name)
@@ -976,7 +989,7 @@ def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_
     >>> d.gap_after.rms < d.gap_before.rms
     True
     """
-    from wormgear_cli.diagnosis import run_diagnose
+    from wormgear_cli.diagnosis import run_diagnose  # lazy: keeps diagnosis off `import wormgear_cli.api`'s start-up
 
     spec = _spec(spec)
     meas = data if isinstance(data, Measurement) else read_measurement(data)
@@ -1025,19 +1038,17 @@ class Sweep:
 
 def _jobs(jobs: int) -> int:
     """``jobs`` as a worker count (0: every core); UsageError outside 0..MAX_JOBS."""
-    from wormgear_cli.batch.pool import resolve_jobs
+    from wormgear_cli.batch.pool import resolve_jobs  # lazy: keeps batch.pool off `import wormgear_cli.api`'s start-up
 
     return resolve_jobs(jobs)
 
 
 def _axis(value, option: str):
-    import numpy as np
-
+    # lazy: keeps analysis.sweep off `import wormgear_cli.api`'s start-up
     from wormgear_cli.analysis import sweep as core
 
     if isinstance(value, str):
         return core.parse_range_spec(value, option, positive=True).values()
-    from wormgear_cli.errors import UsageError
 
     arr = np.atleast_1d(np.asarray(value, dtype=float))
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
@@ -1088,8 +1099,8 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     >>> sorted(s.best)
     ['gear_transmission_error', 'total_transmission_error']
     """
+    # lazy: keeps analysis.sweep off `import wormgear_cli.api`'s start-up
     from wormgear_cli.analysis import sweep as core
-    from wormgear_cli.errors import UsageError
 
     spec = _spec(spec)
     _choice("hold", hold, ("force", "torque"))
@@ -1159,6 +1170,7 @@ class Tolerance:
 
 def _tolerance_doc(spec, options, target_yield):
     """Set-up, run, allocation and document, as ``wormgear tolerance`` (no shard, no summarize)."""
+    # lazy: keeps tolerance.engine off `import wormgear_cli.api`'s start-up
     from wormgear_cli.tolerance import engine, study
 
     s = engine.setup(spec, options)
@@ -1201,10 +1213,7 @@ def tolerance(spec, samples: int = 100_000, seed: int = 0, *, metrics: str = "al
     >>> te.mean < te.percentiles["99"] < te.corner
     True
     """
-    from dataclasses import replace
-
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.tolerance import engine
+    from wormgear_cli.tolerance import engine  # lazy: keeps tolerance.engine off `import wormgear_cli.api`'s start-up
 
     spec = _spec(spec)
     if target_yield is not None and not 0.0 < target_yield < 1.0:
@@ -1279,6 +1288,7 @@ def compare(specs: Sequence, *, samples: int | None = None, seed: int = 0) -> Co
     >>> f"{c.totals['budget_statistical'][1]:.2f}"
     '27.00 arcsec'
     """
+    # lazy: keeps workflows.compare off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.compare import Options
     from wormgear_cli.workflows.compare import compare as run
 

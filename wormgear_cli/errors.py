@@ -8,7 +8,9 @@ escapes is a bug and may raise normally.
 
 from __future__ import annotations
 
+import difflib
 import re
+import warnings
 
 
 class WormgearError(Exception):
@@ -62,16 +64,12 @@ def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: f
     """The hint of every "unknown key" message: `` (did you mean X?)`` for the closest of
     ``choices`` to ``word`` (difflib ratio >= ``cutoff``), shown through ``show`` (a prefix,
     quotes), else ``otherwise`` (e.g. the list of valid names, or nothing)."""
-    import difflib
-
     near = difflib.get_close_matches(word, list(choices), n=1, cutoff=cutoff)
     return f" (did you mean {show(near[0])}?)" if near else otherwise
 
 
 def moved(old: str, new: str, stacklevel: int = 3) -> None:
     """Warn that ``old`` is now ``new`` (a DeprecationWarning, shown once per call site)."""
-    import warnings
-
     warnings.warn(f"{old} moved to {new}; the old name will be removed in wormgear-cli 0.3",
                   DeprecationWarning, stacklevel=stacklevel)
 

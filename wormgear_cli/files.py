@@ -46,10 +46,13 @@ from __future__ import annotations
 
 import errno
 import os
+import platform
 import re
+import select
 import signal
 import stat
 import sys
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -512,8 +515,6 @@ def _write_all(fd: int, data: bytes) -> None:
         try:
             n = os.write(fd, view)
         except BlockingIOError:
-            import select
-
             select.select([], [fd], [])
             continue
         if n <= 0:
@@ -723,7 +724,6 @@ def install_stop_handlers(process: bool = False):
         Restores the previous handlers.
     """
     global _PROCESS_WIDE
-    import threading
 
     if threading.current_thread() is not threading.main_thread():
         return lambda: None
@@ -1016,7 +1016,6 @@ def _host_tag() -> str:
     if hasattr(os, "uname"):
         node = os.uname().nodename
     else:  # pragma: no cover - not POSIX
-        import platform
 
         node = platform.node()
     return "".join(c for c in node if c.isascii() and c.isalnum())[:16]
@@ -1304,7 +1303,7 @@ def _cgroup_room() -> int | None:
 def _rlimit_room() -> tuple[int, str] | None:
     """Bytes the address-space or data limit (``ulimit -v`` / ``-d``) still allows, or None."""
     try:
-        import resource
+        import resource  # lazy: keeps resource off `analyze`'s start-up
     except ImportError:  # pragma: no cover - not POSIX
         return None
     try:
@@ -1389,8 +1388,6 @@ def check_memory(need: float, what: str, fix: str) -> None:
 def count_lines(path, limit: int) -> int | None:
     """Line ends in the first ``limit`` + 1 bytes of a regular file (a fast pass, before the
     file is parsed), or None for anything else (a pipe cannot be read twice) or on error."""
-    import stat
-
     try:
         with open(path, "rb", buffering=0) as fh:
             if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):

@@ -193,3 +193,69 @@ def test_centre_distance_growth_separate_temperatures():
     # housing 5 K warmer than the gears: only the housing term remains
     got = centre_distance_growth(100.0, 20.0, 80.0, 11e-6, 12e-6, 18e-6, housing_dt=5.0, worm_dt=0.0, wheel_dt=0.0)
     assert got == pytest.approx(100.0 * 11e-6 * 5.0)
+
+
+def _amplified(eff) -> dict:
+    """Internal parameters of ``eff`` with defaults, and a quarter of the range's top for the rest (ten times
+    the bottom for a parameter the signature is inverse in: a stiffness)."""
+    out = {q.name: (q.default if q.default is not None else 0.25 * q.hi) * q.scale for q in eff.params}
+    if eff.extra.get("inverse"):
+        q = next(q for q in eff.params if q.name == eff.amplitude)
+        out[q.name] = 10.0 * q.lo * q.scale
+    return out
+
+
+@pytest.mark.parametrize("name", list(EFFECTS))
+def test_the_records_diagnosis_metadata_is_what_the_signature_does(name, mch50_spec):
+    """``mode``, ``pattern`` and ``needs`` on the record (what diagnose reads) agree with the signature
+    function itself, evaluated here: a common-mode effect is the same in both directions, a
+    differential one is not; a trend changes with its signal and with nothing else but the direction; a
+    reversal with the direction alone; a periodic effect repeats after 1/order of a turn."""
+    from wormgear_cli.physics.signals import SIGNALS
+
+    eff, g = EFFECTS[name], geometry(mch50_spec)
+    s, theta, _, load, temp = _signals(11)
+    conditions = {"load": load, "temperature": temp, "time": s.time}
+
+    def f(direction, theta=theta, **changed):
+        values = {**conditions, **changed}
+        sig = Signals(theta, np.full(theta.shape, direction), values["load"], values["temperature"], values["time"])
+        return eff.function(sig, g, **_amplified(eff))
+
+    assert eff.mode in ("common", "differential")
+    assert eff.needs is None or eff.needs in SIGNALS
+    diff = f(1.0) - f(-1.0)
+    if eff.mode == "common":
+        np.testing.assert_allclose(diff, 0.0, atol=1e-15)
+    else:
+        assert np.max(np.abs(diff)) > 1e-9 and eff.needs is not None
+    others = [k for k in conditions if k != eff.needs]
+    if eff.pattern == "trend":
+        assert SIGNALS[eff.needs].slope_unit and eff.signature
+        assert np.max(np.abs(f(1.0, **{eff.needs: conditions[eff.needs] + 10.0}) - f(1.0))) > 1e-9
+        for k in others:
+            np.testing.assert_allclose(f(1.0, **{k: conditions[k] + 10.0}), f(1.0), atol=1e-15, err_msg=k)
+        np.testing.assert_allclose(f(1.0, theta=theta + 0.3), f(1.0), atol=1e-15)
+    elif eff.pattern == "reversal":
+        assert eff.needs == "direction" and eff.mode == "differential" and eff.signature
+        for k in conditions:
+            np.testing.assert_allclose(f(1.0, **{k: conditions[k] + 10.0}), f(1.0), atol=1e-15, err_msg=k)
+        np.testing.assert_allclose(f(1.0, theta=theta + 0.3), f(1.0), atol=1e-15)
+    else:
+        assert eff.pattern is None and eff.order is not None
+        period = 2.0 * math.pi / float(eff.order(g))
+        np.testing.assert_allclose(f(1.0, theta=theta + period), f(1.0), atol=1e-12)
+        assert np.max(np.abs(f(1.0, theta=theta + 0.5 * period) - f(1.0))) > 1e-9
+        assert "order" in eff.signature_text(g)
+
+
+def test_every_signal_has_its_reader_column_with_a_default_and_a_range():
+    """The operating signals' registry is where the readers' optional columns come from."""
+    from wormgear_cli.measurement.reader import DEFAULTS, OPTIONAL
+    from wormgear_cli.measurement.readers.values import RANGES
+    from wormgear_cli.physics.signals import SIGNALS
+
+    for s in SIGNALS.values():
+        assert s.column in OPTIONAL and DEFAULTS[s.column] == s.default, s.name
+        assert RANGES[s.column] == (s.lo, s.hi) and s.lo <= s.default <= s.hi, s.name
+    assert set(SIGNALS) == {"direction", "load", "temperature", "time"} == set(Signals.__dataclass_fields__) - {"theta"}

@@ -11,6 +11,10 @@ The names of the former module ``wormgear_cli.analysis`` are still found here, w
 DeprecationWarning naming their new home ``wormgear_cli.analysis.accuracy``.
 """
 
+import importlib
+
+from wormgear_cli.errors import moved
+
 #: names of the former module ``wormgear_cli.analysis`` (now ``wormgear_cli.analysis.accuracy``)
 _OLD_NAMES = frozenset({
     'Analysis', 'Deflections', 'INFO_COLUMNS', 'METRIC_COLUMNS', 'WormStage', 'analyze',
@@ -21,10 +25,6 @@ _OLD_NAMES = frozenset({
 
 def __getattr__(name: str):
     if name in _OLD_NAMES:
-        import importlib
-
-        from wormgear_cli.errors import moved
-
         moved(f"wormgear_cli.analysis.{name}", f"wormgear_cli.analysis.accuracy.{name}")
         return getattr(importlib.import_module("wormgear_cli.analysis.accuracy"), name)
     raise AttributeError(f"module 'wormgear_cli.analysis' has no attribute {name!r}")

@@ -23,6 +23,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from wormgear_cli.analysis.simulate import components
+from wormgear_cli.analysis.synth import Plan, plan_angles
+from wormgear_cli.measurement.iso230 import iso230_figures
+from wormgear_cli.physics.effects import Signals
+from wormgear_cli.units import ARCSEC
+
 #: the figures a requirement can limit, ``max_iso230_<NAME>_arcsec``
 FIGURES = ("A", "E", "B", "M")
 #: seconds per target, as synth's iso plan (the time only matters to time-dependent effects)
@@ -46,8 +52,6 @@ class Prediction(NamedTuple):
 
     def describe(self) -> dict:
         """The plan as check's JSON states it next to each ISO 230-2 limit."""
-        from wormgear_cli.units import ARCSEC
-
         where = ({"targets_deg": "as listed in [test_plan]"} if self.spacing is None else
                  {"spacing": "irregular", **self.spacing})
         return {"targets": int(self.targets.size), **where, "runs": self.runs,
@@ -58,7 +62,6 @@ def plan_targets(test_plan) -> np.ndarray:
     """The target angles [rad, ascending] of a spec's ``test_plan`` section (module docstring)."""
     if test_plan.targets_deg is not None:
         return np.sort(np.asarray(test_plan.targets_deg, dtype=float))
-    from wormgear_cli.analysis.synth import Plan, plan_angles
 
     rng = np.random.default_rng(np.random.SeedSequence(int(test_plan.seed)).spawn(4)[0])  # synth's target stream
     plan = Plan(kind="iso", targets=int(test_plan.targets), runs=int(test_plan.runs), jitter=float(test_plan.jitter))
@@ -77,10 +80,6 @@ def predict(spec, registry=None) -> Prediction:
     """The ISO 230-2 figures of ``spec``'s nominal drive on its own ``[test_plan]`` (module docstring).
 
     ``registry``: the spec's :func:`wormgear_cli.drive.registry.build` (built when omitted)."""
-    from wormgear_cli.analysis.simulate import components
-    from wormgear_cli.measurement.iso230 import iso230_figures
-    from wormgear_cli.physics.effects import Signals
-
     tp = spec.test_plan
     theta = plan_targets(tp)
     n, runs = theta.size, int(tp.runs)

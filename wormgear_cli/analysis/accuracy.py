@@ -16,11 +16,14 @@ their replacement, for callers that hold them.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
+from wormgear_cli.errors import SpecError
+from wormgear_cli.spec.loader import legacy_stages
 from wormgear_cli.units import to_unit
 
 if TYPE_CHECKING:
@@ -63,23 +66,18 @@ class Deflections(NamedTuple):
 def geometry(spec):
     """Derived geometry used by the effect catalogue and simulation (a ``DriveGeometry``, any train:
     :func:`wormgear_cli.drive.train.drive_geometry`)."""
-    from wormgear_cli.drive.train import drive_geometry
+    from wormgear_cli.drive.train import drive_geometry  # lazy: keeps drive.train off `analyze`'s start-up
 
     return drive_geometry(spec)
 
 
 def _superseded(name: str, new: str) -> None:
-    import warnings
-
     warnings.warn(f"wormgear_cli.analysis.accuracy.{name} reads only a worm + spur drive and is superseded by "
                   f"{new}; it will be removed in wormgear-cli 0.3", DeprecationWarning, stacklevel=3)
 
 
 def _legacy(spec) -> tuple:
     """(worm stage, spur stage) of a [worm, spur] drive, read from its legacy sections as they are."""
-    from wormgear_cli.errors import SpecError
-    from wormgear_cli.spec.loader import legacy_stages
-
     if spec.gear_pair is None:
         kinds = ", ".join(s.kind for s in spec.stages)
         raise SpecError(f"{spec.source}: this calculation is available for a drive of one worm stage followed by "
@@ -99,7 +97,7 @@ def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=Fals
     The one definition per stage: :func:`wormgear_cli.drive.stiffness.deflection` (deprecated
     wrapper of it; a drive's deflections at its loads: ``drive.registry.build(spec).deflections``).
     """
-    from wormgear_cli.drive.stiffness import deflection
+    from wormgear_cli.drive.stiffness import deflection  # lazy: keeps drive.stiffness off `analyze`'s start-up
 
     _superseded("deflections", "wormgear_cli.drive.stiffness.deflection(spec, stage, force)")
     stages = _legacy(spec)
@@ -112,7 +110,7 @@ def deflections(spec, gear_force=None, worm_force=None, linear_at_spec_load=Fals
 def line_loads(spec) -> tuple[float, float]:
     """F_t K_A / b [N/mm] of the spur and the worm mesh of a [worm, spur] drive at its loads (ISO 6336-1).
     Deprecated: :func:`wormgear_cli.drive.stiffness.line_load` of each stage."""
-    from wormgear_cli.drive.stiffness import line_load
+    from wormgear_cli.drive.stiffness import line_load  # lazy: keeps drive.stiffness off `analyze`'s start-up
 
     _superseded("line_loads", "wormgear_cli.drive.stiffness.line_load(spec, stage)")
     worm, gear = _legacy(spec)
@@ -132,7 +130,7 @@ def worm_stage(spec, deflection):
     """The paper's worm stage of a [worm, spur] ``spec`` at tooth deflection ``deflection`` [mm] (delta2;
     scalar or array): :func:`wormgear_cli.drive.worm.paper`, the one definition that ``analyze`` and
     the torque-held ``sweep`` use.  Deprecated: :func:`wormgear_cli.drive.worm.paper` of the stage."""
-    from wormgear_cli.drive.worm import paper
+    from wormgear_cli.drive.worm import paper  # lazy: keeps drive.worm off `analyze`'s start-up
 
     _superseded("worm_stage", "wormgear_cli.drive.worm.paper(stage, deflection)")
     return paper(_legacy(spec)[0], deflection)
@@ -265,7 +263,7 @@ def analyze(spec, registry: Registry | None = None) -> Analysis:
     Delta phi_wh / i_c with i_c = z1/z2).  ``registry``: the spec's
     :func:`wormgear_cli.drive.registry.build`, built when omitted.
     """
-    from wormgear_cli.drive.registry import build
+    from wormgear_cli.drive.registry import build  # lazy: keeps drive.registry off `analyze`'s start-up
 
     reg = registry if registry is not None else build(spec)
     total_te, total_bl = reg.totals()

@@ -55,6 +55,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.drive.records import Static
+from wormgear_cli.units import to_unit
+
 
 class Rule(str, Enum):
     """How the budget's lines combine into a total amplitude (see the module docstring)."""
@@ -120,8 +124,6 @@ class Budget:
     def report(self, unit: str) -> dict:
         """``{"budget": [...], "total_with_budget": {...}}`` for analyze's JSON (angles in ``unit``;
         ``budget_offsets`` when a curve has a constant mean)."""
-        from wormgear_cli.units import to_unit
-
         lin = self.linear
         lines = [{"source": ln.source, "stage": ln.stage, "kind": ln.kind, "order": float(ln.order),
                   "amplitude": float(to_unit(ln.amplitude, unit)), "origin": ln.origin,
@@ -173,9 +175,6 @@ def budget(spec, analysis=None) -> Budget:
     ``analysis``: the spec's :func:`wormgear_cli.analysis.accuracy.analyze` result (computed when
     omitted); its registry gives the lines.
     """
-    from wormgear_cli.analysis.accuracy import analyze
-    from wormgear_cli.drive.records import Static
-
     a = analysis if analysis is not None else analyze(spec)
     reg = a.registry
     assert reg is not None  # (analyze keeps the registry it built)

@@ -22,6 +22,7 @@ FIGURE_COLUMNS = {
 def figures(spec, result=None) -> dict[str, float]:
     """``column -> value`` [rad] of :data:`FIGURE_COLUMNS` for ``spec`` (``result``: its
     :func:`~wormgear_cli.analysis.accuracy.analyze`, computed when omitted)."""
+    # lazy: analysis.acceptance, analysis.budget pull in numpy, ctypes; this module loads without them
     from wormgear_cli.analysis.acceptance import predict
     from wormgear_cli.analysis.budget import budget
 

@@ -68,6 +68,7 @@ def _measure(metric: str) -> str:
 def evaluate(spec, analysis) -> list[Verdict]:
     """Every requirement present in ``spec`` with its verdict: the totals, each stage's limits (from the
     output back to the motor), the budget's, the acceptance test's."""
+    # lazy: spec.loader pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.spec.loader import raw_value
 
     out = []
@@ -90,12 +91,14 @@ def _value(spec, analysis, metric: str, cache: dict) -> tuple[float, dict | None
     """The quantity ``metric`` limits [rad], and for an ISO 230-2 figure what it was predicted on."""
     if metric.startswith("budget:"):
         if "budget" not in cache:
+            # lazy: analysis.budget pulls in numpy, ctypes; this module loads without it
             from wormgear_cli.analysis.budget import budget
 
             cache["budget"] = budget(spec, analysis)
         return cache["budget"].total(metric.split(":", 1)[1]), None
     if metric.startswith("iso:"):
         if "test" not in cache:
+            # lazy: analysis.acceptance pulls in numpy, ctypes; this module loads without it
             from wormgear_cli.analysis.acceptance import predict
 
             cache["test"] = predict(spec, analysis.registry)

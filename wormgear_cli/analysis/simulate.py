@@ -76,11 +76,13 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from wormgear_cli.drive.records import Compliance, Source, sine  # noqa: F401  (re-exported: their old home)
+from wormgear_cli.drive.registry import aligned_phases as aligned
 from wormgear_cli.drive.registry import build
+from wormgear_cli.drive.train import drive_geometry
+from wormgear_cli.physics.effects import EFFECTS, Signals
 
 if TYPE_CHECKING:
     from wormgear_cli.drive.train import Train
-    from wormgear_cli.physics.effects import Signals
 
 
 def periodic_sources(spec, all_budget_sources: bool = False, registry=None) -> list[Source]:
@@ -107,8 +109,6 @@ def aligned_phases(spec, quantity: str = "error") -> dict[str, float]:
     reaches analyze's total backlash at theta = 0 (the other sources at
     90 deg too).
     """
-    from wormgear_cli.drive.registry import aligned_phases as aligned
-
     return aligned(spec, quantity)
 
 
@@ -146,9 +146,6 @@ def components(spec, signals: Signals, phases: dict | None = None,
     drift = sum(x.amplitude for x in reg.statics if x.kind == "thermal")
     if drift:  # the thermal drift at the spec's operating temperatures, both directions alike
         out["thermal"] = np.full(signals.theta.shape, drift)
-    from wormgear_cli.drive.train import drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS  # the catalogue: not needed by ``analyze``
-
     g = drive_geometry(spec, cast("Train", reg.train))  # (the registry's record holds its train untyped)
     for name, params in (spec.effects if effects is None else effects).items():
         out[f"effect:{name}"] = EFFECTS[name].function(signals, g, **params)
@@ -166,8 +163,6 @@ def simulate(spec, signals: Signals, phases: dict | None = None, offset: float =
 
 def max_reversal(spec, revolutions: int = 1, points: int = 20000) -> float:
     """Largest simulated lost motion over the given turns [rad] (for tests and docs)."""
-    from wormgear_cli.physics.effects import Signals
-
     theta = np.linspace(0.0, 2.0 * np.pi * revolutions, points, endpoint=False)
     fwd = simulate(spec, Signals.make(theta, 1.0))
     rev = simulate(spec, Signals.make(theta, -1.0))

@@ -45,7 +45,15 @@ import numpy as np
 
 from wormgear_cli.batch import shards
 from wormgear_cli.batch.pool import ordered_map
-from wormgear_cli.errors import UsageError, did_you_mean
+from wormgear_cli.drive import belt, spur, worm
+from wormgear_cli.drive.registry import build
+from wormgear_cli.drive.stiffness import deflection
+from wormgear_cli.errors import SpecError, UsageError, did_you_mean
+from wormgear_cli.physics import spur as gear
+from wormgear_cli.physics.deformation import spur_contact_ratio
+from wormgear_cli.spec.kinds import KINDS
+from wormgear_cli.spec.loader import DRIVE_FIELDS, FIELD_BY_PATH, with_values
+from wormgear_cli.spec.stages import LEGACY_KEYS, STAGE_FIELD_BY_KEY, STAGE_KINDS, is_legacy_train
 
 if TYPE_CHECKING:
     from wormgear_cli.drive.train import Train
@@ -258,8 +266,6 @@ def spur_stage(spec, stage: int | None = None):
 
 
 def _reference(spec, st) -> _Reference:
-    from wormgear_cli.drive.registry import build
-
     reg = build(spec)
     t, k = cast("Train", reg.train), st.index  # (the registry's record holds its train untyped)
     i_k = t.ratios[k - 1]
@@ -296,8 +302,6 @@ class RatioDistanceSweep:
 
     def __init__(self, spec, i_values, l_values, hold: str = "force", module: float | None = None,
                  min_teeth: int | None = None, stage: int | None = None, figures: bool = False):
-        from wormgear_cli.physics import spur as gear
-
         st = spur_stage(spec, stage)
         if hold not in HOLD_MODES:
             raise UsageError(f'--hold "{hold}": expected one of {", ".join(HOLD_MODES)}')
@@ -406,9 +410,6 @@ class RatioDistanceSweep:
 
     def _deflections(self, z1, z2, module, r2, ratio):
         """delta1 [mm] of the swept spur mesh and the load factor of the stages before it, per design."""
-        from wormgear_cli.drive.stiffness import deflection
-        from wormgear_cli.physics.deformation import spur_contact_ratio
-
         spec, ref, st = self.spec, self.reference, self.stage
         if self.hold == "torque":
             gear_force = ref.gear_force * ref.r2 / r2
@@ -428,9 +429,6 @@ class RatioDistanceSweep:
     def _upstream(self, scale):
         """(TE, backlash) [rad] of the stages before the swept one at its input shaft, each stage's load
         times ``scale`` (the torque hold: their torques follow 1 / i), by their kinds' models."""
-        from wormgear_cli.drive import belt, spur, worm
-        from wormgear_cli.drive.stiffness import deflection
-
         te = bl = 0.0
         for stage, per in reversed(self.reference.upstream):
             if stage.kind == "belt":
@@ -448,8 +446,6 @@ class RatioDistanceSweep:
         ``teeth``: whole (z1, z2) of snapped designs (then R = m z / 2 exactly); otherwise
         z = 2 R / m.  Totals at the output: the stages after the swept one as they are, the swept
         stage / O_k, the stages before it / (i O_k)."""
-        from wormgear_cli.physics import spur as gear
-
         i = np.asarray(i, dtype=float)
         l = np.asarray(l, dtype=float)
         i, l = np.broadcast_arrays(i, l)
@@ -502,8 +498,6 @@ class RatioDistanceSweep:
         """The kinematic peak at l indices ``li``.  A long l axis is done in fixed blocks of
         :data:`CHUNK_POINTS` l values (the last two kept), so a value never depends on which
         points share its block of work: shards stay byte-identical to the whole run."""
-        from wormgear_cli.physics import spur as gear
-
         if self._peak is not None:
             return tuple(p[li] for p in self._peak)
         size = CHUNK_POINTS
@@ -523,8 +517,6 @@ class RatioDistanceSweep:
 
     def chunk(self, a: int, b: int) -> dict:
         """Column arrays for grid points [a, b) (see :meth:`chunks`)."""
-        from wormgear_cli.physics import spur as gear
-
         ii, li = self.grid_index(a, b)
         i_nom, l_nom = self.i_values[ii], self.l_values[li]
         point = np.arange(a, b, dtype=np.int64)
@@ -557,9 +549,6 @@ class RatioDistanceSweep:
         them (``force``: the spec's; ``torque``: the swept stage's force times R2_spec / R2, the stages
         before it times i_spec / i), written out so that the loader does not derive them again.
         ``wormgear analyze`` of this spec gives the row's totals (a test holds them equal)."""
-        from wormgear_cli.spec.kinds import KINDS
-        from wormgear_cli.spec.loader import with_values
-
         if self.module is None:
             raise ValueError("design_spec: the sweep has no module (its designs are not whole-tooth)")
         ref, k = self.reference, self.stage.index
@@ -578,8 +567,7 @@ class RatioDistanceSweep:
         """:data:`FIGURE_COLUMNS` arrays [rad] of the snapped designs (z1, z2), one full analysis each,
         of the designs the drive spec holds for (``valid``; e.g. a wheel beyond ISO 1328's scope of
         teeth for its accuracy grade is not), and the first other's SpecError message (None: none)."""
-        from wormgear_cli.analysis.figures import figures
-        from wormgear_cli.errors import SpecError
+        from wormgear_cli.analysis.figures import figures  # lazy: keeps the budget and acceptance test off `sweep`
 
         cols: dict[str, list[float]] = {c: [] for c in FIGURE_COLUMNS}
         valid = np.ones(np.size(z1), dtype=bool)
@@ -815,7 +803,7 @@ class ParamAxis:
 
 
 def _effect_param_keys() -> list[str]:
-    from wormgear_cli.physics.effects import EFFECTS
+    from wormgear_cli.physics.effects import EFFECTS  # lazy: keeps physics.effects off `sweep`'s start-up
 
     return [f"effects.{name}.{p.key}" for name, eff in EFFECTS.items() for p in eff.params]
 
@@ -853,9 +841,6 @@ def parse_param(text: str, spec=None) -> ParamAxis:
 
 def _param_field(key: str, spec):
     """The schema's :class:`~wormgear_cli.spec.fields.Field` of a --param key (see :func:`parse_param`)."""
-    from wormgear_cli.spec.loader import DRIVE_FIELDS, FIELD_BY_PATH
-    from wormgear_cli.spec.stages import LEGACY_KEYS, STAGE_FIELD_BY_KEY, is_legacy_train
-
     parts = key.split(".", 2)
     if len(parts) == 3 and parts[0] == "stage" and parts[1].isdigit():
         return _stage_field(key, int(parts[1]), parts[2], spec)
@@ -884,8 +869,6 @@ def _param_field(key: str, spec):
 
 def _stage_field(key: str, n: int, stage_key: str, spec):
     """The Field of ``stage.N.KEY``: of stage N's kind with ``spec``, else of any kind having KEY."""
-    from wormgear_cli.spec.stages import STAGE_FIELD_BY_KEY, STAGE_KINDS
-
     if spec is None:
         for kind in STAGE_KINDS:
             if stage_key in STAGE_FIELD_BY_KEY[kind]:
@@ -929,8 +912,7 @@ def param_rows(spec, axes: list[ParamAxis], start: int = 0, stop: int | None = N
                progress: Callable[[int], None] | None = None) -> Iterator[tuple]:
     """(values, Analysis) for points [start, stop) of the grid over ``axes`` (row-major, the
     first axis outermost).  Each point is ``analyze(with_values(spec, {key: value, ...}))``."""
-    from wormgear_cli.analysis.accuracy import analyze
-    from wormgear_cli.spec.loader import with_values
+    from wormgear_cli.analysis.accuracy import analyze  # lazy: keeps analysis.accuracy off `sweep`'s start-up
 
     total = param_size(axes)
     stop = total if stop is None else stop

@@ -36,8 +36,17 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from wormgear_cli.analysis.simulate import periodic_sources, simulate
+from wormgear_cli.drive.train import drive_geometry
 from wormgear_cli.errors import UsageError, did_you_mean
-from wormgear_cli.physics.effects import EFFECTS, Signals, params_from_keys, params_to_keys
+from wormgear_cli.physics.effects import EFFECTS, Signals, geometry_absent_reason, params_from_keys, params_to_keys
+from wormgear_cli.physics.thermal import (
+    centre_distance_change_mm,
+    mesh_housing_warmup,
+    predicted_centre_distance_um_per_K,
+    predicted_drift_arcsec_per_K,
+    worm_pair_radii,
+)
 from wormgear_cli.units import ARCSEC
 
 #: the data columns, in file order
@@ -170,7 +179,6 @@ class Programme:
         """The housing temperature [degC] at times ``t`` [s] of a ``mesh-warmup``, else None."""
         if self.kind != "mesh-warmup":
             return None
-        from wormgear_cli.physics.thermal import mesh_housing_warmup
 
         t0, t1, tau, share, lag = self.values
         return t0 + mesh_housing_warmup(t, t1 - t0, tau, share, lag)[1]
@@ -301,14 +309,10 @@ def resolve_effects(spec, effects: dict | None = None, include_spec: bool = True
     outside its physical range or an unknown name raises UsageError.
     Returns name -> {key: value} in catalogue units, in catalogue order.
     """
-    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K, predicted_drift_arcsec_per_K
-
     merged: dict[str, dict] = {}
     if include_spec:
         for name, params in spec.effects.items():
             merged[name] = params_to_keys(name, params)
-    from wormgear_cli.drive.train import drive_geometry
-    from wormgear_cli.physics.effects import geometry_absent_reason
 
     g = drive_geometry(spec) if effects else None
     for name, values in (effects or {}).items():
@@ -401,8 +405,6 @@ def synthesize(spec, plan: Plan | None = None, effects: dict | None = None, nois
     angle_deg, error_arcsec, direction (+1/-1), run (1..runs), load_Nm,
     temperature_C, time_s, each a numpy array, rows in measuring order.
     """
-    from wormgear_cli.analysis.simulate import periodic_sources, simulate
-
     plan = plan or Plan()
     noise = noise or Noise()
     temperature = temperature or Programme("constant", (20.0,))
@@ -561,12 +563,7 @@ def _two_temperature_backlash(spec, signals: Signals, temperature: Programme):
     lag leaves (the physical term minus the linear one, RMS and max over the
     rows [arcsec]).
     """
-    from wormgear_cli.analysis.accuracy import geometry
-    from wormgear_cli.physics.thermal import (
-        centre_distance_change_mm,
-        predicted_centre_distance_um_per_K,
-        worm_pair_radii,
-    )
+    from wormgear_cli.analysis.accuracy import geometry  # lazy: keeps analysis.accuracy off `simulate`'s start-up
 
     t0, _t1, _tau, share, lag = temperature.values
     mesh_dt = signals.temperature - t0

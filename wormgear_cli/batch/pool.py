@@ -49,7 +49,7 @@ def resolve_jobs(jobs: int) -> int:
 
 
 def _context():
-    import multiprocessing
+    import multiprocessing  # lazy: keeps multiprocessing off `sweep`'s start-up
 
     methods = multiprocessing.get_all_start_methods()
     return multiprocessing.get_context("fork" if "fork" in methods and sys.platform != "darwin" else "spawn")

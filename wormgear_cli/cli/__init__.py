@@ -11,7 +11,10 @@ every command registered.
 
 from __future__ import annotations
 
+import atexit
+import gc
 import importlib
+import signal
 import sys
 
 #: command name -> module registering it (the one table of commands)
@@ -37,7 +40,7 @@ def _register(modules) -> None:
 def __getattr__(name: str):
     if name == "app":  # the full app: every command registered
         _register(COMMAND_MODULES.values())
-        from wormgear_cli.cli._app import app
+        from wormgear_cli.cli._app import app  # lazy: the full app, only when asked for
 
         return app
     raise AttributeError(name)
@@ -48,14 +51,13 @@ def main() -> None:
     are replaced and the stop signals handled (:func:`wormgear_cli.files.start_cli`), so
     Ctrl-C, SIGTERM and SIGHUP are one line and exit 128 + N from the first instruction on;
     once the exit code is known, a late signal ends the process at once with it, quietly."""
-    import gc
-
     # start-up: what is loaded so far (the interpreter, numpy and typer: the bulk of the heap) is never
     # garbage, so keep the collector from walking it again: a full collection during the command's
     # imports otherwise costs more than all of them (tens of ms)
     gc.freeze()
     code = 0
     try:
+        # inside the try: a Ctrl-C while the command's modules load is one line, not a traceback
         from wormgear_cli import files
 
         files.start_cli()
@@ -72,13 +74,12 @@ def main() -> None:
         elif isinstance(exc, MemoryError):
             del exc  # release what the failed step held before saying so
             code = 2
-            from wormgear_cli.files import OUT_OF_MEMORY
+            from wormgear_cli.files import OUT_OF_MEMORY  # (files may be what failed to load)
 
             _say(f"error: {OUT_OF_MEMORY}")
         else:
             raise
     _settle(code)
-    import atexit
 
     loaded = sys.modules.get("wormgear_cli.files")
     if loaded is not None and hasattr(loaded, "ignore_stop_signals"):
@@ -87,6 +88,7 @@ def main() -> None:
 
 
 def _run(args: list[str]) -> int:
+    # lazy: keeps cli._app off `import wormgear_cli.cli`'s start-up
     from wormgear_cli.cli._app import single_command_app
 
     name = args[0] if args and not args[0].startswith("-") else None
@@ -107,8 +109,6 @@ def _settle(code: int) -> None:
 
 def _stopped(signum: int) -> int:
     """A stop signal outside a command's run (while the program loads): nothing was written."""
-    import signal
-
     code = 128 + signum
     _settle(code)
     name = "interrupted" if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"

@@ -6,22 +6,32 @@ it turned into one stderr line per problem and the exit code 2.
 
 from __future__ import annotations
 
+import errno
+import signal
+
 import typer
+from typer._click.exceptions import NoArgsIsHelpError, UsageError
 from typer.core import TyperGroup
 
+from wormgear_cli import __version__
 from wormgear_cli.errors import UsageError as CoreUsageError
-from wormgear_cli.errors import WormgearError
+from wormgear_cli.errors import WormgearError, escape
 from wormgear_cli.files import (
+    BROKEN_PIPE_EXIT,
     OUT_OF_MEMORY,
     RunStopped,  # re-exported: the class lives with the signal handlers
+    StdoutClosed,
+    _stdout_failed,
+    flush_stdout,
+    install_stop_handlers,
+    output_transaction,
+    settle,
 )
 
 
 def _say(line: str) -> None:
     """One line on stderr; a stderr that is gone (the terminal closed: SIGHUP) is not an error
     of its own, the exit code still tells."""
-    from wormgear_cli.errors import escape
-
     try:
         typer.echo(escape(line), err=True)
     except (OSError, ValueError):
@@ -29,8 +39,6 @@ def _say(line: str) -> None:
 
 
 def _signal_name(signum: int) -> str:
-    import signal
-
     try:
         return signal.Signals(signum).name
     except ValueError:
@@ -56,8 +64,6 @@ class WormgearGroup(TyperGroup):
     """
 
     def make_context(self, info_name, args, parent=None, **extra):
-        from typer._click.exceptions import NoArgsIsHelpError, UsageError
-
         try:
             return super().make_context(info_name, args, parent=parent, **extra)
         except NoArgsIsHelpError:
@@ -70,16 +76,6 @@ class WormgearGroup(TyperGroup):
             raise _stopped_exit(exc.signum) from None
 
     def invoke(self, ctx):
-        from typer._click.exceptions import NoArgsIsHelpError, UsageError
-
-        from wormgear_cli.files import (
-            BROKEN_PIPE_EXIT,
-            StdoutClosed,
-            flush_stdout,
-            install_stop_handlers,
-            output_transaction,
-        )
-
         restore = install_stop_handlers()
         tx = None
         out_of_memory = False
@@ -147,8 +143,6 @@ def _flags(ctx) -> dict[str, str]:
 def _stopped_exit(signum: int) -> typer.Exit:
     """Ctrl-C (SIGINT), SIGTERM or SIGHUP stopped the run before its outputs were committed:
     one line, exit 128 + N; a further signal while it exits ends the process at once."""
-    from wormgear_cli.files import settle
-
     code = 128 + signum
     settle(code)
     if signum == 2:
@@ -161,10 +155,6 @@ def _stopped_exit(signum: int) -> typer.Exit:
 def _output_error_exit(exc: OSError):
     """Exit code for a failed write to stdout (after one stderr line), None if ``exc`` is
     not an output error."""
-    import errno
-
-    from wormgear_cli.files import BROKEN_PIPE_EXIT, StdoutClosed, UsageError, _stdout_failed
-
     if exc.errno not in (errno.EPIPE, errno.ENOSPC, errno.EIO, errno.EFBIG, errno.EBADF,
                          getattr(errno, "EDQUOT", -1)):
         return None
@@ -172,7 +162,7 @@ def _output_error_exit(exc: OSError):
         _stdout_failed(exc)
     except StdoutClosed:
         return BROKEN_PIPE_EXIT
-    except UsageError as err:
+    except CoreUsageError as err:
         for line in err.problems:
             _say(f"error: {line}")
         return err.exit_code
@@ -199,8 +189,6 @@ app = _typer()
 
 def _version(value: bool) -> None:
     if value:
-        from wormgear_cli import __version__
-
         typer.echo(f"wormgear {__version__}")
         raise typer.Exit()
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 from typing import Annotated
 
@@ -16,6 +17,7 @@ from wormgear_cli.cli.common import (
     TableFormat,
     TextJsonFormat,
     UnitOption,
+    announce_written,
     csv_text,
     emit,
     fmt_angle,
@@ -28,6 +30,9 @@ from wormgear_cli.cli.common import (
     warn_if_absurd,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import SpecError, UsageError, quote
+from wormgear_cli.files import after_commit, atomic_write, names_a_descriptor, read_text_file
+from wormgear_cli.units import to_unit
 
 
 @app.command(cls=HelpCommand)
@@ -45,6 +50,7 @@ def analyze(
 
     Example: wormgear analyze configs/mch50.toml --unit deg --format json
     """
+    # lazy: keeps analysis.accuracy, output.analyze off `analyze`'s start-up
     from wormgear_cli.analysis.accuracy import analyze as run
     from wormgear_cli.output.analyze import document
     spec = load_drive(drive)
@@ -53,8 +59,8 @@ def analyze(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     if fmt == "csv":
+        # lazy: keeps analysis.figures off `analyze`'s start-up
         from wormgear_cli.analysis.figures import FIGURE_COLUMNS, figures
-        from wormgear_cli.units import to_unit
 
         m = result.metrics(unit)
         m.update({k: float(to_unit(v, unit)) for k, v in figures(spec, result).items()})  # the sign-off figures
@@ -71,13 +77,13 @@ def analyze(
 def _table(title: str, headers, left=(0,)):
     """A :class:`~wormgear_cli.output.tables.Table` titled ``title``: the columns at the ``left``
     positions aligned left (the first: the quantity), the numbers right."""
-    from wormgear_cli.output.tables import Column, Table
+    from wormgear_cli.output.tables import Column, Table  # lazy: keeps output.tables off `analyze`'s start-up
 
     return Table(title, [Column(h, "left" if i in left else "right") for i, h in enumerate(headers)])
 
 
 def _budget_tables(r: dict, unit: str) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `analyze`'s start-up
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     spurs = [st for st in r["stages"] if st["kind"] == "spur"]
@@ -118,7 +124,7 @@ def _stage_title(r: dict, st: dict) -> str:
 
 
 def _spur_table(r: dict, st: dict, unit: str, title: str) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `analyze`'s start-up
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
@@ -142,7 +148,7 @@ def _spur_table(r: dict, st: dict, unit: str, title: str) -> list:
 
 
 def _worm_table(r: dict, st: dict, unit: str, title: str) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `analyze`'s start-up
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, wp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
@@ -164,7 +170,7 @@ def _worm_table(r: dict, st: dict, unit: str, title: str) -> list:
 
 
 def _belt_table(r: dict, st: dict, unit: str, title: str) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `analyze`'s start-up
 
     a = lambda x: fmt_angle(x, unit)  # noqa: E731
     c, tp, bp = st["contribution"], st["transmission_error_parts"], st["backlash_parts"]
@@ -230,7 +236,7 @@ def check(
 
     Example: wormgear check configs/*.toml --format json
     """
-    from wormgear_cli.workflows.check import check_file
+    from wormgear_cli.workflows.check import check_file  # lazy: keeps workflows.check off `analyze`'s start-up
 
     fmt = output_format(format, output)
     checks = [check_file(path) for path in drives]
@@ -248,7 +254,6 @@ def check(
     elif lines:
         if output is None and stdout_is_terminal():  # on a screen, long findings wrap at spaces;
             import shutil  # piped or to a file, one finding per line (grep)
-            import textwrap
 
             width = shutil.get_terminal_size((80, 24)).columns
             lines = [textwrap.fill(ln, width, subsequent_indent="    ", break_long_words=False,
@@ -285,8 +290,7 @@ def new(
 
     Example: wormgear new my-mount.toml --stages belt,worm && wormgear analyze my-mount.toml
     """
-    from wormgear_cli.errors import UsageError, quote
-    from wormgear_cli.files import atomic_write, names_a_descriptor
+    # lazy: keeps spec.stages, spec.template off `analyze`'s start-up
     from wormgear_cli.spec.stages import MAX_STAGES, STAGE_KINDS
     from wormgear_cli.spec.template import template
 
@@ -305,8 +309,6 @@ def new(
     path = _spec_name(path)
     if path.exists() or path.is_symlink():
         raise UsageError(f"{quote(path)}: already exists; wormgear new never overwrites a file")
-    from wormgear_cli.cli.common import announce_written
-    from wormgear_cli.files import after_commit
 
     atomic_write(path, template(name or quote(path.stem), kinds), exclusive=True)
     announce_written(path)
@@ -316,8 +318,6 @@ def new(
 def _spec_name(path: Path) -> Path:
     """The file ``new`` writes: ``path``, with ``.toml`` added when it has no suffix; a suffix
     other than ``.toml`` is refused with the name to use (every command reads drives as TOML)."""
-    from wormgear_cli.errors import UsageError, quote
-
     if path.suffix.lower() == ".toml" or path.is_dir():  # a directory: refused as it is, below
         return path
     if not path.suffix or not path.name.strip("."):
@@ -342,8 +342,7 @@ def upgrade(
 
     Example: wormgear upgrade configs/mch50.toml -o mch50-stages.toml
     """
-    from wormgear_cli.errors import SpecError, quote
-    from wormgear_cli.files import read_text_file
+    # lazy: keeps spec.toml, spec.upgrade off `analyze`'s start-up
     from wormgear_cli.spec.toml import MAX_SPEC_BYTES
     from wormgear_cli.spec.upgrade import upgrade_text
 

@@ -14,6 +14,8 @@ italic, dim) only on a terminal without NO_COLOR.
 
 from __future__ import annotations
 
+import io
+import math
 import os
 import re
 import sys
@@ -25,8 +27,23 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from typer._click.globals import get_current_context
+from typer._click.types import IntParamType, IntRange, ParamType
 
+from wormgear_cli import __version__
+from wormgear_cli.errors import UsageError, escape, quote
+from wormgear_cli.errors import escape as printable
+from wormgear_cli.files import (
+    after_commit,
+    atomic_stream,
+    atomic_write,
+    check_output_path,
+    descriptor_of,
+    names_a_descriptor,
+)
+from wormgear_cli.files import write_stdout as checked_write
 from wormgear_cli.output.formats import csv_text, fmt_angle, fmt_number, json_text  # noqa: F401  (re-exported)
+from wormgear_cli.units import RAD_PER_UNIT
 
 
 class TableFormat(str, Enum):
@@ -64,16 +81,12 @@ UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the
 def _output_type():
     """The click type of -o: a path, refused at once when it ends with "/" (a folder, which the
     path would otherwise lose: ``-o out/`` wrote a file named ``out``)."""
-    from typer._click.types import ParamType
-
     class OutputPath(ParamType):
         name = "path"
 
         def convert(self, value, param, ctx):
             text = os.fspath(value)
             if text.endswith("/") and text != "/":
-                from wormgear_cli.errors import UsageError, quote
-
                 raise UsageError(f"{quote(text)}: ends with /, which names a folder; expected a file name for -o "
                                  f"(e.g. {quote(text + 'result.json')})")
             return Path(text)
@@ -83,8 +96,6 @@ def _output_type():
 
 def _check_output(value: Path | None) -> Path | None:
     """-o: a directory or a missing folder is the project's one-line error, before any work."""
-    from wormgear_cli.files import check_output_path
-
     check_output_path(value, "-o")
     return value
 
@@ -107,7 +118,7 @@ TEXT_SUFFIXES = (".txt", ".text", ".log")
 def _suffix_formats() -> dict[str, str]:
     """File-name suffix -> format: the documents' (.json, .csv, .npy) and the writer registry's
     (.comp, .tbl, .pec: files other programs load)."""
-    from wormgear_cli.output.writers import extensions
+    from wormgear_cli.output.writers import extensions  # lazy: keeps output.writers off `analyze`'s start-up
 
     return {**extensions(), **SUFFIX_FORMATS}
 
@@ -135,10 +146,6 @@ def output_format(format, output: Path | None) -> str:
     ``.csv`` name holds that format, so ``-o out.json`` with ``--format csv``, or a ``.csv``
     name for a command without CSV, is an error (UsageError, exit 2) naming both.
     """
-    from typer._click.globals import get_current_context
-
-    from wormgear_cli.errors import UsageError
-
     fmt = getattr(format, "value", format)
     ctx = get_current_context(silent=True)
     file = output_file(output)
@@ -175,8 +182,6 @@ def parse_count(text: str) -> int:
 
     Raises ValueError (its text says what was expected) for a fraction (``1.5``, ``1e-3``),
     a non-finite value or anything that is not a number."""
-    import math
-
     text = str(text).strip()
     try:
         return int(text)
@@ -194,8 +199,6 @@ def parse_count(text: str) -> int:
 @lru_cache(maxsize=1)
 def _count_types():
     """The click types of counts (built on first use: typer's click is imported with typer)."""
-    from typer._click.types import IntParamType, IntRange, ParamType
-
     class _Parse(ParamType):  # (before the integer type in the method order: parses, then hands on)
         def convert(self, value, param, ctx):
             if isinstance(value, str):
@@ -242,8 +245,6 @@ def write_stdout(data: str | bytes) -> None:
 
     The one place a command's result reaches stdout: :func:`wormgear_cli.files.write_stdout`
     checks and completes every write (a full disk is exit 2, a closed pipe a quiet stop)."""
-    from wormgear_cli.files import write_stdout as checked_write
-
     checked_write(data)
 
 
@@ -252,7 +253,6 @@ def is_stdout(output: Path | None) -> bool:
     (``/dev/stdout``, ``/proc/self/fd/1``: written exactly like ``-``, streamed where ``-`` is)."""
     if output is None or str(output) == "-":
         return True
-    from wormgear_cli.files import descriptor_of
 
     return descriptor_of(output) == 1
 
@@ -267,9 +267,6 @@ def announce_written(path: str | Path) -> None:
     writes a file (``-o``, ``--plot``, ``--truth``, ...) says so this way, once per file,
     and only once the run's outputs are committed (a failed run claims no file).  A path
     naming a descriptor (``-o /dev/stdout``) is written like ``-``: nothing to announce."""
-    from wormgear_cli.errors import quote
-    from wormgear_cli.files import after_commit, names_a_descriptor
-
     if names_a_descriptor(path):
         return
     after_commit(lambda: say(f"wrote {quote(path)}"))
@@ -278,8 +275,6 @@ def announce_written(path: str | Path) -> None:
 def say(line: str) -> None:
     """One message line on stderr, control characters written out
     (:func:`wormgear_cli.errors.escape`); a stderr that is gone is not an error of its own."""
-    from wormgear_cli.errors import escape
-
     try:
         typer.echo(escape(line), err=True)
     except (OSError, ValueError):
@@ -289,7 +284,7 @@ def say(line: str) -> None:
 def load_drive(path):
     """Load a drive spec and say its plausibility warnings on stderr, one ``warning:`` line each
     (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2)."""
-    from wormgear_cli.spec.loader import load_spec
+    from wormgear_cli.spec.loader import load_spec  # lazy: keeps spec.loader off `analyze`'s start-up
 
     spec = load_spec(path)
     for w in spec.warnings:
@@ -302,8 +297,7 @@ def warn_if_absurd(angles: dict, source, unit: str = "rad", strict: bool = False
     finite stop the run (one error line, exit 2); magnitudes beyond a full turn are one
     warning line, or with ``strict`` (the nominal drive's own figures) an error
     (:func:`wormgear_cli.analysis.sanity.check_angles`)."""
-    from wormgear_cli.analysis.sanity import check_angles
-    from wormgear_cli.units import RAD_PER_UNIT
+    from wormgear_cli.analysis.sanity import check_angles  # lazy: keeps analysis.sanity off `analyze`'s start-up
 
     scale = RAD_PER_UNIT[unit]
     warning = check_angles({k: v if scale == 1.0 else _scaled(v, scale) for k, v in angles.items()}, str(source),
@@ -313,7 +307,7 @@ def warn_if_absurd(angles: dict, source, unit: str = "rad", strict: bool = False
 
 
 def _scaled(v, scale: float):
-    import numpy as np
+    import numpy as np  # lazy: keeps numpy off `analyze`'s start-up
 
     return np.asarray(v, dtype=float) * scale
 
@@ -325,7 +319,6 @@ def emit(data: str | bytes, output: Path | None, inputs: Iterable = ()) -> None:
     if file is None:
         write_stdout(data)
         return
-    from wormgear_cli.files import atomic_write
 
     atomic_write(file, data, tuple(inputs))
     announce_written(file)
@@ -340,7 +333,6 @@ def emit_stream(chunks: Iterable, output: Path | None, inputs: Iterable = ()) ->
         for data in chunks:
             write_stdout(data)
         return
-    from wormgear_cli.files import atomic_stream
 
     with atomic_stream(file, tuple(inputs)) as write:
         for data in chunks:
@@ -353,7 +345,7 @@ def emit_stream(chunks: Iterable, output: Path | None, inputs: Iterable = ()) ->
 
 def jobs_count(jobs: int) -> int:
     """``--jobs`` as a number of worker processes (0: every core this process may use)."""
-    from wormgear_cli.batch.pool import resolve_jobs
+    from wormgear_cli.batch.pool import resolve_jobs  # lazy: keeps batch.pool off `analyze`'s start-up
 
     return resolve_jobs(jobs)
 
@@ -363,7 +355,7 @@ def shard_part(text: str | None):
     ``auto`` says on stderr which part it took and from which variables."""
     if text is None:
         return None
-    from wormgear_cli.batch import shards
+    from wormgear_cli.batch import shards  # lazy: keeps batch.shards off `analyze`'s start-up
 
     part = shards.parse(text, os.environ)
     if part.source:
@@ -381,8 +373,7 @@ class PartOutput:
 
     def __init__(self, command: str, drive: Path, output: Path | None, part, parameters: dict, first: int,
                  stop: int, total: int):
-        from wormgear_cli import __version__
-        from wormgear_cli.batch import manifest
+        from wormgear_cli.batch import manifest  # lazy: keeps batch.manifest off `analyze`'s start-up
 
         special = output is not None and Path(output).exists() and not Path(output).is_file()
         file = output_file(output)
@@ -393,7 +384,7 @@ class PartOutput:
         if self.active:
             part_info = {"k": part.k, "n": part.n, "first": int(first), "stop": int(stop), "total": int(total)}
             self.key = manifest.run_key(command, __version__, manifest.file_sha256(drive), parameters, part_info)
-            from wormgear_cli.workflows.merge import MERGEABLE
+            from wormgear_cli.workflows.merge import MERGEABLE  # lazy: keeps workflows.merge off `analyze`'s start-up
 
             fmt, mergeable = parameters.get("format"), MERGEABLE.get(command, ())
             if fmt not in mergeable:  # said before the part runs, not when the parts are merged
@@ -403,7 +394,7 @@ class PartOutput:
     def done(self) -> bool:
         if self.file is None:  # (not active)
             return False
-        from wormgear_cli.batch.manifest import resume_note
+        from wormgear_cli.batch.manifest import resume_note  # lazy: keeps batch.manifest off `analyze`'s start-up
 
         note = resume_note(self.file, self.key)
         if note is not None:
@@ -418,8 +409,7 @@ class PartOutput:
     def finish(self, inputs: Iterable = ()) -> None:
         if self.file is None:  # (not active)
             return
-        from wormgear_cli.batch import manifest
-        from wormgear_cli.files import atomic_write
+        from wormgear_cli.batch import manifest  # lazy: keeps batch.manifest off `analyze`'s start-up
 
         text = manifest.document(self.key, self.drive, self.hash.file, Path(self.file).name)
         atomic_write(manifest.manifest_path(self.file), text, tuple(inputs))
@@ -461,10 +451,10 @@ def console(**kwargs):
     terminal; rich's own styles (its segments' styles) are drawn as usual."""
     global _SAFE_CONSOLE
     if _SAFE_CONSOLE is None:
+        # lazy: keeps rich.console, rich.segment off `analyze`'s start-up
         from rich.console import Console
         from rich.segment import Segment
 
-        from wormgear_cli.errors import escape
 
         class SafeConsole(Console):
             def _render_buffer(self, buffer):
@@ -490,6 +480,7 @@ class Progress:
     def __init__(self, total: int, seconds: float, label: str):
         self.bar = None
         if total > 0 and seconds > 1.0 and stderr_is_terminal() and not no_color():
+            # lazy: keeps rich.progress off `analyze`'s start-up
             from rich.progress import BarColumn, MofNCompleteColumn, TimeRemainingColumn
             from rich.progress import Progress as Bar
 
@@ -516,13 +507,13 @@ class Progress:
 
 def _rich_table(t):
     """A :class:`wormgear_cli.output.tables.Table` as a rich Table (text is never read as markup)."""
+    # lazy: keeps rich.box, rich.markup, rich.table, rich.text off `analyze`'s start-up
     from rich import box
     from rich.markup import escape as markup
     from rich.table import Table
     from rich.text import Text
 
-    from wormgear_cli.errors import escape as printable
-    from wormgear_cli.output.tables import Cell
+    from wormgear_cli.output.tables import Cell  # lazy: keeps output.tables off `analyze`'s start-up
 
     def escape(text):  # rich markup escaped, control characters written out (before the layout)
         return markup(printable(text, "\n"))
@@ -542,7 +533,7 @@ def _rich_table(t):
 
 def _words(table) -> Counter:
     """Every word and number of a rich table's header and body cells, with its count."""
-    from rich.text import Text
+    from rich.text import Text  # lazy: keeps rich.text off `analyze`'s start-up
 
     words: Counter = Counter()
     for column in table.columns:
@@ -560,9 +551,7 @@ def _fits(table, console, width: int) -> bool:
     number: the table is drawn (without its title and caption) and every word of its cells
     must come out whole.  Only rich's public drawing is used, so the answer does not depend
     on how a rich version computes its column widths or paddings."""
-    import io
-
-    from rich.console import Console
+    from rich.console import Console  # lazy: keeps rich.console off `analyze`'s start-up
 
     drawing = io.StringIO()
     probe = Console(file=drawing, width=width, no_color=True, color_system=None, highlight=False,
@@ -580,9 +569,9 @@ def _fits(table, console, width: int) -> bool:
 
 
 def _part(table, columns: list, title, caption):
-    from dataclasses import replace
+    from dataclasses import replace  # lazy: keeps dataclasses off `analyze`'s start-up
 
-    from rich.table import Table
+    from rich.table import Table  # lazy: keeps rich.table off `analyze`'s start-up
 
     part = Table(title=title, title_justify=table.title_justify, caption=caption,
                  caption_justify=table.caption_justify, show_header=table.show_header, box=table.box,
@@ -616,9 +605,9 @@ def fit_table(table, console, width: int) -> list:
 
 
 def _draw(console, renderables: list, width: int) -> None:
-    from rich.table import Table as RichTable
+    from rich.table import Table as RichTable  # lazy: keeps rich.table off `analyze`'s start-up
 
-    from wormgear_cli.output.tables import Table
+    from wormgear_cli.output.tables import Table  # lazy: keeps output.tables off `analyze`'s start-up
 
     for r in renderables:
         if isinstance(r, Table):
@@ -630,8 +619,6 @@ def _draw(console, renderables: list, width: int) -> None:
 def render(renderables: list, output: Path | None, inputs: Iterable = ()) -> None:
     """Draw tables (:class:`wormgear_cli.output.tables.Table` or rich renderables) to stdout
     (styled only on a terminal without NO_COLOR) or, as plain text, to ``output``."""
-    import io
-
     if output is None and stdout_is_terminal():
         probe = terminal_console(width=text_width() if "COLUMNS" in os.environ else None)
         buf = io.StringIO()

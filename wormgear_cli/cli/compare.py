@@ -25,6 +25,7 @@ from wormgear_cli.cli.common import (
     render,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import UsageError
 
 #: seconds per sampled drive of the yield (paper and budget metrics), for the progress bar
 _SECONDS_PER_SAMPLE = 3.5e-6
@@ -55,7 +56,7 @@ def compare(
 
     Example: wormgear compare configs/mch50.toml configs/rotary-table-precision.toml --samples 2e4
     """
-    from wormgear_cli.errors import UsageError
+    # lazy: keeps workflows.compare off `--help`'s start-up
     from wormgear_cli.workflows.compare import MIN_DRIVES, Options, compare, csv_rows
 
     fmt = output_format(format, output)
@@ -83,9 +84,9 @@ def _letters(n: int) -> list[str]:
 def _tables(doc: dict) -> list:
     """The table view: which drive is which, then totals, budget lines and yields with differences
     (:class:`~wormgear_cli.output.tables.Table`)."""
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
-    from wormgear_cli.output.tables import Column, Table
+    from wormgear_cli.output.tables import Column, Table  # lazy: keeps output.tables off `--help`'s start-up
 
     unit = doc["unit"]
     names = _letters(len(doc["drives"]))

@@ -22,7 +22,10 @@ from wormgear_cli.cli.read_options import (
     SessionOption,
     read_options,
 )
+from wormgear_cli.files import check_outputs
+from wormgear_cli.output.formats import json_text
 from wormgear_cli.output.writers import WRITERS
+from wormgear_cli.units import from_unit
 
 #: the formats and the file name endings that stand for them (from the writer registry)
 FORMATS = "|".join(WRITERS)
@@ -103,9 +106,8 @@ def compensate(
 
     Example: wormgear compensate PHD2_GuideLog.txt --drive mount.toml --steps-per-worm 50133 -o mount.pec
     """
+    # lazy: keeps compensation.table, workflows.compensate, workflows.measure off `--help`'s start-up
     from wormgear_cli.compensation.table import parse_range
-    from wormgear_cli.output.formats import json_text
-    from wormgear_cli.units import from_unit
     from wormgear_cli.workflows.compensate import CompensateOptions, report, summary
     from wormgear_cli.workflows.compensate import compensate as run
     from wormgear_cli.workflows.measure import parse_orders
@@ -113,7 +115,6 @@ def compensate(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
-    from wormgear_cli.files import check_outputs
 
     check_outputs([(output, "-o"), (report_path, "--report")], inputs)  # before any work
     is_file = output is not None and str(output) != "-"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib.util
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -40,6 +42,10 @@ from wormgear_cli.cli.read_options import (
     check_rows_memory,
     read_options,
 )
+from wormgear_cli.errors import UsageError
+from wormgear_cli.files import atomic_write, check_outputs
+from wormgear_cli.measurement.readers import read_measurement
+from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
 #: rows above which a progress display is shown (when stderr is a terminal)
 PROGRESS_ROWS = 20_000
@@ -104,9 +110,8 @@ def diagnose(
 
     Example: wormgear diagnose configs/mch50.toml configs/mch50-warm.csv --write-spec mch50-warm.toml
     """
+    # lazy: keeps diagnosis.report, spec.filekind off `--help`'s start-up
     from wormgear_cli.diagnosis.report import run_diagnose
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.measurement.readers import read_measurement
     from wormgear_cli.spec.filekind import kind_of_file
 
     if kind_of_file(drive) == "table" and kind_of_file(data) == "drive":
@@ -135,16 +140,14 @@ def diagnose(
     doc = result.document
     figure = None
     if plot is not None:
-        from wormgear_cli.plots.diagnose import draw
+        from wormgear_cli.plots.diagnose import draw  # lazy: keeps plots.diagnose off `--help`'s start-up
 
         figure = draw(result.diagnosis, doc, unit)
     if write_spec is not None and result.spec_toml is not None:
-        from wormgear_cli.files import atomic_write
-
         atomic_write(write_spec, result.spec_toml, inputs)
         announce_written(write_spec)
     if plot is not None and figure is not None:
-        from wormgear_cli.plots.diagnose import save
+        from wormgear_cli.plots.diagnose import save  # lazy: keeps plots.diagnose off `--help`'s start-up
 
         save(figure, plot)
         announce_written(plot)
@@ -158,16 +161,11 @@ def _check_paths(drive: Path, data: Path, output: Path | None, write_spec: Path 
                  plot: Path | None) -> Path | None:
     """Refuse outputs that would overwrite an input or each other, and a plot or spec file of the wrong
     kind, before any work; returns ``output`` (None for stdout)."""
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.files import check_outputs
-
     if output is not None and str(output) == "-":
         output = None
     check_outputs([(output, "-o"), (write_spec, "--write-spec"), (plot, "--plot")], (drive, data))
     if plot is not None:
-        import importlib.util
-
-        from wormgear_cli.plots import INSTALL_HINT, check_plot_path
+        from wormgear_cli.plots import INSTALL_HINT, check_plot_path  # lazy: keeps plots off `--help`'s start-up
 
         check_plot_path(plot)
         if importlib.util.find_spec("matplotlib") is None:
@@ -180,7 +178,7 @@ def _check_paths(drive: Path, data: Path, output: Path | None, write_spec: Path 
 def _tables(doc: dict, unit: str) -> list:
     """The report as tables (:class:`~wormgear_cli.output.tables.Table`) and lines (every angle converted
     from arcsec to ``unit``; effect parameters stay in their catalogue units)."""
-    from wormgear_cli.output.tables import Table
+    from wormgear_cli.output.tables import Table  # lazy: keeps output.tables off `--help`'s start-up
 
     v = _View(unit)
     out = _head(doc, v) + [_gap_table(doc, v)] + _nuisance_lines(doc, v) + _effect_parts(doc, v)
@@ -196,8 +194,6 @@ class _View:
     """Formatting shared by the tables of one report (angles from arcsec to ``unit``)."""
 
     def __init__(self, unit: str):
-        from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
-
         self.unit = unit
         self.factor = ARCSEC / RAD_PER_UNIT[unit]
 
@@ -208,19 +204,21 @@ class _View:
     def table(title: str, cols: list[str], left=(0,)):
         """A :class:`~wormgear_cli.output.tables.Table`: the columns at the ``left`` positions aligned left
         (the labels), the numbers right."""
-        from wormgear_cli.output.tables import Column, Table
+        from wormgear_cli.output.tables import Column, Table  # lazy: keeps output.tables off `--help`'s start-up
 
         return Table(title, [Column(c, "left" if i in left else "right") for i, c in enumerate(cols)])
 
 
 def _head(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
+
+    from wormgear_cli.physics.signals import SIGNALS  # lazy: keeps physics off `--help`'s start-up
 
     sig = doc["signals"]
     runs = doc["noise"]["before"]["runs"]
     parts = [f"{doc['rows']} rows", f"{runs} run{'s' if runs != 1 else ''}",
              "both directions" if len(sig["directions"]) == 2 else "one direction"]
-    for key, name, u in (("temperature_C", "temperature", "degC"), ("load_Nm", "load", "N m")):
+    for key, name, u in ((SIGNALS[s].column, s, SIGNALS[s].unit) for s in ("temperature", "load")):
         if sig.get(key):
             lo, hi = sig[key]
             parts.append(f"{name} {lo:g} to {hi:g} {u}" if hi > lo else f"{name} {lo:g} {u}")
@@ -245,7 +243,7 @@ def _gap_table(doc: dict, v: _View):
 
 def _nuisance_lines(doc: dict, v: _View) -> list:
     """The nuisance terms, apart from the gap (which is measured without them)."""
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     nu = doc.get("nuisance")
     if not nu:
@@ -260,7 +258,7 @@ def _nuisance_lines(doc: dict, v: _View) -> list:
 
 
 def _effect_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     if not doc["effects_found"]:
         return []
@@ -294,7 +292,7 @@ def _effect_parts(doc: dict, v: _View) -> list:
 
 
 def _candidate_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     ct = v.table("catalogue effects", ["effect", "status", "p (adjusted)", "why"], left=(0, 1, 3))
     for c in doc["candidates"]:
@@ -338,7 +336,7 @@ def _unexplained_parts(doc: dict, v: _View) -> list:
 
 
 def _fit_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     a, out = v.a, []
     fit = doc["fit"]
@@ -357,7 +355,7 @@ def _fit_parts(doc: dict, v: _View) -> list:
 
 
 def _noise_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     a = v.a
     nt = v.table(f"noise [{v.unit}]", ["", "before", "after"])
@@ -376,7 +374,7 @@ def _noise_parts(doc: dict, v: _View) -> list:
 
 
 def _order_parts(doc: dict, v: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     a = v.a
     ot = v.table(f"residual at the physical orders [{v.unit}]", ["order", "shaft or mesh", "common before",
@@ -426,8 +424,6 @@ def _keep_numbers_whole(t) -> None:
     """Let a narrow terminal fold words and headers, never cut a number: the number columns
     (right-aligned) are at least as wide as their longest cell, so only the text columns give
     way (every column folds instead of ending in an ellipsis: :func:`~wormgear_cli.cli.common.render`)."""
-    from dataclasses import replace
-
     for j, col in enumerate(t.columns):
         cells = [row[j] if j < len(row) else "" for row in t.rows]
         if col.justify == "right" and cells:

@@ -18,6 +18,7 @@ from wormgear_cli.cli.common import (
     say,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import UsageError
 
 
 @app.command(cls=HelpCommand)
@@ -46,7 +47,7 @@ def grade(
 
     Example: wormgear grade --grade 6 --module-mm 2 --diameter-mm 100 --face-width-mm 20
     """
-    from wormgear_cli.errors import UsageError
+    # lazy: keeps physics.iso1328 off `--help`'s start-up
     from wormgear_cli.physics.iso1328 import PART2_GRADES, GradeError, flank_tolerances, radial_composite
 
     fmt = output_format(format, output)
@@ -106,7 +107,7 @@ _ROWS = (
 
 def _table(doc: dict):
     """The tolerances as a :class:`~wormgear_cli.output.tables.Table`."""
-    from wormgear_cli.output.tables import Column, Table
+    from wormgear_cli.output.tables import Column, Table  # lazy: keeps output.tables off `grade`'s start-up
 
     t = Table(f"grade {doc['grade']}: m = {doc['module_mm']:g} mm, d = {doc['diameter_mm']:g} mm, "
               f"b = {doc['face_width_mm']:g} mm, z = {doc['teeth']} [um]",

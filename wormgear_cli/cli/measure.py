@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Annotated
@@ -38,6 +39,8 @@ from wormgear_cli.cli.read_options import (
     check_rows_memory,
     read_options,
 )
+from wormgear_cli.errors import UsageError
+from wormgear_cli.files import check_outputs
 
 #: peak memory per row of a measurement file in ``measure`` (reading, figures, orders, the output; about
 #: 90 bytes a row on 13e6 short rows and 200 on a dense scan of 2e6 rows, bench/bench_memory.py) [bytes]
@@ -107,6 +110,7 @@ def measure(
 
     Example: wormgear measure export.csv --map angle_deg="Position (deg)" --map error_arcsec=Deviation
     """
+    # lazy: keeps workflows.measure off `--help`'s start-up
     from wormgear_cli.workflows.measure import measure as run
     from wormgear_cli.workflows.measure import parse_orders, report, target_row_blocks
 
@@ -114,11 +118,10 @@ def measure(
     unit = getattr(unit, "value", unit)
     fmt = output_format(format, output)
     inputs = [data] + ([drive] if drive is not None else [])
-    from wormgear_cli.files import check_outputs
 
     check_outputs([(output, "-o"), (plot, "--plot")], inputs)  # before any work, not when a result is written
     if plot is not None:
-        from wormgear_cli.plots import check_plot_path
+        from wormgear_cli.plots import check_plot_path  # lazy: keeps plots off `--help`'s start-up
 
         check_plot_path(plot)
     options = read_options(column_map, error_unit, angle_unit, input_format, session, pixel_scale, dec_deg, guide_rate)
@@ -144,6 +147,7 @@ def measure(
         for note in doc["notes"]:
             say(f"note: {note}")
         if result.figures is None:
+            # lazy: keeps cli.measure_guide off `--help`'s start-up
             from wormgear_cli.cli.measure_guide import frames_csv
 
             emit_stream([frames_csv(result, unit)], output, inputs)
@@ -156,11 +160,12 @@ def measure(
 def _plot(result, unit: str, plot: Path, title: str) -> None:
     """The deviation chart (ISO 230-2), or a guide log's periodic-error chart."""
     if result.figures is None:
+        # lazy: keeps plots.guidelog off `--help`'s start-up
         from wormgear_cli.plots.guidelog import periodic_error_chart
 
         periodic_error_chart(result.measurement, result.guide, unit, plot, title=title)
         return
-    from wormgear_cli.plots.measure import deviation_chart
+    from wormgear_cli.plots.measure import deviation_chart  # lazy: keeps plots.measure off `--help`'s start-up
 
     deviation_chart(result.figures, result.measurement, unit, plot, title=title)
 
@@ -168,8 +173,7 @@ def _plot(result, unit: str, plot: Path, title: str) -> None:
 def _check_roles(data: Path, drive: Path | None) -> None:
     """A drive spec given as DATA.csv (alone, or swapped with --drive's measurement) is a usage
     error that says where each file goes, before any parser sees it."""
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.spec.filekind import kind_of_file
+    from wormgear_cli.spec.filekind import kind_of_file  # lazy: keeps spec.filekind off `--help`'s start-up
 
     if kind_of_file(data) != "drive":
         return
@@ -185,8 +189,6 @@ def json_chunks(doc: dict, blocks):
     """``json_text`` of the document, in pieces, with its per-target list (``blocks``: lists of rows,
     concatenated; ``doc``'s own list is not read) written last, one compact object per line (fast and
     readable for 100 000 targets), a block at a time: the same text as the whole list at once."""
-    import json
-
     head = {k: v for k, v in doc.items() if k != "per_target"}
     head["per_target"] = []  # the list goes last (after the notes): a reader finds the figures first
     text = json_text(head)
@@ -223,13 +225,14 @@ def _tables(doc: dict, ntargets: int) -> list:
 
     Every table fits 80 columns without cutting a number: numbers never wrap
     (no_wrap), labels and long words fold, and wide tables are split."""
-    from rich.text import Text
+    from rich.text import Text  # lazy: keeps rich.text off `--help`'s start-up
 
     view = _View(doc["unit"])
     out = [Text(doc["verdict"])]
     if doc["iso230_2"] is not None:
         out.append(_iso_table(doc, view))
     else:  # a guide log: its periodic error first
+        # lazy: keeps cli.measure_guide off `--help`'s start-up
         from wormgear_cli.cli.measure_guide import periodic_error_tables
 
         out += periodic_error_tables(doc, view)
@@ -261,6 +264,7 @@ class _View:
 
     @staticmethod
     def table(title: str):
+        # lazy: keeps rich.box, rich.markup, rich.table off `--help`'s start-up
         from rich import box
         from rich.markup import escape
         from rich.table import Table
@@ -309,7 +313,7 @@ def _status_text(it: dict) -> str:
 
 
 def _order_tables(doc: dict, view: _View) -> list:
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     unit, a = view.unit, view.a
     od, cov = doc["orders"], doc["coverage"]
@@ -353,7 +357,7 @@ def _order_tables(doc: dict, view: _View) -> list:
 
 def _dominant_table(doc: dict, view: _View):
     """The strongest orders of the data, or None when nothing was scanned."""
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
     dom = doc.get("dominant")
     if not dom or not dom["peaks"]:
@@ -391,7 +395,7 @@ def _dominant_table(doc: dict, view: _View):
 
 
 def _target_tables(doc: dict, ntargets: int, view: _View) -> list:
-    from rich.text import Text
+    from rich.text import Text  # lazy: keeps rich.text off `--help`'s start-up
 
     unit, a = view.unit, view.a
     rows = doc["per_target"]

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from wormgear_cli.output.formats import csv_block
+from wormgear_cli.units import to_unit
+
 
 def periodic_error_tables(doc: dict, view) -> list:
     """The periodic error of the document (``doc["periodic_error"]``) as tables: the figure, the worm
     harmonics and the orders fitted alongside, the sessions (more than one)."""
+    # lazy: rich.markup only on this path; rich.text only on this path
     from rich.markup import escape
     from rich.text import Text
 
@@ -67,10 +71,8 @@ def frames_csv(result, unit: str) -> str:
     """Every frame of a guide log as CSV: run (session), time_s, angle_deg (RA axis), the reconstructed
     error, its fitted drift and the worm's periodic error (empty without one), in ``unit``.  Readable
     again by ``measure`` as a table (angle_deg, error_UNIT, run, time_s)."""
-    import numpy as np
+    import numpy as np  # lazy: numpy only on this path
 
-    from wormgear_cli.output.formats import csv_block
-    from wormgear_cli.units import to_unit
 
     m, pe = result.measurement, result.guide.periodic if result.guide is not None else None
     nan = np.full(len(m), np.nan)

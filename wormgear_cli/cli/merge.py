@@ -13,11 +13,15 @@ from wormgear_cli.cli.common import (
     JobsOption,
     OutputOption,
     Progress,
+    emit,
     emit_stream,
     jobs_count,
+    json_text,
     output_format,
+    render,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import UsageError
 
 
 class MergeFormat(str, Enum):
@@ -52,8 +56,7 @@ def merge(
 
     Example: wormgear merge part1.npy part2.npy part3.npy part4.npy --format json -o report.json
     """
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.workflows import merge as work
+    from wormgear_cli.workflows import merge as work  # lazy: keeps workflows.merge off `--help`'s start-up
 
     fmt = output_format(format, output)
     got = work.parts_of(parts)
@@ -71,9 +74,8 @@ def merge(
 
 
 def _tolerance(parts, drive, fmt, target_yield, jobs, output, inputs) -> None:
-    from wormgear_cli.cli.common import emit, json_text, render
+    # lazy: the tolerance command's modules, loaded only when tolerance parts are merged
     from wormgear_cli.cli.tolerance import _tables, allocation_seconds
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.spec.loader import load_spec
     from wormgear_cli.tolerance import engine, report, study
     from wormgear_cli.workflows import merge as work

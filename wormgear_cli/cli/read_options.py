@@ -16,6 +16,10 @@ from typing import Annotated
 
 import typer
 
+from wormgear_cli.errors import UsageError, quote
+from wormgear_cli.files import check_memory, count_lines
+from wormgear_cli.measurement.readers import FORMATS, find_format
+
 
 class ErrorUnit(str, Enum):
     arcsec = "arcsec"
@@ -43,8 +47,6 @@ AngleUnitOption = Annotated[InputAngleUnit | None, typer.Option(
 
 
 def _format_help() -> str:
-    from wormgear_cli.measurement.readers import FORMATS
-
     return ("Format of the data file: auto (detected from its content) or one of "
             + ", ".join(f"{f.name} ({f.title})" for f in FORMATS) + ".")
 
@@ -70,8 +72,6 @@ GuideRateOption = Annotated[float | None, typer.Option(
 def parse_sessions(items: list[str] | None) -> tuple[int, ...]:
     """``--session`` values (each a number, a comma list or a range A-B) as session numbers; UsageError
     naming the item otherwise."""
-    from wormgear_cli.errors import UsageError
-
     out: list[int] = []
     for item in items or ():
         for part in str(item).split(","):
@@ -93,7 +93,7 @@ def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None,
     """:class:`~wormgear_cli.measurement.reader.ReadOptions` from the option values; UsageError (one line
     per bad ``--map``, or naming the guide-log option) otherwise.  (The measurement module is imported
     here, not at start-up.)"""
-    from wormgear_cli.errors import UsageError
+    # lazy: keeps measurement.guidelog_options, measurement.reader off `--help`'s start-up
     from wormgear_cli.measurement.guidelog_options import GuideLogOptions
     from wormgear_cli.measurement.reader import ReadOptions
 
@@ -108,8 +108,6 @@ def read_options(column_map: list[str] | None, error_unit=None, angle_unit=None,
     if problems:
         raise UsageError(problems)
     if input_format != "auto":
-        from wormgear_cli.measurement.readers import find_format
-
         find_format(input_format)
     return ReadOptions(column_map=tuple(pairs), error_unit=getattr(error_unit, "value", error_unit),
                        angle_unit=getattr(angle_unit, "value", angle_unit),
@@ -121,9 +119,7 @@ def check_rows_memory(data, bytes_per_row: int, command: str) -> None:
     """Refuse, before it is parsed, a measurement file whose rows the machine cannot hold: its
     line ends are counted in one fast pass (a regular file; a pipe is bounded by the size limit
     alone) and priced at ``bytes_per_row`` (:func:`wormgear_cli.files.check_memory`)."""
-    from wormgear_cli.errors import quote
-    from wormgear_cli.files import check_memory, count_lines
-    from wormgear_cli.measurement.reader import MAX_FILE_BYTES
+    from wormgear_cli.measurement.reader import MAX_FILE_BYTES  # lazy: keeps measurement.reader off `--help`'s start-up
 
     rows = count_lines(data, MAX_FILE_BYTES)
     if rows:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -27,6 +28,8 @@ from wormgear_cli.cli.common import (
     warn_if_absurd,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import UsageError
+from wormgear_cli.files import check_memory, refuse_input, refuse_same_outputs
 
 
 class Phases(str, Enum):
@@ -102,10 +105,8 @@ def simulate(
 
     Example: wormgear simulate configs/mch50.toml --points 720 -o curve.csv
     """
-    import math
-
+    # lazy: keeps analysis.synth, workflows.simulate off `--help`'s start-up
     from wormgear_cli.analysis.synth import parse_effects
-    from wormgear_cli.errors import UsageError
     from wormgear_cli.workflows import simulate as report
 
     unit = getattr(unit, "value", unit)
@@ -119,21 +120,19 @@ def simulate(
     if not -100.0 <= temperature_c <= 300.0:
         raise UsageError(f"--temperature-C: expected a number in [-100, 300] [degC], got {temperature_c:g}")
     if plot is not None:
-        from wormgear_cli.plots import check_plot_path
+        from wormgear_cli.plots import check_plot_path  # lazy: keeps plots off `--help`'s start-up
 
         check_plot_path(plot)
     requested = parse_effects(effect)
     spec = load_drive(drive)
     effects = report.effect_params(spec, requested)
     inputs = [drive] + ([at] if at is not None else [])
-    from wormgear_cli.files import refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     if at is None:
-        from wormgear_cli.files import check_memory
-
         check_memory(points * SIMULATE_BYTES_PER_POINT, f"simulate --points {points}", "lower --points")
     else:
+        # lazy: keeps cli.read_options off `simulate --help`'s start-up
         from wormgear_cli.cli.read_options import check_rows_memory
 
         check_rows_memory(at, SIMULATE_AT_BYTES_PER_ROW, "simulate --at")
@@ -145,8 +144,7 @@ def simulate(
     warn_if_absurd({"forward error": c["forward"], "reverse error": c["reverse"]} if c["kind"] == "dense"
                    else {"simulated error": c["simulated"]}, drive, unit)
     if plot is not None:
-        from wormgear_cli.files import refuse_input
-        from wormgear_cli.plots.simulate import plot_simulation
+        from wormgear_cli.plots.simulate import plot_simulation  # lazy: keeps plots.simulate off `--help`'s start-up
 
         refuse_input(plot, inputs, "--plot")
         plot_simulation(result.curves, plot)
@@ -254,8 +252,7 @@ class SynthOptions:
 
 def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | None, o: SynthOptions) -> None:
     """``synth``: check the options and the paths, draw the data, write the CSV (and the truth, the plot)."""
-    import math
-
+    # lazy: keeps analysis.synth off `--help`'s start-up
     from wormgear_cli.analysis.synth import (
         Noise,
         Plan,
@@ -265,7 +262,6 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
         parse_temperature,
         synthesize,
     )
-    from wormgear_cli.errors import UsageError
 
     for name, value in (("--noise-arcsec", o.noise_arcsec), ("--run-noise-arcsec", o.run_noise_arcsec),
                         ("--offset-arcsec", o.offset_arcsec), ("--dwell-s", o.dwell_s),
@@ -276,11 +272,10 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
     load_prog = parse_load(o.load)
     effects = parse_effects(o.effect)
     if plot is not None:
-        from wormgear_cli.plots import check_plot_path
+        from wormgear_cli.plots import check_plot_path  # lazy: keeps plots off `--help`'s start-up
 
         check_plot_path(plot)
     outs = [p for p in (output, truth, plot) if p is not None]
-    from wormgear_cli.files import refuse_input, refuse_same_outputs
 
     refuse_same_outputs([(output, "-o"), (truth, "--truth"), (plot, "--plot")])
 
@@ -305,7 +300,7 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
     warn_if_absurd({"error": result.columns["error_arcsec"]}, drive, "arcsec")
     text = format_csv(result)
     if plot is not None:
-        from wormgear_cli.plots.simulate import plot_synthesis
+        from wormgear_cli.plots.simulate import plot_synthesis  # lazy: keeps plots.simulate off `--help`'s start-up
 
         plot_synthesis(result, spec.drive.name, plot)
         announce_written(plot)
@@ -316,8 +311,6 @@ def _synth(drive: Path, output: Path | None, truth: Path | None, plot: Path | No
 
 def _check_synth_memory(plan) -> None:
     """Refuse, before drawing, a plan whose rows the machine cannot hold (one line naming the options)."""
-    from wormgear_cli.files import check_memory
-
     dense = plan.kind == "dense"
     per_pass, option = (plan.points, "--points") if dense else (plan.targets, "--targets")
     rows = per_pass * 2 * plan.runs * plan.cycles

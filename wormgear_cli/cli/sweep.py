@@ -39,6 +39,8 @@ from wormgear_cli.cli.common import (
     warn_if_absurd,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.files import atomic_stream, check_memory, refuse_same_outputs
+from wormgear_cli.output.formats import csv_text
 
 #: estimated seconds per point, for deciding whether to show a progress bar
 _SECONDS_PER_RL_POINT = 3e-6
@@ -106,6 +108,7 @@ def sweep(
 
     Example: wormgear sweep configs/mch50.toml --i 2:10:9 --l-mm 100:300:11 --unit arcsec
     """
+    # lazy: keeps analysis.sweep, analysis.sweep_limits, plots off `--help`'s start-up
     from wormgear_cli.analysis import sweep as core
     from wormgear_cli.analysis import sweep_limits as limits
     from wormgear_cli.plots import check_plot_path
@@ -117,7 +120,6 @@ def sweep(
                          shard=shard, fmt=fmt, plot=plot is not None, stage=stage, figures=figures)
     if plot is not None:
         check_plot_path(plot)
-        from wormgear_cli.files import refuse_same_outputs
 
         refuse_same_outputs([(output, "-o"), (plot, "--plot")])
     part = shard_part(shard)
@@ -135,6 +137,7 @@ def sweep(
     limits.check_ratio_distance_size(n_i, n_l, fmt, plot is not None, k_n, figures)
     _check_memory(n_i * n_l, k_n, fmt, plot is not None)
     if plot is not None:
+        # lazy: keeps plots.sweep off `--help`'s start-up
         from wormgear_cli.plots.sweep import check_ratio_distance_plot
 
         check_ratio_distance_plot(n_i, n_l)
@@ -158,6 +161,7 @@ def sweep(
 
 def _param_command(drive: Path, params: list[str], fmt: str, unit: str, output, part, k_n, plot, jobs: int) -> None:
     """sweep --param: the grid of spec keys, sized and checked before anything is built."""
+    # lazy: keeps analysis.sweep, analysis.sweep_limits off `--help`'s start-up
     from wormgear_cli.analysis import sweep as core
     from wormgear_cli.analysis import sweep_limits as limits
 
@@ -165,7 +169,7 @@ def _param_command(drive: Path, params: list[str], fmt: str, unit: str, output, 
     axes = [core.parse_param(p, spec) for p in params]
     limits.check_param_size(axes, fmt, k_n)
     if plot is not None:
-        from wormgear_cli.plots.sweep import check_param_plot
+        from wormgear_cli.plots.sweep import check_param_plot  # lazy: keeps plots.sweep off `--help`'s start-up
 
         check_param_plot([len(ax.values) for ax in axes])
         _require_matplotlib()
@@ -184,8 +188,7 @@ def _range_key(r):
 
 def _check_memory(total: int, k_n, fmt: str, plot: bool) -> None:
     """Refuse, before the grid is built, an (i, l) run that holds more points than the machine can."""
-    from wormgear_cli.analysis.sweep import shard_bounds
-    from wormgear_cli.files import check_memory
+    from wormgear_cli.analysis.sweep import shard_bounds  # lazy: keeps analysis.sweep off `--help`'s start-up
 
     start, stop = shard_bounds(total, *k_n) if k_n else (0, total)
     streamed = fmt == "csv" and not plot  # to stdout or through a staged file, block by block
@@ -196,7 +199,7 @@ def _check_memory(total: int, k_n, fmt: str, plot: bool) -> None:
 
 def _require_matplotlib() -> None:
     """Exit 2 with the install hint now, rather than after the sweep."""
-    from wormgear_cli.plots import pyplot
+    from wormgear_cli.plots import pyplot  # lazy: keeps plots off `--help`'s start-up
 
     pyplot()
 
@@ -221,7 +224,7 @@ def _note_skipped(sw, skipped: int, start: int, stop: int) -> None:
 
 
 def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
-    from wormgear_cli.output import sweep as report
+    from wormgear_cli.output import sweep as report  # lazy: keeps output.sweep off `--help`'s start-up
 
     output = out.output
     start, stop = sw.run_bounds(k_n)
@@ -237,7 +240,6 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
                     emit(data, None)
                 _note_skipped(sw, stop - start - rows, start, stop)
                 return
-            from wormgear_cli.files import atomic_stream
 
             with atomic_stream(file, (drive,)) as write:  # streamed to a staged file, renamed at the end
                 write_part = out.hash.wrap(write)
@@ -250,7 +252,7 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
             return
         data = sw.collect(start, stop, progress=bar.advance, jobs=jobs)
     _note_skipped(sw, stop - start - int(data["_point"].size), start, stop)
-    from wormgear_cli.analysis.sweep import ANGLE_COLUMNS
+    from wormgear_cli.analysis.sweep import ANGLE_COLUMNS  # lazy: keeps analysis.sweep off `--help`'s start-up
 
     warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)
     if fmt == "csv":
@@ -260,16 +262,16 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
     else:
         render(report.ratio_distance_tables(sw, data, unit), output, [drive])
     if plot is not None:
-        from wormgear_cli.plots.sweep import plot_ratio_distance
+        from wormgear_cli.plots.sweep import plot_ratio_distance  # lazy: keeps plots.sweep off `--help`'s start-up
 
         plot_ratio_distance(plot, sw, data, unit)
         announce_written(plot)
 
 
 def _param_sweep(spec, drive, axes, fmt, unit, out: PartOutput, plot, k_n, jobs: int):
+    # lazy: keeps analysis.sweep, output.sweep off `--help`'s start-up
     from wormgear_cli.analysis.sweep import param_size, shard_bounds
     from wormgear_cli.output import sweep as report
-    from wormgear_cli.output.formats import csv_text
 
     output = out.output
     start, stop = shard_bounds(param_size(axes), *k_n) if k_n else (0, param_size(axes))
@@ -286,7 +288,7 @@ def _param_sweep(spec, drive, axes, fmt, unit, out: PartOutput, plot, k_n, jobs:
     else:
         render(report.param_tables(spec, axes, rows, unit), output, [drive])
     if plot is not None:
-        from wormgear_cli.plots.sweep import plot_params
+        from wormgear_cli.plots.sweep import plot_params  # lazy: keeps plots.sweep off `--help`'s start-up
 
         plot_params(plot, spec.drive.name, axes, report.param_columns(axes, spec), rows, unit,
                     report.stage_te_column(spec))

@@ -20,6 +20,7 @@ from wormgear_cli.cli.common import (
     UnitOption,
     announce_written,
     count_type,
+    fmt_angle,
     is_stdout,
     jobs_count,
     json_text,
@@ -33,6 +34,8 @@ from wormgear_cli.cli.common import (
     write_stdout,
 )
 from wormgear_cli.cli.helptext import HelpCommand
+from wormgear_cli.errors import UsageError
+from wormgear_cli.files import atomic_stream, refuse_input, refuse_same_outputs
 
 #: seconds per sample (a loaded 2-core machine), for deciding whether a progress bar is worth showing
 _SECONDS_PER_SAMPLE = {"paper": 2e-6, "budget": 1.5e-6, "paper+budget": 3.5e-6, "iso": 1e-5, "all": 1.4e-5}
@@ -111,10 +114,9 @@ def tolerance(
 
     Example: wormgear tolerance configs/mch50.toml --target-yield 0.99
     """
-    from dataclasses import replace
+    from dataclasses import replace  # lazy: keeps dataclasses off `tolerance --help`'s start-up
 
-    from wormgear_cli.errors import UsageError
-    from wormgear_cli.tolerance import engine, report, study
+    from wormgear_cli.tolerance import engine, report, study  # lazy: keeps tolerance.engine off `--help`'s start-up
 
     fmt = output_format(format, output)
     unit = getattr(unit, "value", unit)
@@ -153,7 +155,7 @@ def tolerance(
     warn_if_absurd({LABELS.get(m, m): [x for x in (r["mean"], r["percentiles"]["max"]) if x is not None]
                     for m, r in doc["metrics"].items()}, drive, unit)
     if plot is not None:
-        from wormgear_cli.plots.tolerance import draw
+        from wormgear_cli.plots.tolerance import draw  # lazy: keeps plots.tolerance off `--help`'s start-up
 
         draw(doc, summary.plot_values, engine.limits(s), plot, LABELS)
         announce_written(plot)
@@ -166,7 +168,7 @@ def tolerance(
 def _summary(s, out: PartOutput, inputs: list, fmt: str, summarize: Path | None):
     """The run's summary: read from the samples of ``summarize``, or drawn (streamed out as they are drawn
     for the csv and npy formats)."""
-    from wormgear_cli.tolerance import engine, report
+    from wormgear_cli.tolerance import engine, report  # lazy: keeps tolerance.engine off `--help`'s start-up
 
     if summarize is not None:
         read = report.read_npy if report.is_npy(summarize) else report.read_samples
@@ -181,8 +183,6 @@ def _summary(s, out: PartOutput, inputs: list, fmt: str, summarize: Path | None)
 def _check_usage(drive: Path, fmt: str, output: Path | None, plot: Path | None, summarize: Path | None,
                  target_yield: float | None, sharded: bool) -> None:
     """The options that cannot go together, and the plot's path, checked before any work."""
-    from wormgear_cli.errors import UsageError
-
     if summarize is not None and sharded:
         raise UsageError("--summarize cannot be combined with --shard (merge the parts: wormgear merge)")
     if summarize is not None and fmt in ("csv", "npy"):
@@ -190,8 +190,7 @@ def _check_usage(drive: Path, fmt: str, output: Path | None, plot: Path | None, 
     if fmt == "npy" and is_stdout(output):
         raise UsageError("--format npy writes binary columns: give -o FILE.npy")
     if plot is not None:
-        from wormgear_cli.files import refuse_input, refuse_same_outputs
-        from wormgear_cli.plots import check_plot_path
+        from wormgear_cli.plots import check_plot_path  # lazy: keeps plots off `--help`'s start-up
 
         check_plot_path(plot)
         refuse_input(plot, [drive] + ([summarize] if summarize is not None else []), "--plot")
@@ -202,7 +201,7 @@ def _check_usage(drive: Path, fmt: str, output: Path | None, plot: Path | None, 
 
 def allocation_seconds(spec, runs: tuple[int, int] | None) -> float:
     """Expected seconds of the allocation's ``runs`` (samples per run, runs), for the progress bar."""
-    from wormgear_cli.tolerance import engine
+    from wormgear_cli.tolerance import engine  # lazy: keeps tolerance.engine off `--help`'s start-up
 
     metric_set = engine.metrics_for_limits(spec)
     return runs[0] * runs[1] * _SECONDS_PER_SAMPLE[metric_set] if runs and metric_set is not None else 0.0
@@ -236,7 +235,7 @@ def _samples_run(s, out: PartOutput, inputs, fmt: str):
     """Stream the samples (CSV, or the .npy records) block by block (stdout, or -o through a
     staged file renamed at the end) and return the summary; memory stays constant whatever the
     sample count.  A part written with -o gets its manifest."""
-    from wormgear_cli.tolerance import engine, report
+    from wormgear_cli.tolerance import engine, report  # lazy: keeps tolerance.engine off `--help`'s start-up
 
     output = output_file(out.output)
     seconds = (s.stop - s.start) * (_SECONDS_PER_SAMPLE[s.options.metrics] + 4e-6)
@@ -247,7 +246,6 @@ def _samples_run(s, out: PartOutput, inputs, fmt: str):
         if output is None:
             write_stdout(header)  # checked: a full disk is exit 2, a closed pipe a quiet stop
             return engine.run(s, on_block=write_stdout, progress=bar.advance, render=rows)
-        from wormgear_cli.files import atomic_stream
 
         with atomic_stream(output, tuple(inputs)) as write:
             write = out.hash.wrap(write)
@@ -261,9 +259,9 @@ def _samples_run(s, out: PartOutput, inputs, fmt: str):
 def _tables(doc: dict, target) -> list:
     """The report: a heading line, the metric tables, the yields, the variance shares and the allocation
     (:class:`~wormgear_cli.output.tables.Table`), then notes."""
-    from rich.markup import escape
+    from rich.markup import escape  # lazy: keeps rich.markup off `--help`'s start-up
 
-    from wormgear_cli.cli.common import fmt_angle
+    # lazy: keeps output.tables, tolerance.report off `--help`'s start-up
     from wormgear_cli.output.tables import Column, Table
     from wormgear_cli.tolerance.report import short_key, variance_rows
 
@@ -291,6 +289,7 @@ def _tables(doc: dict, target) -> list:
             row = [key.replace("requirements.", "") if key != "all" else "all limits", _pct(y["value"]),
                    f"{_pct(y['low'])} - {_pct(y['high'])}"]
             if target is not None:
+                # lazy: keeps tolerance.statistics off `--help`'s start-up
                 from wormgear_cli.tolerance.statistics import Yield
 
                 row.append(Yield(y["passing"], doc["samples"], y["value"], y["low"], y["high"]).verdict(target))

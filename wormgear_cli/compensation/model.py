@@ -29,8 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.compensation.noise import noise_components
 from wormgear_cli.measurement.coverage import Coverage, trend_columns, unwrap_passes
 from wormgear_cli.measurement.harmonics import BLOCK_ROWS, harmonic_columns
+from wormgear_cli.measurement.iso230 import group_targets
+from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
 
 #: significance of the residual at the targets above which per-target means are added
 TARGET_ALPHA = 0.01
@@ -152,8 +155,6 @@ def parameters(plan: ModelPlan, theta, direction) -> int:
     """Values a table of ``plan`` is fitted with on these rows: the model's columns, or with
     per-target means the cells (target and direction) they are taken over."""
     if plan.per_target:
-        from wormgear_cli.measurement.iso230 import group_targets
-
         index = group_targets(np.asarray(theta, dtype=float))[0]
         return int(np.unique(2 * index + (np.asarray(direction) < 0)).size)
     return (1 + 2 * len(plan.orders) + plan.trend_degree) * (2 if plan.both else 1)
@@ -205,7 +206,6 @@ def fit_plan(plan: ModelPlan, theta, y, direction, run=None) -> CorrectionModel:
         targets=np.zeros(0), residual_forward=np.zeros(0), residual_reverse=np.zeros(0))
     if not plan.per_target:
         return model
-    from wormgear_cli.measurement.iso230 import group_targets
 
     index, targets = group_targets(theta)
     resid = y - model.error(th, d)
@@ -251,9 +251,6 @@ def check_targets(model: CorrectionModel, theta, y, direction, run, alpha: float
     :func:`~wormgear_cli.compensation.noise.noise_components` (run offsets
     removed, so an offset per run neither hides nor fakes a pattern).
     """
-    from wormgear_cli.compensation.noise import noise_components
-    from wormgear_cli.measurement.iso230 import group_targets
-
     theta = np.asarray(theta, dtype=float)
     y = np.asarray(y, dtype=float)
     d = np.asarray(direction, dtype=float)
@@ -306,8 +303,6 @@ def plan_model(theta, y, direction, orders: Sequence[float], labels=None, priori
     (:func:`~wormgear_cli.measurement.orders.analyse_orders`: beyond span,
     aliased, folded and unresolved orders are left out, with reasons).
     """
-    from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
-
     theta = np.asarray(theta, dtype=float)
     d = np.asarray(direction, dtype=float)
     options = OrdersOptions(labels=None if labels is None else tuple(labels),

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.compensation.scan import order_amplitudes
+from wormgear_cli.measurement.coverage import unwrap_passes
 from wormgear_cli.measurement.harmonics import harmonic_columns
 
 #: one sidereal day [s]: the RA axis turns once in it when tracking
@@ -59,8 +61,6 @@ def order_of(period_s: float) -> float:
 
 def continuous(theta, run) -> np.ndarray:
     """Angles [rad] made continuous within each run (a record may cross 0 deg)."""
-    from wormgear_cli.measurement.coverage import unwrap_passes
-
     return unwrap_passes(np.asarray(theta, dtype=float), run)
 
 
@@ -258,8 +258,6 @@ class PecPrediction:
 def predict_pec(theta, y, run, curve: PecCurve, most: int = 3) -> PecPrediction:
     """What the PEC curve will leave (module doc); not cross-validated (``after`` NaN) unless
     the record holds two worm cycles and every curve made without one of them a whole cycle."""
-    from wormgear_cli.compensation.scan import order_amplitudes
-
     run = np.asarray(run)
     th = continuous(theta, run)
     y = np.asarray(y, dtype=float)

@@ -32,6 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from wormgear_cli.compensation.noise import Noise, noise_components
+from wormgear_cli.compensation.scan import harmonic_block, order_amplitudes
+from wormgear_cli.compensation.table import apply_table
+from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
+from wormgear_cli.measurement.iso230 import group_targets, iso230_figures
 
 #: simulated repeat tests behind a predicted figure (fewer on long files: REPLICATE_ROWS / rows)
 REPLICATES = 200
@@ -85,8 +89,6 @@ class TablePrediction:
 
 
 def _cells(theta, d):
-    from wormgear_cli.measurement.iso230 import group_targets
-
     grouping = group_targets(theta)
     return grouping, 2 * grouping[0] + (d < 0)
 
@@ -97,8 +99,6 @@ def corrected_rows(make_table: Callable, theta, y, d, run) -> tuple[np.ndarray, 
     ``make_table(mask)`` returns the table made from the rows where
     ``mask`` is True.  With a single run the table of all rows is applied
     to them (folds 0)."""
-    from wormgear_cli.compensation.table import apply_table
-
     runs = np.unique(run)
     out = np.empty_like(y)
     if runs.size < 2:
@@ -110,8 +110,6 @@ def corrected_rows(make_table: Callable, theta, y, d, run) -> tuple[np.ndarray, 
 
 
 def _figures(theta, x, d, grouping) -> dict:
-    from wormgear_cli.measurement.iso230 import iso230_figures
-
     f = iso230_figures(theta, x, d, grouping=grouping)
     return {k: getattr(f, k) for k in FIGURES}
 
@@ -165,9 +163,6 @@ def residual_orders(theta, resid, d, extra=(), most: int = RESIDUAL_ORDERS) -> t
     orders: ((order, common, differential) [rad], ...), the amplitudes of each order's step.
     Fitted on the means per angle and direction, weighted by their rows (the same fit as on the
     rows, for far fewer rows when runs repeat the angles)."""
-    from wormgear_cli.compensation.scan import harmonic_block, order_amplitudes
-    from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
-
     _, first, inverse, counts = np.unique(np.column_stack([theta, d]), axis=0, return_index=True,
                                              return_inverse=True, return_counts=True)
     resid = np.bincount(inverse.ravel(), weights=resid) / counts
@@ -261,6 +256,4 @@ def _remainder(mean_square: float, within: float, folds: int, parameters: int | 
 
 
 def _iso(theta, y, d, grouping):
-    from wormgear_cli.measurement.iso230 import iso230_figures
-
     return iso230_figures(theta, y, d, grouping=grouping)

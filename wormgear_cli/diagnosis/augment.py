@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from wormgear_cli.diagnosis.inference import augmented_params, wrap_deg
+from wormgear_cli.spec.loader import raw_copy, set_path, spec_from_dict
 from wormgear_cli.units import ARCSEC
 
 if TYPE_CHECKING:
@@ -16,8 +17,7 @@ def augment(spec, sig, after: ModelFit, sources, found, fit_phases, y, base: int
     """The spec as a TOML dict with fitted phases and the named effects, and its
     simulation (plus the fitted zero offset, and each run's offset and drift: the first ``base``
     linear columns of ``after``) at the measured rows [arcsec]."""
-    from wormgear_cli.analysis.simulate import simulate
-    from wormgear_cli.spec.loader import raw_copy, set_path, spec_from_dict
+    from wormgear_cli.analysis.simulate import simulate  # lazy: keeps analysis.simulate off `measure`'s start-up
 
     raw = raw_copy(spec)
     if fit_phases:

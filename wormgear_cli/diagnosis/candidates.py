@@ -19,6 +19,9 @@ from wormgear_cli.diagnosis.mixed import level_shares
 from wormgear_cli.diagnosis.phases import probe_signals
 from wormgear_cli.diagnosis.runs import DataInfo, Groups
 from wormgear_cli.diagnosis.thresholds import JOINT_MIN_SINGULAR_VALUE, MIN_TEMPERATURE_RANGE, MONOTONIC
+from wormgear_cli.measurement.harmonics import alias_groups, aliasing, physical_orders
+from wormgear_cli.physics.effects import EFFECTS, params_to_keys, train_effects
+from wormgear_cli.physics.signals import SIGNALS
 from wormgear_cli.units import ARCSEC
 
 
@@ -59,8 +62,6 @@ def candidate(name: str, signals, geometry) -> Candidate | None:
     to tell linear from reciprocal), the phase at 0 and 90 deg, every other
     parameter at its catalogue default.  Returns None for a signature that
     is none of the three forms (it cannot be fitted linearly)."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     eff = EFFECTS[name]
     base = {}
     for p in eff.params:
@@ -98,8 +99,6 @@ def candidate(name: str, signals, geometry) -> Candidate | None:
 
 def candidate_params(cand: Candidate, beta: np.ndarray) -> dict:
     """Internal parameters of an effect from its fitted column coefficients."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     eff = EFFECTS[cand.name]
     out = dict(cand.fixed)
     if cand.kind is CandidateKind.PERIODIC:
@@ -116,17 +115,17 @@ def needs_problem(name: str, needs: str | None, info: DataInfo) -> str | None:
     """Why the data cannot show an effect that needs a varying signal (None: they can)."""
     if needs == "temperature":
         if not info.temperature_present:
-            return ("no temperature_C column: record the drive temperature (a sensor on the housing) during a "
-                    "warm-up, ideally heating and cooling")
+            return (f"no {SIGNALS['temperature'].column} column: record the drive temperature (a sensor on the "
+                    "housing) during a warm-up, ideally heating and cooling")
         if info.temperature_range < MIN_TEMPERATURE_RANGE:
             return (f"the temperature varies by only {info.temperature_range:.3g} K: measure through a warm-up "
                     "(several kelvin), ideally heating and cooling")
     if needs == "load":
         if not info.load_present:
-            return "no load_Nm column: measure at two or more output torques (load steps)"
+            return f"no {SIGNALS['load'].column} column: measure at two or more output torques (load steps)"
         if info.load_range <= 0:
             return "the load does not vary: measure at two or more output torques (load steps)"
-    if needs in ("direction", "temperature") and name in ("bearing_clearance", "thermal_backlash"):
+    if needs is not None and name in EFFECTS and EFFECTS[name].mode == "differential":
         if len(info.directions) < 2:
             return "only one direction measured: lost motion shows only between forward and reverse runs"
     if needs == "direction" and len(info.directions) < 2:
@@ -163,8 +162,6 @@ def replication_problem(cand: Candidate, basis, groups: Groups, info: DataInfo) 
 
 def physical_problem(name: str, params: dict) -> str | None:
     """A fitted parameter outside the catalogue's physical range (None: inside)."""
-    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
-
     eff = EFFECTS[name]
     keys = params_to_keys(name, params)
     p = eff.param(next(pp.key for pp in eff.params if pp.name == eff.amplitude))
@@ -174,18 +171,12 @@ def physical_problem(name: str, params: dict) -> str | None:
     return None
 
 
-#: what a significant but unphysical fit of an effect says about the spec
-UNPHYSICAL_HINT = {
-    "bearing_clearance": "the table shows less lost motion than the spec predicts: the spec's backlash terms "
-                         "(thickness deviations, clearances) are larger than the table's",
-    "torsional_compliance": "the table winds up less under load than the spec's tooth stiffness predicts",
-}
+#: what a significant but unphysical fit of an effect says about the spec (each effect's ``unphysical_hint``)
+UNPHYSICAL_HINT = {name: eff.unphysical_hint for name, eff in EFFECTS.items() if eff.unphysical_hint}
 
 
 def order_aliases(theta, cands: dict, sources, geometry) -> dict:
     """Per periodic candidate: the orders it cannot be told from at these angles, as (order, label)."""
-    from wormgear_cli.measurement.harmonics import aliasing, physical_orders
-
     labels = dict(physical_orders(geometry, 3))
     for s in sources:
         labels.setdefault(s.order, s.name)
@@ -215,8 +206,6 @@ def unaliased_orders(theta, orders) -> tuple[list, dict]:
     :func:`jointly_fittable_orders`.  (Not the same test as
     :func:`wormgear_cli.measurement.harmonics.resolvable_orders`, which judges the
     conditioning of the whole design for ``measure``.)"""
-    from wormgear_cli.measurement.harmonics import aliasing
-
     orders = [float(o) for o in orders]
     aliased = {}
     groups, folded = aliasing(theta, orders)
@@ -263,16 +252,12 @@ def jointly_fittable_orders(theta, orders, priority=None,
 
 def effect_order(name: str, geometry) -> float | None:
     """The order [cycles/rev] of catalogue effect ``name`` on this drive (None: not periodic)."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     eff = EFFECTS[name]
     return float(eff.order(geometry)) if eff.order is not None else None
 
 
 def catalogue_orders(geometry) -> list[float]:
     """The orders [cycles/rev] of the periodic catalogue effects of this drive's train (in catalogue order)."""
-    from wormgear_cli.physics.effects import train_effects
-
     return [o for n in train_effects(geometry) if (o := effect_order(n, geometry)) is not None]
 
 
@@ -287,8 +272,6 @@ def aliased_effects(theta, name: str, names, geometry) -> list[tuple[str, float]
     explains the data equally well.  Orders aliased onto a constant are left
     out (the offset takes them).  Returns [(name, order)] sorted by order;
     empty when ``name`` is not periodic or nothing folds onto it."""
-    from wormgear_cli.measurement.harmonics import alias_groups
-
     k = effect_order(name, geometry)
     if k is None:
         return []

@@ -15,6 +15,7 @@ from wormgear_cli.diagnosis.mixed import Cross, Wald, containment_df, contrast_d
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, PhaseSource, effect_contrib, fit_model
 from wormgear_cli.diagnosis.scoring import Score
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, NEAR_SHARE
+from wormgear_cli.physics.effects import EFFECTS, params_to_keys
 
 
 def wrap_deg(x: float) -> float:
@@ -28,8 +29,6 @@ def _sig6(x: float) -> float:
 
 def augmented_params(found: Found) -> dict:
     """A named effect's parameters keyed as in the catalogue (rounded as written)."""
-    from wormgear_cli.physics.effects import EFFECTS, params_to_keys
-
     eff = EFFECTS[found.name]
     keys = params_to_keys(found.name, found.params)
     out = {}
@@ -99,8 +98,6 @@ def final_inference(state: ModelFit, accepted: list[Accepted], lin_names, groups
     The first ``fixed`` linear columns (the zero offset, and any unexplained
     structure held in the model) are nuisance; the named effects follow, in
     ``lin_names`` order."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     if not accepted:
         return []
     lin = state.lin
@@ -198,8 +195,6 @@ def same_order_range(f: Found, ctx: FitContext, state: ModelFit, lin, sl, cand: 
     between 0 and the fitted size, the upper end by bisection beyond it.  Sets
     ``f.intervals`` to that range of the amplitude key (the phase has none) and
     adds a note."""
-    from wormgear_cli.physics.effects import EFFECTS
-
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     eff = EFFECTS[cand.name]
     order = cand.order

@@ -404,6 +404,7 @@ def f_sf(f: float, d1: float, d2: float) -> float:
         return 0.0 if f > 0 else 1.0
     if f <= 0.0:
         return 1.0
+    # lazy: scipy.special is slow to import (a large part of a second); only this path needs it
     from scipy.special import fdtrc
 
     return float(fdtrc(d1, d2, f))
@@ -411,6 +412,7 @@ def f_sf(f: float, d1: float, d2: float) -> float:
 
 def t_ppf(p: float, df: float) -> float:
     """Quantile of Student's t with ``df`` (> 0, real) degrees of freedom (:func:`scipy.special.stdtrit`)."""
+    # lazy: scipy.special is slow to import (a large part of a second); only this path needs it
     from scipy.special import stdtrit
 
     return float(stdtrit(df, p))

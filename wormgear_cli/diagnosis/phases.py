@@ -11,17 +11,15 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from wormgear_cli.diagnosis.design import orthonormal
 from wormgear_cli.diagnosis.mixed import Cross, VarFit, reml
 from wormgear_cli.diagnosis.runs import Groups, pass_sums
+from wormgear_cli.measurement.harmonics import fit_orders
+from wormgear_cli.physics.effects import EFFECTS, Signals
 from wormgear_cli.units import ARCSEC
-
-if TYPE_CHECKING:
-    from wormgear_cli.physics.effects import Signals
 
 
 @dataclass(frozen=True)
@@ -93,8 +91,8 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
     ``[effects.*]`` (those with a phase key).  A term is fittable when its
     contribution at these samples changes with its phase (a source of zero
     size, or one whose lost motion does not depend on the phase, is not)."""
+    # lazy: keeps analysis.simulate off `measure`'s start-up
     from wormgear_cli.analysis.simulate import periodic_sources
-    from wormgear_cli.physics.effects import EFFECTS
 
     out = []
     for src in periodic_sources(spec):
@@ -120,14 +118,10 @@ def phase_sources(spec, geometry, signals) -> tuple[list[PhaseSource], list[Phas
 
 
 def unit_circle(n: int = 720):
-    from wormgear_cli.physics.effects import Signals
-
     return Signals.make(np.linspace(0.0, 2.0 * np.pi, n, endpoint=False))
 
 
 def probe_signals(signals, n: int = 2000):
-    from wormgear_cli.physics.effects import Signals
-
     step = max(1, signals.theta.shape[0] // n)
     sl = slice(None, None, step)
     theta = np.concatenate([signals.theta[sl], np.linspace(0.0, 2.0 * np.pi, 360, endpoint=False)])
@@ -137,8 +131,6 @@ def probe_signals(signals, n: int = 2000):
 
 
 def subset(sig, idx):
-    from wormgear_cli.physics.effects import Signals
-
     return Signals(sig.theta[idx], sig.direction[idx], sig.load[idx], sig.temperature[idx], sig.time[idx])
 
 
@@ -418,7 +410,6 @@ def _harmonic_starts(ctx: FitContext):
     """Deterministic starting phases: as specified; aligned with the measured
     harmonic at each order; and rotated variants for shafts carrying several sources."""
     y, sig, base, sources, spec_psi = ctx.y, ctx.sig, ctx.base, ctx.sources, ctx.spec_psi
-    from wormgear_cli.measurement.harmonics import fit_orders
 
     starts = [np.array(spec_psi, dtype=float)]
     if not sources:
@@ -458,8 +449,6 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     misplaced by half a step costs more than a wrong basin), so besides the best
     vector the ``keep`` lowest local minima of each shaft's grid are returned,
     for the caller to polish and compare."""
-    from wormgear_cli.physics.effects import Signals
-
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     psi = np.array(psi, dtype=float)
     if not sources:

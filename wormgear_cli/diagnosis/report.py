@@ -28,12 +28,18 @@ from wormgear_cli.diagnosis.residuals import (
 from wormgear_cli.diagnosis.scoring import ScoreStatus
 from wormgear_cli.diagnosis.selection import Diagnosis, StopReason, diagnose
 from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR, MISMATCH_NOISE, MISMATCH_RATIO, UNIT_RATIO_TOLERANCE
-from wormgear_cli.units import ARCSEC
+from wormgear_cli.measurement.checks import guide_log_findings, structure_findings
+from wormgear_cli.measurement.guidelog_options import is_guide_log
+from wormgear_cli.measurement.iso230 import group_targets
+from wormgear_cli.measurement.reader import ERROR_UNITS
+from wormgear_cli.physics.effects import EFFECTS, geometry_absent_reason, params_to_keys, train_effects
+from wormgear_cli.physics.signals import SIGNALS
+from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
 
 def _status(diag: Diagnosis, twins: dict) -> list[dict]:
+    # lazy: keeps analysis.accuracy off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS, geometry_absent_reason
 
     stop = diag.stop
     out = []
@@ -158,8 +164,8 @@ def folded_twins(diag: Diagnosis) -> dict[str, list[dict]]:
     Each twin: ``name``, ``order``, and (for an effect whose size is determined) ``estimate``, the twin's
     parameters that reproduce the named effect's fitted signature at the measured angles (least squares
     of the named signature on the twin's columns), keyed as in the catalogue."""
+    # lazy: keeps analysis.accuracy off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
 
     g = drive_geometry(diag.spec)
     names = [n for n in train_effects(g) if n not in diag.spec.effects]
@@ -199,6 +205,7 @@ FOLD_REMEDY = "measure with irregular target spacing (or a dense scan) to tell t
 
 def _effect_order(name: str, diag: Diagnosis) -> float:
     """The order of periodic effect ``name`` on the diagnosed drive."""
+    # lazy: keeps analysis.accuracy off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
 
     order = effect_order(name, drive_geometry(diag.spec))
@@ -208,20 +215,22 @@ def _effect_order(name: str, diag: Diagnosis) -> float:
 
 
 def _keys(name, params) -> dict:
-    from wormgear_cli.physics.effects import params_to_keys
-
     return {k: float(v) for k, v in params_to_keys(name, params).items()}
 
 
 def _separate_hint(names) -> str:
-    s = set(names)
-    if s >= {"thermal_backlash", "thermal_drift"}:
-        return "measure both directions during the warm-up"
-    if "thermal_drift" in s or "thermal_backlash" in s:
-        return "vary temperature independently of the other signals (heat and cool, or hold it during load steps)"
-    if "torsional_compliance" in s:
-        return "apply load steps at constant temperature and in both signs"
-    return "measure with irregular target spacing or a dense scan, in both directions"
+    """How to measure so that the catalogue effects among ``names`` can be told apart: both directions while
+    a signal varies when two of them need it in different modes, else the first one's ``separate_hint``."""
+    effs = [eff for name, eff in EFFECTS.items() if name in set(names)]
+    modes: dict[str, set] = {}
+    for eff in effs:
+        if eff.needs is not None:
+            modes.setdefault(eff.needs, set()).add(eff.mode)
+    for needs, seen in modes.items():
+        if len(seen) > 1 and SIGNALS[needs].varied_by:
+            return f"measure both directions during {SIGNALS[needs].varied_by}"
+    return next((eff.separate_hint for eff in effs if eff.separate_hint),
+                "measure with irregular target spacing or a dense scan, in both directions")
 
 
 def over_prediction(diag: Diagnosis, order: float, data_rows: list | None) -> tuple[float, float] | None:
@@ -333,10 +342,6 @@ def data_findings(meas) -> list:
     """What the file does not state and looks wrong (exact duplicate rows, time going backwards inside a
     pass, one direction only, targets repeated without a direction column, the reader's unit warnings):
     ``measure``'s checks (:func:`wormgear_cli.measurement.checks.structure_findings`), the one definition."""
-    from wormgear_cli.measurement.checks import guide_log_findings, structure_findings
-    from wormgear_cli.measurement.guidelog_options import is_guide_log
-    from wormgear_cli.measurement.iso230 import group_targets
-
     if is_guide_log(meas):
         return guide_log_findings(meas)
     tgt, _ = group_targets(meas.angle)
@@ -399,9 +404,8 @@ def spec_mismatch(diag: Diagnosis, repeat_arcsec: float | None, tables=None) -> 
     UNIT_RATIO_TOLERANCE of the ratio of those two units, else None}.
     ``tables``: the :func:`order_table` of the measured error and of the
     fitted model before the effects, when already made (else made here)."""
+    # lazy: keeps analysis.accuracy off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.measurement.reader import ERROR_UNITS
-    from wormgear_cli.units import RAD_PER_UNIT
 
     meas = diag.meas
     noise = repeat_arcsec if repeat_arcsec else diag.noise_floor
@@ -484,8 +488,8 @@ def report(diag: Diagnosis) -> dict:
 
 
 def _report(diag: Diagnosis) -> dict:
+    # lazy: keeps analysis.accuracy off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
-    from wormgear_cli.measurement.guidelog_options import is_guide_log
 
     g = drive_geometry(diag.spec)
     meas = diag.meas
@@ -687,7 +691,7 @@ def run_diagnose(spec, meas, *, alpha: float = 0.01, fit_phases: bool = True, ma
 
 def augmented_toml(diag: Diagnosis, data_name: str = "") -> str:
     """The augmented spec as TOML text, with a comment header saying what changed."""
-    import tomli_w
+    import tomli_w  # lazy: keeps tomli_w off `measure`'s start-up
 
     from wormgear_cli.errors import quote  # names on one comment line: a line break cannot start TOML
 

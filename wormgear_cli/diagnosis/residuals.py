@@ -12,6 +12,10 @@ from wormgear_cli.diagnosis.mixed import VarFit
 from wormgear_cli.diagnosis.phases import ModelFit
 from wormgear_cli.diagnosis.runs import DataInfo, Groups
 from wormgear_cli.diagnosis.thresholds import MIN_RUNS
+from wormgear_cli.measurement.harmonics import fit_modes_each, physical_orders
+from wormgear_cli.measurement.iso230 import group_targets, iso230_figures
+from wormgear_cli.measurement.serial import point_noise
+from wormgear_cli.physics.signals import SIGNALS
 from wormgear_cli.units import ARCSEC
 
 
@@ -19,8 +23,6 @@ def short_term_noise(resid: np.ndarray, groups: Groups, time: np.ndarray | None 
     """Point-to-point noise [arcsec]: robust standard deviation (1.4826 x median absolute value) of the
     differences of consecutive rows within a pass (in time order), over sqrt(2).  Offsets per pass or
     run cancel; structure that changes slowly along a pass adds little.  NaN without such pairs."""
-    from wormgear_cli.measurement.serial import point_noise
-
     return point_noise(resid, groups.pass_id, time)
 
 
@@ -36,8 +38,6 @@ def noise_floor_rms(state: ModelFit, groups: Groups, time=None) -> float:
 
 def _target_pairs(meas):
     """(key of each row's target/run cell, common and differential per cell with both directions)."""
-    from wormgear_cli.measurement.iso230 import group_targets
-
     tgt, _ = group_targets(meas.angle)
     run = meas.run if "run" in meas.present else np.zeros(len(meas), dtype=int)
     return tgt, run
@@ -96,8 +96,6 @@ def order_tables(meas, resids, geometry) -> list[list[dict]]:
     design is built once for all residuals
     (:func:`wormgear_cli.measurement.harmonics.fit_modes_each`): the same tables as one
     call per residual, for little more than the cost of one."""
-    from wormgear_cli.measurement.harmonics import fit_modes_each, physical_orders
-
     phys = physical_orders(geometry, 3)
     bases = geometry.base_orders
 
@@ -143,7 +141,7 @@ def versus(meas, resid, info: DataInfo, bins: int = 5) -> dict:
     least-squares slopes of the common and differential mode and binned means per direction."""
     out = {}
     both = len(info.directions) == 2
-    for name, values in (("temperature_C", meas.temperature), ("load_Nm", meas.load), ("time_s", meas.time)):
+    for name, values in ((SIGNALS[s].column, getattr(meas, s)) for s in ("temperature", "load", "time")):
         if np.ptp(values) <= 0:
             continue
         x = values - np.mean(values)
@@ -173,8 +171,6 @@ def versus(meas, resid, info: DataInfo, bins: int = 5) -> dict:
 def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
     """Scatter over repeated runs [arcsec]: pooled standard deviation of the residual
     per target and direction, and the fitted white, pass and run components."""
-    from wormgear_cli.measurement.iso230 import iso230_figures
-
     t = iso230_figures(meas.angle, resid * ARCSEC, meas.direction).targets
     num = 0.0
     den = 0.0
@@ -191,8 +187,6 @@ def noise_floor(meas, resid, var: VarFit, groups: Groups) -> dict:
 
 def iso_figures(meas, error_arcsec) -> dict:
     """ISO 230-2 axis figures A, B, E, M, R [arcsec] of an error array at the measured rows."""
-    from wormgear_cli.measurement.iso230 import iso230_figures
-
     f = iso230_figures(meas.angle, np.asarray(error_arcsec) * ARCSEC, meas.direction)
     out = {}
     for key in ("A", "B", "E", "M", "R"):

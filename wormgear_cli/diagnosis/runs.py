@@ -12,7 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from wormgear_cli.measurement.iso230 import group_targets
 from wormgear_cli.measurement.reader import time_restarts
+from wormgear_cli.physics.signals import SIGNALS
 
 
 @dataclass(frozen=True)
@@ -173,8 +175,6 @@ class Cells:
 
 def make_cells(theta: np.ndarray, direction: np.ndarray) -> Cells:
     """Cells of a measurement: rows at the same target (angles within 1e-6 deg) and direction."""
-    from wormgear_cli.measurement.iso230 import group_targets
-
     tgt, _ = group_targets(theta)
     key = tgt.astype(np.int64) * 2 + (np.asarray(direction) < 0)
     _, cell = np.unique(key, return_inverse=True)
@@ -213,5 +213,6 @@ def data_info(meas, groups: Groups) -> DataInfo:
     tt = math.nan
     if t_rng > 0 and np.ptp(meas.time) > 0:
         tt = float(np.corrcoef(meas.temperature, meas.time)[0, 1])
-    return DataInfo(d, t_rng, "temperature_C" in meas.present, float(np.ptp(meas.load)), "load_Nm" in meas.present,
+    present = {s for s in SIGNALS if SIGNALS[s].column in meas.present}
+    return DataInfo(d, t_rng, "temperature" in present, float(np.ptp(meas.load)), "load" in present,
                     float(np.ptp(meas.time)), tt, groups.passes / max(len(d), 1))

@@ -22,6 +22,14 @@ from wormgear_cli.diagnosis.thresholds import (
     MIN_SCAN_SHARE,
     MIN_TEMPERATURE_RANGE,
 )
+from wormgear_cli.measurement.coverage import coverage
+from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+from wormgear_cli.measurement.drift import slow_model
+from wormgear_cli.measurement.harmonics import physical_orders
+from wormgear_cli.measurement.iso230 import group_targets
+from wormgear_cli.measurement.separation import SEPARATION_CORR, canonical_correlations
+from wormgear_cli.physics.effects import EFFECTS, train_effects
+from wormgear_cli.physics.signals import SIGNALS, SLOPE_UNITS
 
 if TYPE_CHECKING:
     from wormgear_cli.measurement.coverage import Coverage
@@ -30,15 +38,14 @@ if TYPE_CHECKING:
     from wormgear_cli.physics.geometry import DriveGeometry
 
 
-#: the catalogue effect whose signature a pattern of the residual scan is
 def _signature_of(item: dict, geometry) -> str | None:
-    from wormgear_cli.physics.effects import EFFECTS, train_effects
-
+    """The catalogue effect whose signature a pattern of the residual scan is (its record's ``pattern``,
+    ``needs`` and ``mode``), None if none."""
     if item["kind"] == "reversal":
-        return "bearing_clearance"
+        return next((name for name, eff in EFFECTS.items() if eff.pattern == "reversal"), None)
     if item["kind"] == "trend":
-        return {("temperature_C", "differential"): "thermal_backlash", ("temperature_C", "common"): "thermal_drift",
-                ("load_Nm", "common"): "torsional_compliance"}.get((item["signal"], item["mode"]))
+        return next((name for name, eff in EFFECTS.items() if eff.pattern == "trend" and eff.needs is not None
+                     and SIGNALS[eff.needs].column == item["signal"] and eff.mode == item["mode"]), None)
     if item["kind"] == "order" and item["mode"] == "common":
         for name in train_effects(geometry):
             eff = EFFECTS[name]
@@ -48,21 +55,9 @@ def _signature_of(item: dict, geometry) -> str | None:
 
 
 def _pattern(name: str, geometry) -> tuple[str, str]:
-    """(mode, words) of a catalogue effect's signature."""
-    from wormgear_cli.physics.effects import EFFECTS
-
+    """(mode, words) of a catalogue effect's signature (from its record)."""
     eff = EFFECTS[name]
-    if name == "thermal_backlash":
-        return "differential", "a differential-mode trend with temperature (the reversal changing as it warms)"
-    if name == "bearing_clearance":
-        return "differential", "a change of the mean reversal"
-    if name == "thermal_drift":
-        return "common", "a common-mode trend with temperature"
-    if name == "torsional_compliance":
-        return "common", "a common-mode trend with load"
-    if eff.order is not None:
-        return "common", f"order {float(eff.order(geometry)):g} content in common mode"
-    return "common", eff.doc
+    return eff.mode, eff.signature_text(geometry)
 
 
 def annotate(items: list, scores: dict, groups: Groups, few_runs: bool, likely: dict | None, state: ModelFit,
@@ -177,10 +172,6 @@ def scan_residual(state: ModelFit, ctx: ScanContext) -> list[dict]:
 
 
 def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
-    from wormgear_cli.measurement.coverage import coverage
-    from wormgear_cli.measurement.drift import slow_model
-    from wormgear_cli.measurement.harmonics import physical_orders
-
     sig, info, cache = ctx.sig, ctx.info, ctx.cache if ctx.cache is not None else {}
     if "coverage" not in cache:
         cov = coverage(sig.theta)
@@ -201,9 +192,9 @@ def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
         tests.append(("order", o, "common", ("order", o, False)))
         if both:
             tests.append(("order", o, "differential", ("order", o, True)))
-    signals = [("temperature_C", sig.temperature, info.temperature_range >= MIN_TEMPERATURE_RANGE),
-               ("load_Nm", sig.load, info.load_range > 0),
-               ("time_s", sig.time, info.time_range > 0 and (slow is None or slow.kind != "time"))]
+    signals = [(SIGNALS["temperature"].column, sig.temperature, info.temperature_range >= MIN_TEMPERATURE_RANGE),
+               (SIGNALS["load"].column, sig.load, info.load_range > 0),
+               (SIGNALS["time"].column, sig.time, info.time_range > 0 and (slow is None or slow.kind != "time"))]
     for name, values, varies in signals:
         if not varies:
             continue
@@ -217,9 +208,6 @@ def _plan(state: ModelFit, ctx: ScanContext) -> _Plan:
 
 def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: dict) -> tuple[list, dict, float]:
     """(the orders to test, {order added by the scan of every order: its adjusted p}, the Nyquist limit)."""
-    from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
-    from wormgear_cli.measurement.iso230 import group_targets
-
     sig = ctx.sig
     if "targets" not in cache:
         cache["targets"] = int(group_targets(sig.theta)[1].shape[0])
@@ -250,8 +238,6 @@ def _orders(state: ModelFit, ctx: ScanContext, cov, slow, labels: dict, cache: d
 
 def _separable_from(orders: list, owned: list, theta, cov, cache: dict) -> list:
     """``orders`` without those the arc cannot tell from a different owned order (separation rule)."""
-    from wormgear_cli.measurement.separation import SEPARATION_CORR, canonical_correlations
-
     key = ("separable", tuple(orders), tuple(owned))
     if key in cache:
         return cache[key]
@@ -433,7 +419,7 @@ def _order_and_trend_items(plan: _Plan, ctx: ScanContext, state: ModelFit, resul
         if kind == "order":
             _describe_order(item, what, plan, ctx, cross, idx, full_rot, w, r.shape[0])
         elif kind == "trend":
-            unit = {"temperature_C": "K", "load_Nm": "N m", "time_s": "s"}[what]
+            unit = SLOPE_UNITS[what]
             item.update(signal=what, slope_arcsec_per_unit=float(w.estimate[0]), unit=unit)
             item["explanation"] = f"a {mode}-mode trend of the residual with {what} ({w.estimate[0]:.4g} arcsec/{unit})"
             if what == "time_s" and not ctx.info.temperature_present:

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wormgear_cli.diagnosis.augment import augment
-from wormgear_cli.diagnosis.candidates import UNPHYSICAL_HINT, candidate, order_aliases, physical_problem
+from wormgear_cli.diagnosis.candidates import candidate, order_aliases, physical_problem
 from wormgear_cli.diagnosis.inference import Accepted, final_inference, likely_effect, same_order_range
 from wormgear_cli.diagnosis.phases import FitContext, ModelFit, fit_model, phase_sources, sources_total
 from wormgear_cli.diagnosis.residuals import noise_floor_rms
@@ -20,6 +20,8 @@ from wormgear_cli.diagnosis.scan import ScanContext, annotate, nuisance_columns,
 from wormgear_cli.diagnosis.scoring import Score, ScoreStatus, Step, same_order_test, score_step
 from wormgear_cli.diagnosis.thresholds import INDISTINGUISHABLE, MIN_RUNS, MIN_STABILITY, NEAR_FACTOR, NEARLY
 from wormgear_cli.errors import DataError, UsageError
+from wormgear_cli.measurement.drift import drift_columns
+from wormgear_cli.physics.effects import EFFECTS, train_effects
 from wormgear_cli.units import ARCSEC
 
 if TYPE_CHECKING:
@@ -209,6 +211,7 @@ class _Setup:
 
 
 def _setup(spec, meas, opt: DiagnoseOptions) -> _Setup:
+    # lazy: keeps analysis.accuracy, analysis.simulate off `measure`'s start-up
     from wormgear_cli.analysis.accuracy import geometry as drive_geometry
     from wormgear_cli.analysis.simulate import simulate
 
@@ -288,8 +291,6 @@ class _Run:
 
 
 def _diagnose(spec, meas, opt: DiagnoseOptions) -> Diagnosis:
-    from wormgear_cli.physics.effects import train_effects
-
     s = _setup(spec, meas, opt)
     opt.say("fitting phases and offset")
     base, name = base_columns(meas)
@@ -311,7 +312,6 @@ def base_columns(meas) -> tuple[np.ndarray, str]:
     ones = np.ones((len(meas), 1))
     if not getattr(meas, "run_drift", False):
         return ones, "the zero offset"
-    from wormgear_cli.measurement.drift import drift_columns
 
     return np.hstack([ones, drift_columns(meas.time, meas.run)]), "the zero offset and each run's offset and drift"
 
@@ -412,7 +412,7 @@ def _decide(run: _Run, step: Step) -> Stop | None:
     assert sc.params is not None  # (a tested candidate's parameters are set)
     problem = physical_problem(best, sc.params)
     if problem:
-        return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=UNPHYSICAL_HINT.get(best, ""))
+        return Stop(StopReason.UNPHYSICAL, candidate=best, detail=problem, hint=EFFECTS[best].unphysical_hint or "")
     return None
 
 
@@ -571,6 +571,7 @@ def _nuisance_parts(run: _Run, state: ModelFit) -> list[dict]:
 
 def _thermal_prediction(spec) -> float | None:
     try:
+        # lazy: keeps physics.thermal off `measure`'s start-up
         from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K
 
         predicted = predicted_centre_distance_um_per_K(spec, spec.materials.housing_rise_ratio)

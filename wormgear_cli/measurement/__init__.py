@@ -13,6 +13,10 @@ The names of the former module ``wormgear_cli.measurement`` are still found here
 DeprecationWarning naming their new home ``wormgear_cli.measurement.reader``.
 """
 
+import importlib
+
+from wormgear_cli.errors import moved
+
 #: names of the former module ``wormgear_cli.measurement`` (now ``wormgear_cli.measurement.reader``)
 _OLD_NAMES = frozenset({
     'ANGLE_UNITS', 'ARCSEC', 'BLOCK_CHARS', 'CANONICAL', 'DEFAULTS', 'ERROR_UNITS',
@@ -30,10 +34,6 @@ _ELSEWHERE = {"read_measurement": "readers", "parse_measurement": "readers", "de
 
 def __getattr__(name: str):
     if name in _OLD_NAMES:
-        import importlib
-
-        from wormgear_cli.errors import moved
-
         home = f"wormgear_cli.measurement.{_ELSEWHERE.get(name, 'reader')}"
         moved(f"wormgear_cli.measurement.{name}", f"{home}.{name}")
         return getattr(importlib.import_module(home), name)

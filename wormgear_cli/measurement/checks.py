@@ -11,6 +11,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.physics.signals import CONDITIONS
+
 
 @dataclass(frozen=True)
 class Finding:
@@ -36,8 +38,7 @@ def duplicate_rows(m, repeated=None) -> int:
     duplicates (a dense scan then needs no sort).  No column is copied: the
     keys are mixed and the candidates compared a block of rows at a time."""
     cols = [m.angle, m.error, m.direction, m.run] + [
-        getattr(m, a) for c, a in (("load_Nm", "load"), ("temperature_C", "temperature"), ("time_s", "time"))
-        if c in m.present]
+        getattr(m, s.name) for s in CONDITIONS if s.column in m.present]
     n = len(m)
     if n < 2:
         return 0

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -135,6 +136,135 @@ def _solve_blocks(block, n: int, p: int, y: np.ndarray, weights: np.ndarray | No
     return _solve_blocks_each(block, n, p, [y], weights, rcond, n_fixed)[0]
 
 
+class _WeightedDesign:
+    """The (n x p) design of :func:`_solve_blocks_each`, weighted and column-scaled, served in row blocks.
+
+    Rows are multiplied by sqrt(weights); columns after the first ``n_fixed``
+    are divided by ``safe`` (their RMS over the weighted samples) so the
+    singular-value cutoff does not depend on their units.  A design of at
+    most :data:`BLOCK_ROWS` rows is built once and kept."""
+
+    def __init__(self, block, n: int, p: int, weights: np.ndarray | None, n_fixed: int) -> None:
+        if weights is not None and (np.any(weights < 0) or not np.all(np.isfinite(weights))):
+            raise ValueError("weights must be finite and non-negative")
+        self.block, self.n, self.p = block, n, p
+        self.sw = None if weights is None else np.sqrt(weights)
+        self.wsum = float(n) if weights is None else float(np.sum(weights))
+        self.starts = list(range(0, n, BLOCK_ROWS)) or [0]
+        self.single = n <= BLOCK_ROWS
+        self.xw_all = self.xblock(0, n) if self.single else None
+        self.safe = self._column_scales(n_fixed)
+        self.scaled = bool(np.any(self.safe != 1.0))
+
+    def _column_scales(self, n_fixed: int) -> np.ndarray:
+        """Per-column divisor: the RMS of each user column over the weighted samples (1 where unused)."""
+        n, p = self.n, self.p
+        if n_fixed >= p:
+            sq = np.ones(p)  # no column is scaled: the norms are not needed
+        elif self.xw_all is not None:
+            sq = np.einsum("ij,ij->j", self.xw_all, self.xw_all)
+        else:
+            sq = np.zeros(p)
+            for a in self.starts:
+                xb = self.xblock(a, min(a + BLOCK_ROWS, n))
+                sq += np.einsum("ij,ij->j", xb, xb)
+        norms = np.sqrt(sq)
+        rms_norm = math.sqrt(max(self.wsum, 1e-300))
+        safe = np.where(norms > 0, norms / rms_norm, 1.0)
+        safe[:n_fixed] = 1.0
+        return safe
+
+    def ranges(self):
+        """The (a, b) row ranges of the blocks."""
+        return [(a, min(a + BLOCK_ROWS, self.n)) for a in self.starts]
+
+    def xblock(self, a: int, b: int) -> np.ndarray:
+        """Rows a..b-1 of the weighted (unscaled) design."""
+        xb = self.block(a, b)
+        return xb if self.sw is None else xb * self.sw[a:b, None]
+
+    def yblock(self, y: np.ndarray, a: int, b: int) -> np.ndarray:
+        """Samples a..b-1 of ``y``, weighted."""
+        return y[a:b] if self.sw is None else y[a:b] * self.sw[a:b]
+
+    def sxblock(self, a: int, b: int) -> np.ndarray:
+        """Rows a..b-1 of the weighted, column-scaled design."""
+        xb = self.xw_all if self.xw_all is not None else self.xblock(a, b)
+        return xb / self.safe if self.scaled else xb
+
+    def syblock(self, y: np.ndarray, a: int, b: int) -> np.ndarray:
+        """Samples a..b-1 of ``y``, weighted (all of them for a single-block design)."""
+        return self.yblock(y, 0, self.n) if self.single else self.yblock(y, a, b)
+
+
+def _solve_normal(d: _WeightedDesign, ys) -> tuple[np.ndarray, list[np.ndarray]] | None:
+    """Fast path of :func:`_solve_blocks_each`: the normal equations, accumulated over the blocks.
+
+    Used only when the design is well conditioned (cond(X) < 1e4, so
+    cond(X^T X) < 1e8 and the solution loses at most ~1e-8 relative
+    accuracy).  Returns the scaled (X^T W X)^-1 and the scaled coefficients
+    of each right-hand side, or None when the design is not well conditioned
+    (or not overdetermined)."""
+    n, p = d.n, d.p
+    if not (n >= p and p > 0):
+        return None
+    gram = np.zeros((p, p))
+    rhs = [np.zeros(p) for _ in ys]
+    for a, b in d.ranges():
+        xs = d.sxblock(a, b)
+        gram += xs.T @ xs
+        for i, y in enumerate(ys):
+            rhs[i] += xs.T @ d.syblock(y, a, b)
+    lam, vec = np.linalg.eigh(gram)
+    if not lam[0] > 1e-8 * lam[-1] > 0:
+        return None
+    cov = (vec / lam) @ vec.T
+    return cov, [cov @ r for r in rhs]
+
+
+def _solve_robust(d: _WeightedDesign, y: np.ndarray, rcond: float) -> tuple[np.ndarray, np.ndarray, int, np.ndarray]:
+    """Robust path of :func:`_solve_blocks_each` for one right-hand side ``y``.
+
+    QR of [X y] (X padded to square when n < p), reduced block by block,
+    then an SVD of R cut at ``rcond`` times the largest singular value
+    (minimum-norm solution).  Returns the scaled coefficients, the scaled
+    unscaled-covariance (X^T W X)^+, the rank and the per-column
+    identifiability (no weight in the null space)."""
+    n, p = d.n, d.p
+    r_aug: np.ndarray | None = None
+    for a, b in d.ranges():
+        aug = np.column_stack([d.sxblock(a, b), d.syblock(y, a, b)])
+        if n < p:
+            aug = np.vstack([aug, np.zeros((p - n, p + 1))])
+        stacked = aug if r_aug is None else np.vstack([r_aug, aug])
+        r_aug = cast(np.ndarray, np.linalg.qr(stacked, mode="r"))  # mode "r": R alone, not a QRResult
+    assert r_aug is not None  # there is always at least one block
+    if r_aug.shape[0] < p + 1:
+        r_aug = np.vstack([r_aug, np.zeros((p + 1 - r_aug.shape[0], p + 1))])
+    r, qty = r_aug[:p, :p], r_aug[:p, p]
+    u, sv, vt = np.linalg.svd(r)
+    smax = sv[0] if sv.size else 0.0
+    keep = (sv > rcond * smax) & (sv > 0) if smax > 0 else np.zeros_like(sv, dtype=bool)
+    inv = np.zeros_like(sv)
+    inv[keep] = 1.0 / sv[keep]
+    coef = vt.T @ (inv * (u.T @ qty))
+    cov = (vt.T * inv**2) @ vt
+    # null-space weight of each column: a coefficient is unique only if it has none
+    null = vt[~keep]
+    null_weight = np.sum(null**2, axis=0) if null.size else np.zeros(p)
+    return coef, cov, int(np.count_nonzero(keep)), null_weight < 1e-6
+
+
+def _residuals(d: _WeightedDesign, ys, coef: list[np.ndarray]) -> list[np.ndarray]:
+    """y - X coef for each right-hand side (unweighted, original column units), one pass over the blocks."""
+    residual = [np.empty(d.n) for _ in ys]
+    for a, b in d.ranges():
+        xb = d.block(a, b)
+        for i, y in enumerate(ys):
+            residual[i][a:b] = y[a:b] - xb @ coef[i]
+    return residual
+
+
 def _solve_blocks_each(block, n: int, p: int, ys, weights: np.ndarray | None, rcond: float,
                        n_fixed: int) -> list[_Solve]:
     """:func:`_solve_blocks` of each right-hand side in ``ys`` (each (n,)) on one design.
@@ -143,109 +273,30 @@ def _solve_blocks_each(block, n: int, p: int, ys, weights: np.ndarray | None, rc
     design is built once per pass over the rows for all of them (column
     norms, normal equations, residuals); only the robust path (an
     ill-conditioned design) reduces [X y] for each y on its own."""
-    if weights is not None and (np.any(weights < 0) or not np.all(np.isfinite(weights))):
-        raise ValueError("weights must be finite and non-negative")
-    sw = None if weights is None else np.sqrt(weights)
-    wsum = float(n) if weights is None else float(np.sum(weights))
-    starts = list(range(0, n, BLOCK_ROWS)) or [0]
-
-    def xblock(a, b):
-        xb = block(a, b)
-        return xb if sw is None else xb * sw[a:b, None]
-
-    def yblock(y, a, b):
-        return y[a:b] if sw is None else y[a:b] * sw[a:b]
-
-    single = n <= BLOCK_ROWS
-    if single:
-        xw_all = xblock(0, n)
-    if n_fixed >= p:
-        sq = np.ones(p)  # no column is scaled: the norms are not needed
-    elif single:
-        sq = np.einsum("ij,ij->j", xw_all, xw_all)
-    else:
-        sq = np.zeros(p)
-        for a in starts:
-            xb = xblock(a, min(a + BLOCK_ROWS, n))
-            sq += np.einsum("ij,ij->j", xb, xb)
-    norms = np.sqrt(sq)
-    rms_norm = math.sqrt(max(wsum, 1e-300))
-    safe = np.where(norms > 0, norms / rms_norm, 1.0)
-    safe[:n_fixed] = 1.0
-    scaled = bool(np.any(safe != 1.0))
-
-    def sxblock(a, b):
-        xb = xw_all if single else xblock(a, b)
-        return xb / safe if scaled else xb
-
-    def syblock(y, a, b):
-        return yblock(y, 0, n) if single else yblock(y, a, b)
-
+    d = _WeightedDesign(block, n, p, weights, n_fixed)
     r_count = len(ys)
-    coef_s = [None] * r_count
-    cov_s = [None] * r_count
     identifiable = [np.ones(p, dtype=bool) for _ in range(r_count)]
     rank = [p] * r_count
-    if n >= p and p > 0:
-        # fast path: normal equations, used only when the design is well
-        # conditioned (cond(X) < 1e4, so cond(X^T X) < 1e8 and the solution
-        # loses at most ~1e-8 relative accuracy)
-        gram = np.zeros((p, p))
-        rhs = [np.zeros(p) for _ in range(r_count)]
-        for a in starts:
-            b = min(a + BLOCK_ROWS, n)
-            xs = sxblock(a, b)
-            gram += xs.T @ xs
-            for i, y in enumerate(ys):
-                rhs[i] += xs.T @ syblock(y, a, b)
-        lam, vec = np.linalg.eigh(gram)
-        if lam[0] > 1e-8 * lam[-1] > 0:
-            cov = (vec / lam) @ vec.T
-            cov_s = [cov] * r_count
-            coef_s = [cov @ r for r in rhs]
-    for i, y in enumerate(ys):
-        if coef_s[i] is not None:
-            continue
-        # robust path: QR of [X y] (X padded to square when n < p), reduced block by block, then SVD of R
-        r_aug = None
-        for a in starts:
-            b = min(a + BLOCK_ROWS, n)
-            xs, yq = sxblock(a, b), syblock(y, a, b)
-            aug = np.column_stack([xs, yq])
-            if n < p:
-                aug = np.vstack([aug, np.zeros((p - n, p + 1))])
-            stacked = aug if r_aug is None else np.vstack([r_aug, aug])
-            r_aug = np.linalg.qr(stacked, mode="r")
-        if r_aug.shape[0] < p + 1:
-            r_aug = np.vstack([r_aug, np.zeros((p + 1 - r_aug.shape[0], p + 1))])
-        r, qty = r_aug[:p, :p], r_aug[:p, p]
-        u, sv, vt = np.linalg.svd(r)
-        smax = sv[0] if sv.size else 0.0
-        keep = (sv > rcond * smax) & (sv > 0) if smax > 0 else np.zeros_like(sv, dtype=bool)
-        rank[i] = int(np.count_nonzero(keep))
-        inv = np.zeros_like(sv)
-        inv[keep] = 1.0 / sv[keep]
-        coef_s[i] = vt.T @ (inv * (u.T @ qty))
-        cov_s[i] = (vt.T * inv**2) @ vt
-        # null-space weight of each column: a coefficient is unique only if it has none
-        null = vt[~keep]
-        null_weight = np.sum(null**2, axis=0) if null.size else np.zeros(p)
-        identifiable[i] = null_weight < 1e-6
-    coef = [c / safe for c in coef_s]
-    residual = [np.empty(n) for _ in range(r_count)]
-    for a in starts:
-        b = min(a + BLOCK_ROWS, n)
-        xb = block(a, b)
+    normal = _solve_normal(d, ys)
+    if normal is not None:
+        cov_s = [normal[0]] * r_count
+        coef_s = normal[1]
+    else:
+        cov_s, coef_s = [], []
         for i, y in enumerate(ys):
-            residual[i][a:b] = y[a:b] - xb @ coef[i]
+            c, cv, rank[i], identifiable[i] = _solve_robust(d, y, rcond)
+            coef_s.append(c)
+            cov_s.append(cv)
+    coef = [c / d.safe for c in coef_s]
+    residual = _residuals(d, ys, coef)
     out = []
     for i in range(r_count):
-        wres = residual[i] if sw is None else residual[i] * sw
+        wres = residual[i] if d.sw is None else residual[i] * d.sw
         rss = float(wres @ wres)
         dof = n - rank[i]
         sigma = math.sqrt(rss / dof) if dof > 0 else math.nan
-        rms = math.sqrt(rss / wsum) if wsum > 0 else math.nan
-        out.append(_Solve(coef[i], cov_s[i] / np.outer(safe, safe), residual[i], rank[i], identifiable[i], sigma,
+        rms = math.sqrt(rss / d.wsum) if d.wsum > 0 else math.nan
+        out.append(_Solve(coef[i], cov_s[i] / np.outer(d.safe, d.safe), residual[i], rank[i], identifiable[i], sigma,
                           rms))
     return out
 
@@ -783,11 +834,11 @@ def select_orders(theta, candidates: Sequence[float], min_eigenvalue: float = RE
         cols = fixed + [c for i in alive for c in (n_fixed + 2 * i, n_fixed + 2 * i + 1)]
         sub = gram[np.ix_(cols, cols)] / np.outer(diag[cols], diag[cols])
         inv = np.linalg.pinv(sub + 1e-10 * np.eye(len(cols)), hermitian=True)
-        d = []
+        d_list = []
         for j in range(len(alive)):
             blk = inv[n_fixed + 2 * j:n_fixed + 2 * j + 2, n_fixed + 2 * j:n_fixed + 2 * j + 2]
-            d.append(1.0 / max(float(np.linalg.eigvalsh(blk)[-1]), 1.0))
-        d = np.asarray(d)
+            d_list.append(1.0 / max(float(np.linalg.eigvalsh(blk)[-1]), 1.0))
+        d = np.asarray(d_list)
         for j, i in enumerate(alive):
             det[float(ords[i])] = float(d[j])
         if d.min() >= min_eigenvalue:

@@ -39,6 +39,7 @@ All angles in radians.  Pure numpy, no I/O.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -269,8 +270,6 @@ def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:
     mix both directions, so their s, R, A and E mean nothing.  Axis A, E, R
     (forward, reverse and bidirectional), the per-target s and R are
     withheld; ``reason`` is added to the notes."""
-    import dataclasses
-
     nan = math.nan
     t = figures.targets
     blank = np.full(len(t), np.nan)

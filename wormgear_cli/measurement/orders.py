@@ -10,6 +10,7 @@ no I/O.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -445,8 +446,6 @@ class _AngleSums:
 
     def with_trend(self, trend: np.ndarray) -> _AngleSums:
         """The same sums with trend columns (distinct x t) at the distinct angles."""
-        import dataclasses
-
         return dataclasses.replace(self, trend=trend)
 
     @classmethod

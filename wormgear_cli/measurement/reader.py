@@ -18,27 +18,32 @@ DeprecationWarning naming their new home.
 from __future__ import annotations
 
 import csv
+import importlib
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from wormgear_cli.errors import DataError
+from wormgear_cli.errors import DataError, UsageError, moved
+from wormgear_cli.files import read_text_file
 from wormgear_cli.measurement.guidelog_options import GuideLogOptions
 from wormgear_cli.physics.effects import Signals
+from wormgear_cli.physics.signals import CONDITIONS, SIGNALS
 from wormgear_cli.units import RAD_PER_UNIT
 
 #: 1 arcsec [rad] (re-exported from :mod:`wormgear_cli.units`)
 ARCSEC = RAD_PER_UNIT["arcsec"]
 REQUIRED = ("angle_deg", "error_arcsec")
-OPTIONAL = ("direction", "run", "load_Nm", "temperature_C", "time_s")
+#: the optional columns: the direction, the run, and a column per operating condition (physics.signals)
+OPTIONAL = (SIGNALS["direction"].column, "run", *(s.column for s in CONDITIONS))
 #: columns read only to form others: the actual position (-> error) and the velocity (-> direction)
 FORMING = ("actual_deg", "velocity")
 CANONICAL = REQUIRED + OPTIONAL + FORMING
 
 #: default value of an optional column that is absent
-DEFAULTS = {"direction": 1.0, "run": 0.0, "load_Nm": 0.0, "temperature_C": 20.0, "time_s": 0.0}
+DEFAULTS = {SIGNALS["direction"].column: SIGNALS["direction"].default, "run": 0.0,
+            **{s.column: s.default for s in CONDITIONS}}
 
 #: units accepted for the error and the angle columns
 ERROR_UNITS = ("arcsec", "arcmin", "deg", "urad")
@@ -97,8 +102,6 @@ class ReadOptions:
     guidelog: GuideLogOptions = GuideLogOptions()
 
     def __post_init__(self):
-        from wormgear_cli.errors import UsageError
-
         problems = []
         seen = Counter(c for c, _ in self.column_map)
         for canon, _header in self.column_map:
@@ -215,8 +218,6 @@ def read_bytes_bounded(path: str | Path, expected: str = "a CSV file", limit: in
         chunk), not UTF-8, larger than ``limit`` (endless inputs such as ``/dev/zero``
         stop at the first chunk or at the limit), or a line longer than :data:`MAX_LINE_BYTES`.
     """
-    from wormgear_cli.files import read_text_file
-
     return read_text_file(path, expected, DataError, encoding="utf-8-sig", max_bytes=limit,
                           max_line_bytes=MAX_LINE_BYTES)
 
@@ -246,10 +247,6 @@ _MOVED = {
 def __getattr__(name: str):
     for module, names in _MOVED.items():
         if name in names:
-            import importlib
-
-            from wormgear_cli.errors import moved
-
             moved(f"wormgear_cli.measurement.reader.{name}", f"{module}.{name}")
             return getattr(importlib.import_module(module), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,7 +12,7 @@ def document(spec, result, unit: str) -> dict:
     """The JSON document of ``wormgear analyze`` (angles in ``unit``): each stage's and the total
     values (:meth:`wormgear_cli.analysis.accuracy.Analysis.report`), the full error budget
     (:func:`wormgear_cli.analysis.budget.budget`) and the values used with their origin."""
-    from wormgear_cli.analysis.budget import budget
+    from wormgear_cli.analysis.budget import budget  # lazy: keeps analysis.budget off `analyze`'s start-up
 
     return {**result.report(unit), **budget(spec, result).report(unit), "values_used": values_used(spec)}
 
@@ -27,6 +27,7 @@ def values_used(spec) -> list:
     default), keyed by their TOML path: the parts' tolerances stage by stage from the output back,
     then the assembly's (a spur stage's centre distance and eccentricity: the eccentricity the stage's
     kinematics uses, under the involute reading 0 unless the file states one)."""
+    # lazy: spec.stages pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.spec.stages import record_values
 
     back = spec.stages[::-1]

@@ -14,10 +14,13 @@ them to get exactly the bytes the CLI writes.
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
+
+from wormgear_cli.errors import DataError
 
 if TYPE_CHECKING:  # numpy is imported where the fast formatter first runs
     import numpy as np
@@ -30,7 +33,7 @@ def __getattr__(name: str):
     # the table classes moved to wormgear_cli.output.tables (one topic per module, and ``analyze``
     # does not pay for three dataclasses it does not draw); the old names still work
     if name in ("Cell", "Column", "Table"):
-        from wormgear_cli.output import tables
+        from wormgear_cli.output import tables  # lazy: an old name, resolved on first use
 
         return getattr(tables, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
@@ -86,7 +89,6 @@ def csv_text(columns: list[str], rows: Iterable[Iterable], header: bool = True) 
 
     Raises DataError for a cell holding a line break (:func:`one_row_per_line`)."""
     import csv  # only the CSV paths pay for it (start-up of ``analyze --format json``)
-    import io
 
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -106,8 +108,6 @@ def one_row_per_line(text: str) -> str:
     if '"' in text:
         for k, line in enumerate(text.split("\n"), start=1):
             if line.count('"') % 2:
-                from wormgear_cli.errors import DataError
-
                 raise DataError(f"CSV output line {k}: a cell would hold a line break ({line[:40]!r}...); each "
                                 "row must be one line for the file to read back")
     return text
@@ -135,7 +135,7 @@ def fmt_angle(x: float, unit: str) -> str:
 
 
 def _tables():
-    import numpy as np
+    import numpy as np  # lazy: keeps numpy off `analyze`'s start-up
 
     global _DIGITS4, _POW10
     if _DIGITS4 is None:
@@ -151,7 +151,7 @@ _POW10: np.ndarray | None = None
 def format_g(x, digits: int = CSV_DIGITS):
     """'%.{digits}g' % v for every v of ``x`` as an (n, W) uint8 matrix of ASCII bytes, unused
     bytes 0 (NaN gives an empty field).  1 <= digits <= 15."""
-    import numpy as np
+    import numpy as np  # lazy: keeps numpy off `analyze`'s start-up
 
     p = int(digits)
     if not 1 <= p <= 15:
@@ -244,7 +244,7 @@ def format_g(x, digits: int = CSV_DIGITS):
 
 def csv_block(columns, digits: int = CSV_DIGITS) -> bytes:
     """CSV rows (no header) of equal-length numeric columns, each value '%.{digits}g'."""
-    import numpy as np
+    import numpy as np  # lazy: keeps numpy off `analyze`'s start-up
 
     fields = [format_g(c, digits) for c in columns]
     n = fields[0].shape[0] if fields else 0

@@ -8,6 +8,8 @@ constant however large the grid.  Angles are converted to the output unit here.
 
 from __future__ import annotations
 
+import io
+from collections import deque
 from collections.abc import Callable, Iterator
 
 import numpy as np
@@ -17,6 +19,7 @@ from wormgear_cli.analysis.sweep import ANGLE_COLUMNS, CHUNK_POINTS, INTEGER_COL
 from wormgear_cli.batch.pool import ordered_map
 from wormgear_cli.output.formats import csv_block, csv_text, fmt_angle
 from wormgear_cli.output.tables import Cell, Column, Table
+from wormgear_cli.spec.loader import with_values
 from wormgear_cli.units import to_unit
 
 #: heat-map size shown in the table (rows = i values, columns = l values): every value up to
@@ -60,8 +63,7 @@ def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress 
     """CSV bytes of grid points [start, stop) of ``sw``: the header, then each block in order
     (computed here, formatted by two worker threads, at most three blocks in flight; with
     ``jobs`` > 1 computed and formatted by that many worker processes)."""
-    from collections import deque
-    from concurrent.futures import Future, ThreadPoolExecutor
+    from concurrent.futures import Future, ThreadPoolExecutor  # lazy: keeps concurrent.futures off `sweep`'s start-up
 
     yield csv_header(sw.columns)
     if jobs > 1:
@@ -84,8 +86,6 @@ def ratio_distance_csv(sw, start: int, stop: int, unit: str, progress: Progress 
 def collected_csv(sw, data: dict, unit: str) -> bytes:
     """CSV of collected points, formatted a block at a time into one buffer (formatting every
     column at once would need ~500 bytes per point)."""
-    import io
-
     buf = io.BytesIO()
     buf.write(csv_header(sw.columns))
     for a in range(0, data["_point"].size, CHUNK_POINTS):
@@ -96,8 +96,6 @@ def collected_csv(sw, data: dict, unit: str) -> bytes:
 def joined(chunks: Iterator[bytes]) -> bytes:
     """All chunks in one buffer (getvalue() hands it over without a copy: ~1x the text in
     memory, where joining a list of chunks would need 2x)."""
-    import io
-
     buf = io.BytesIO()
     for c in chunks:
         buf.write(c)
@@ -269,12 +267,13 @@ def param_columns(axes, spec=None) -> list:
     CSV columns: :attr:`~wormgear_cli.analysis.accuracy.Analysis.columns`; without ``spec``, a worm +
     spur drive's), then the sign-off figures (:data:`~wormgear_cli.analysis.figures.FIGURE_COLUMNS`:
     the budget's totals and the ISO 230-2 figures, as analyze's CSV)."""
+    # lazy: keeps analysis.accuracy, analysis.figures off `sweep`'s start-up
     from wormgear_cli.analysis.accuracy import INFO_COLUMNS, METRIC_COLUMNS
     from wormgear_cli.analysis.figures import FIGURE_COLUMNS
 
     if spec is None or tuple(s.kind for s in spec.stages) == ("worm", "spur"):
         return [ax.key for ax in axes] + list(METRIC_COLUMNS) + list(INFO_COLUMNS) + list(FIGURE_COLUMNS)
-    from wormgear_cli.analysis.accuracy import analyze
+    from wormgear_cli.analysis.accuracy import analyze  # lazy: keeps analysis.accuracy off `sweep`'s start-up
 
     angle, info = analyze(spec).columns  # names of the stages' parts: the same at every point of the grid
     return [ax.key for ax in axes] + list(angle) + list(info) + list(FIGURE_COLUMNS)
@@ -305,8 +304,7 @@ def param_table_rows(spec, axes, start: int, stop: int, unit: str, progress: Pro
                 progress(b - a)
             yield from rows
         return
-    from wormgear_cli.analysis.figures import figures
-    from wormgear_cli.spec.loader import with_values
+    from wormgear_cli.analysis.figures import figures  # lazy: keeps analysis.figures off `sweep`'s start-up
 
     columns = param_columns(axes, spec)
     n = len(axes)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -69,6 +70,16 @@ class Effect:
     reciprocal of that parameter instead (``torsional_compliance``: load / k).
     ``phase``: the internal name of the phase parameter of a periodic
     effect, or None.
+
+    What ``diagnose`` reads (the effect's diagnosis metadata): ``mode``,
+    "common" (both directions alike) or "differential" (the reversal: lost
+    motion); ``pattern``, what the residual scan sees of a non-periodic
+    effect: "trend" (against its ``needs`` signal, in its ``mode``) or
+    "reversal" (a change of the mean reversal), None for a periodic effect
+    (its ``order``); ``signature``, those words for a report (see
+    :meth:`signature_text`); ``separate_hint``, how to measure so the effect
+    can be told from one its columns resemble; ``unphysical_hint``, what a
+    significant fit outside the physical range says about the spec.
     """
 
     name: str
@@ -80,9 +91,23 @@ class Effect:
     needs: str | None = None
     phase: str | None = None
     extra: dict = field(default_factory=dict)
+    mode: str = "common"
+    pattern: str | None = None
+    signature: str = ""
+    separate_hint: str | None = None
+    unphysical_hint: str | None = None
 
     def param(self, key: str) -> Param:
         return next(p for p in self.params if p.key == key)
+
+    def signature_text(self, g: DriveGeometry) -> str:
+        """The effect's signature in words: its ``signature``, or for a periodic effect its order in
+        the drive ``g``, else its ``doc``."""
+        if self.signature:
+            return self.signature
+        if self.order is not None:
+            return f"order {float(self.order(g)):g} content in common mode"
+        return self.doc
 
 
 def output_gear_runout(s: Signals, g: DriveGeometry, eccentricity, phase):
@@ -163,6 +188,8 @@ def _tref():
                  "temperature at which the effect is zero")
 
 
+_VARY_TEMPERATURE = "vary temperature independently of the other signals (heat and cool, or hold it during load steps)"
+
 EFFECTS: dict[str, Effect] = {
     e.name: e
     for e in (
@@ -190,20 +217,28 @@ EFFECTS: dict[str, Effect] = {
                (Param("centre_distance_um_per_K", "coefficient", "um/K", UM, -20.0, 20.0, None,
                       "growth of the worm centre distance per kelvin"), _tref()),
                "coefficient", "worm-mesh backlash changing with temperature (differential mode)",
-               needs="temperature"),
+               needs="temperature", mode="differential", pattern="trend",
+               signature="a differential-mode trend with temperature (the reversal changing as it warms)",
+               separate_hint=_VARY_TEMPERATURE),
         Effect("thermal_drift", thermal_drift,
                (Param("arcsec_per_K", "coefficient", "arcsec/K", ARCSEC, -100.0, 100.0, None,
                       "output angle drift per kelvin"), _tref()),
-               "coefficient", "zero drift with temperature (common mode)", needs="temperature"),
+               "coefficient", "zero drift with temperature (common mode)", needs="temperature", pattern="trend",
+               signature="a common-mode trend with temperature", separate_hint=_VARY_TEMPERATURE),
         Effect("torsional_compliance", torsional_compliance,
                (Param("stiffness_Nm_per_arcsec", "stiffness", "N m/arcsec", 1.0 / ARCSEC, 1e-3, 1e9, None,
                       "torsional stiffness of the drive at the output"),),
                "stiffness", "wind-up under external torque (common mode)", needs="load",
-               extra={"inverse": True}),
+               extra={"inverse": True}, pattern="trend", signature="a common-mode trend with load",
+               separate_hint="apply load steps at constant temperature and in both signs",
+               unphysical_hint="the table winds up less under load than the spec's tooth stiffness predicts"),
         Effect("bearing_clearance", bearing_clearance,
                (Param("clearance_arcsec", "clearance", "arcsec", ARCSEC, 0.0, 3600.0, None,
                       "extra lost motion"),),
-               "clearance", "extra lost motion (differential mode)", needs="direction"),
+               "clearance", "extra lost motion (differential mode)", needs="direction", mode="differential",
+               pattern="reversal", signature="a change of the mean reversal",
+               unphysical_hint="the table shows less lost motion than the spec predicts: the spec's backlash terms "
+                               "(thickness deviations, clearances) are larger than the table's"),
     )
 }
 
@@ -247,8 +282,8 @@ def params_from_keys(name: str, values: dict) -> dict:
     """TOML-keyed values (catalogue units) -> internal parameters, defaults filled."""
     out = {}
     for p in EFFECTS[name].params:
-        v = values.get(p.key, p.default)
-        out[p.name] = float(v) * p.scale
+        v = values.get(p.key, p.default)  # a required key (default None) is there: the spec loader checked
+        out[p.name] = float(cast(float, v)) * p.scale
     return out
 
 

@@ -34,6 +34,8 @@ import math
 
 import numpy as np
 
+from wormgear_cli.units import ARCSEC
+
 
 def centre_distance_growth(centre_distance, worm_radius, wheel_radius, housing_expansion, worm_expansion,
                            wheel_expansion, housing_dt=1.0, worm_dt=1.0, wheel_dt=1.0):
@@ -175,8 +177,6 @@ def predicted_drift_arcsec_per_K(spec) -> float | None:
     ``worm.thrust_bearing_distance_mm``, r_w the wheel's pitch radius, A the product of the ratios
     after the stage.  The sign depends on which side of the mesh the thrust bearing sits; the
     magnitude is given.  None without a worm stage or without a thrust-bearing distance."""
-    from wormgear_cli.units import ARCSEC
-
     wp = worm_stage(spec)
     length = getattr(getattr(wp, "worm", None), "thrust_bearing_distance", 0.0) if wp is not None else 0.0
     if not length:

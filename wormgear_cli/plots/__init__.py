@@ -8,9 +8,11 @@ SVG and PDF: a fixed SVG id salt, no dates or software versions in the metadata)
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 from wormgear_cli.errors import UsageError
+from wormgear_cli.files import atomic_write, check_output_path
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 #: the one install hint of plotting: the package is installed from a checkout (pip install .), not
@@ -35,11 +37,11 @@ METADATA = {
 def pyplot():
     """matplotlib.pyplot with the non-interactive Agg backend, or a UsageError with the install hint."""
     try:
-        import matplotlib
+        import matplotlib  # lazy: matplotlib (optional extra) is slow to import; only plots need it
     except ImportError:
         raise UsageError(INSTALL_HINT) from None
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib (optional extra) is slow to import; only plots need it
 
     return plt
 
@@ -49,7 +51,6 @@ def check_plot_path(path: Path) -> None:
     a directory or a file in a missing folder (:func:`wormgear_cli.files.check_output_path`)."""
     if Path(path).suffix.lower() not in PLOT_SUFFIXES:
         raise UsageError(f"{path}: --plot expects a file ending in {', '.join(PLOT_SUFFIXES)}")
-    from wormgear_cli.files import check_output_path
 
     check_output_path(path, "--plot")
 
@@ -57,8 +58,6 @@ def check_plot_path(path: Path) -> None:
 def figure_bytes(fig, fmt: str) -> bytes:
     """The file content of ``fig`` in ``fmt`` ("png", "svg", "pdf"): the same figure gives
     the same bytes on every run (:data:`SAVE_RC`, :data:`METADATA`)."""
-    import io
-
     plt = pyplot()
     buf = io.BytesIO()
     with plt.rc_context(SAVE_RC):
@@ -75,8 +74,6 @@ def save_figure(fig, path: Path) -> None:
     UsageError
         Unsupported suffix, or the file cannot be written.
     """
-    from wormgear_cli.files import atomic_write
-
     check_plot_path(path)
     fmt = Path(path).suffix.lower().lstrip(".")
     atomic_write(path, figure_bytes(fig, fmt), option="--plot")

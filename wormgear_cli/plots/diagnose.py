@@ -3,23 +3,23 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
 from wormgear_cli.plots import pyplot, save_figure
+from wormgear_cli.plots.arc import arc_degrees
+from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
 
 def draw(diag, doc: dict, unit: str):
     """A 2 x 2 figure: top, measured and simulated error per direction before
     (phases and offset fitted) and after (effects added); bottom, the residual.
     Every angle is converted from arcsec to ``unit``.  Returns the figure."""
-    from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
-
     plt = pyplot()
     factor = ARCSEC / RAD_PER_UNIT[unit]
     meas = diag.meas
-    from wormgear_cli.plots.arc import arc_degrees
 
     x, moved = arc_degrees(meas.angle)  # an arc through 0 deg drawn as one arc
     d = meas.direction
@@ -57,7 +57,6 @@ def draw(diag, doc: dict, unit: str):
     axes[0, 0].set_ylabel(f"error [{unit}]")
     axes[1, 0].set_ylabel(f"measured - simulated [{unit}]")
     axes[0, 0].legend(loc="upper right", fontsize=7, markerscale=3)
-    import textwrap
 
     # the verdict's first clause (the rest is in the report), wrapped to the figure's width
     headline = doc["verdict"].split("; ")[0]

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wormgear_cli.errors import UsageError
 from wormgear_cli.output.sweep import grid2d, subsample
 from wormgear_cli.plots import pyplot, save_figure
 from wormgear_cli.units import to_unit
@@ -29,8 +30,6 @@ def _grid(sweep, data, name, unit):
 def check_ratio_distance_plot(n_i: int, n_l: int) -> None:
     """Refuse (UsageError) an (i, l) grid that cannot be drawn: it needs 2+ values of i or of l.
     Cheap: the CLI calls it before doing any work."""
-    from wormgear_cli.errors import UsageError
-
     if n_i < 2 and n_l < 2:
         raise UsageError("--plot needs at least 2 values of i or of l (a single point has no curve to draw)")
 
@@ -38,8 +37,6 @@ def check_ratio_distance_plot(n_i: int, n_l: int) -> None:
 def check_param_plot(counts: list) -> None:
     """Refuse (UsageError) a --param grid that cannot be drawn: one or two keys, and 2+ values of
     at least one of them (``counts``: the number of values of each key)."""
-    from wormgear_cli.errors import UsageError
-
     if len(counts) > 2:
         raise UsageError(f"--plot draws one or two --param keys, got {len(counts)}")
     if max(counts, default=0) < 2:
@@ -108,8 +105,6 @@ def plot_params(path: Path, drive: str, axes: list, columns: list, rows: list, u
                 stage_column: str = "gear_transmission_error") -> None:
     """One key: gear TE, total TE and total backlash against it.  Two keys: contour map of the
     total TE over both, with cuts of the total TE against the first key."""
-    from wormgear_cli.errors import UsageError
-
     check_param_plot([len(ax.values) for ax in axes])
     if not rows:
         raise UsageError("--plot: no points to draw")

@@ -7,6 +7,7 @@ Shared by the two forms of a drive file: the stage form (``[[stage]]`` tables,
 
 from __future__ import annotations
 
+import json
 import math
 from typing import Any, NamedTuple
 
@@ -159,8 +160,6 @@ def get_path(data: dict, dotted: str):
 
 def quote(text: str) -> str:
     """A string value as shown in a message: double-quoted, escapes visible, one line."""
-    import json
-
     return json.dumps(text, ensure_ascii=False)
 
 

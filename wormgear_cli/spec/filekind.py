@@ -9,7 +9,9 @@ read is left to the reader, which says why.
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 from pathlib import Path
 
 #: a TOML table header: [name], [a.b], [[name]]
@@ -82,9 +84,6 @@ def first_line(text: str, most: int = 60) -> str:
 def kind_of_file(path) -> str | None:
     """"drive" (a TOML drive spec), "table" (a table of data) or None (neither, or unreadable),
     from the first :data:`_HEAD_BYTES` of ``path``; only a regular file is looked at."""
-    import os
-    import stat
-
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):  # a pipe read here would be lost to the reader
             return None

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from typing import Any, NamedTuple
 
+from wormgear_cli.physics.iso1328 import coarse_scale
 from wormgear_cli.spec.kinds import KINDS
 from wormgear_cli.spec.stages import record_values
 
@@ -84,7 +85,6 @@ def _scale(stage, key: str, name: str) -> float:
         return math.pi * stage.module / 2.0
     if name == "depth":
         return 2.0 * stage.module
-    from wormgear_cli.physics.iso1328 import coarse_scale
 
     return coarse_scale(stage.module, d)[name] * 1e-3
 

@@ -134,7 +134,7 @@ def parse_toml(text: str, source: str = "<spec>") -> dict:
         error, ``FILE: ...`` for what the checks refuse or any other failure
         of the parser (a number out of range, exhausted recursion or memory).
     """
-    import tomllib
+    import tomllib  # lazy: keeps tomllib off `analyze`'s start-up
 
     check_toml_text(text, source)
     try:

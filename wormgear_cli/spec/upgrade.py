@@ -21,8 +21,11 @@ from __future__ import annotations
 import re
 from typing import NamedTuple
 
+import tomli_w
+
 from wormgear_cli.errors import SpecError
 from wormgear_cli.spec import stages as st
+from wormgear_cli.spec.loader import loads_spec, raw_copy, set_path
 
 #: legacy table -> the stage table that takes it whole (its header comments go there)
 _TABLE_MOVES = {"worm_pair": (1, ""), "worm_pair.worm": (1, "worm"), "worm_pair.wheel": (1, "wheel"),
@@ -49,8 +52,6 @@ class _Item(NamedTuple):
 def upgrade_text(text: str, source: str = "<spec>") -> Upgrade:
     """The stage form of the legacy drive file ``text`` (module docstring).  Raises SpecError for a
     file that does not load, or that is already of the stage form."""
-    from wormgear_cli.spec.loader import loads_spec
-
     spec = loads_spec(text, source)
     if spec.form == "stages":
         raise SpecError(f"{source}: already a drive of [[stage]] tables; nothing to upgrade")
@@ -223,10 +224,6 @@ def _drive_table(table: str, tables: dict, drive_level: dict) -> list[str]:
 def _from_values(spec) -> str:
     """The stage form written from ``spec``'s document (no comments): every legacy key moved to its
     stage, the other tables as they are."""
-    import tomli_w
-
-    from wormgear_cli.spec.loader import raw_copy, set_path
-
     raw = raw_copy(spec)
     out: dict = {}
     stage_tables: list[dict] = [{"kind": k} for k in st.LEGACY_TRAIN]

@@ -21,8 +21,11 @@ output gear's cumulative pitch deviation to grade 3 (17 -> 12 um): yield 91.2 % 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from wormgear_cli.errors import UsageError
+from wormgear_cli.physics.iso1328 import flank_tolerances
+from wormgear_cli.spec.loader import value_origin
 from wormgear_cli.tolerance import engine
 from wormgear_cli.tolerance.statistics import Yield
 
@@ -44,8 +47,6 @@ def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     reference diameter m z and face width.  None otherwise (no grade, an explicit value,
     already class 1): the step is then the 70 % factor.
     """
-    from wormgear_cli.spec.loader import value_origin
-
     found = [(s, k) for s in spec.stages for k, p in s.paths.items() if p == path and s.kind == "spur"]
     if not found:
         return None
@@ -57,7 +58,6 @@ def iso1328_finer_grade(spec, path: str) -> tuple[float, int, int] | None:
     grade = part.accuracy_grade
     if grade is None or grade <= 1:
         return None
-    from wormgear_cli.physics.iso1328 import flank_tolerances
 
     tol = flank_tolerances(grade - 1, stage.module, stage.module * part.teeth, stage.face_width, part.teeth)
     return getattr(tol, GRADE_TOLERANCE[key]) * 1e-3, int(grade), int(grade) - 1
@@ -165,10 +165,6 @@ def allocate(spec, options: engine.Options, target: float, progress: Callable[[i
     Returns the JSON-ready allocation: target, base yield, and the steps best
     first (ties: registry order).  Raises UsageError when the spec has no limit.
     """
-    from dataclasses import replace
-
-    from wormgear_cli.errors import UsageError
-
     metric_set = engine.metrics_for_limits(spec)
     if metric_set is None:
         raise UsageError(f"allocation needs a limit in [requirements] ({engine.LIMIT_KEYS}) to count the "

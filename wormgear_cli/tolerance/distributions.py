@@ -35,6 +35,7 @@ def _normal_params(low: float, high: float, cp: float | None, cpk: float | None)
 
 
 def _normal_ppf(u, low, high, cp, cpk):
+    # lazy: scipy.special is slow to import (a large part of a second); only this path needs it
     from scipy.special import ndtr, ndtri
 
     mu, sigma = _normal_params(low, high, cp, cpk)
@@ -58,6 +59,7 @@ def _uniform_ppf(u, low, high, cp, cpk):
 
 
 def _normal_whole(u, low, high, cp, cpk):
+    # lazy: scipy.special is slow to import (a large part of a second); only this path needs it
     from scipy.special import ndtri
 
     mu, sigma = _normal_params(low, high, cp, cpk)

@@ -20,9 +20,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wormgear_cli.analysis.accuracy import analyze
+from wormgear_cli.analysis.synth import Plan, plan_angles
 from wormgear_cli.batch import shards
 from wormgear_cli.batch.pool import MAX_JOBS, ordered_map
-from wormgear_cli.errors import UsageError
+from wormgear_cli.drive.registry import aligned_phases, build
+from wormgear_cli.errors import SpecError, UsageError
 from wormgear_cli.tolerance import metrics as metrics_mod
 from wormgear_cli.tolerance import statistics as stats
 from wormgear_cli.tolerance.quantities import Varied, layout, varied_quantities
@@ -109,8 +112,6 @@ def shard_range(samples: int, shard: tuple[int, int] | None) -> tuple[int, int]:
 
 def plan_targets(options: Options) -> np.ndarray:
     """Test targets [deg]: ``synth``'s iso plan for this seed (its first random stream), or a dense scan."""
-    from wormgear_cli.analysis.synth import Plan, plan_angles
-
     if options.plan == "dense":
         return plan_angles(Plan(kind="dense", points=options.points, runs=1))
     rng = np.random.default_rng(np.random.SeedSequence(int(options.seed)).spawn(4)[0])
@@ -360,8 +361,6 @@ def run(s: Setup, on_block: Callable | None = None, progress: Callable[[int], No
 
 
 def _aligned(spec, quantity: str, registry=None) -> dict[str, np.ndarray]:
-    from wormgear_cli.drive.registry import aligned_phases, build
-
     reg = registry if registry is not None else build(spec)
     a = aligned_phases(spec, quantity, reg)  # sources without a size are left out there: 90 deg, as the sinusoids
     # keyed by the sampled phases' paths (the file's form)
@@ -390,8 +389,6 @@ def reference_values(s: Setup) -> tuple[dict, dict]:
     varied quantity at 0, f_k with quantity k alone at its limit (the classic
     root-sum-square stack-up of the single contributions).
     """
-    from wormgear_cli.analysis.accuracy import analyze
-
     unit = s.options.unit
     corner, rss = {}, {}
     paper = analyze(s.spec).angles
@@ -501,8 +498,6 @@ def check_yield(spec, samples: int = CHECK_SAMPLES, seed: int = 0) -> YieldCheck
     sampled limits (:data:`YIELD_REQUIREMENTS`) from ``samples`` drives.  A target inside the 95 %
     interval is undecided (and fails).  Raises SpecError when there is no limit to count
     against, or for a bad ``[statistics]`` table."""
-    from wormgear_cli.errors import SpecError
-
     target = spec.requirements.min_yield
     if target is None:
         return None

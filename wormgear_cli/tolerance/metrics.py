@@ -53,7 +53,16 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 
+from wormgear_cli.analysis.budget import statistical_total
+from wormgear_cli.analysis.simulate import components
+from wormgear_cli.drive import spur
+from wormgear_cli.drive.models import MODELS
+from wormgear_cli.drive.registry import build
+from wormgear_cli.drive.spur import base_radius
 from wormgear_cli.physics import spur as gear_model
+from wormgear_cli.physics.effects import Signals
+from wormgear_cli.spec.stages import record_values
+from wormgear_cli.tolerance.quantities import train_quantities
 
 if TYPE_CHECKING:
     from wormgear_cli.drive.registry import Registry
@@ -92,7 +101,7 @@ class GearTeMax:
         self.at_t = float(self.exact(np.array([self.t]))[0])
         self.coef = None
         if self.t > 0:
-            from numpy.polynomial import chebyshev
+            from numpy.polynomial import chebyshev  # lazy: numpy.polynomial.chebyshev only on this path
 
             k = np.arange(_CHEB_DEGREE + 1)
             x = -np.cos(np.pi * k / _CHEB_DEGREE)
@@ -114,7 +123,7 @@ class GearTeMax:
         if self.coef is None:
             value = self.exact(de)
         else:
-            from numpy.polynomial import chebyshev
+            from numpy.polynomial import chebyshev  # lazy: numpy.polynomial.chebyshev only on this path
 
             value = chebyshev.chebval(2.0 * de / self.t - 1.0, self.coef)
         value = np.where(de == self.t, self.at_t, value)
@@ -155,11 +164,8 @@ class Context:
 
 
 def _own_values(stage):
-    from wormgear_cli.drive import spur
-
     if stage.kind == "spur":
         return spur.values(stage)
-    from wormgear_cli.spec.stages import record_values
 
     return record_values(stage).__getitem__
 
@@ -180,11 +186,6 @@ def context(spec, tolerances, targets_rad: np.ndarray, dwell_s: float = 10.0) ->
     ``tolerances``: the varied quantities (:func:`~wormgear_cli.tolerance.quantities.varied_quantities`,
     which set each paper-kinematics spur stage's interpolation interval [0, T] of Delta e), or a
     number, the eccentricity tolerance of the drive's spur stage."""
-    from wormgear_cli.analysis.simulate import components
-    from wormgear_cli.drive.registry import build
-    from wormgear_cli.physics.effects import Signals
-    from wormgear_cli.tolerance.quantities import train_quantities
-
     reg = build(spec)
     if isinstance(tolerances, (int, float)):
         spurs = [s.index for s in spec.stages if s.kind == "spur"]
@@ -224,8 +225,6 @@ def stage_value(ctx: Context, v: dict, stage):
 def _stage_totals(sc: StageContext, value, spec) -> tuple:
     """(TE, backlash) [rad] at the stage's own output shaft per sample, by its kind's model (a worm
     stage with its additions beyond the paper, which are not sampled)."""
-    from wormgear_cli.drive.models import MODELS
-
     return MODELS[sc.stage.kind].sampled_totals(sc.stage, sc.deflection, value, spec, sc.te_max)
 
 
@@ -274,8 +273,6 @@ def _static(ctx: Context, x, value):
     sc = ctx.stages[x.stage_index - 1]
     st = sc.stage
     if st.kind == "spur":
-        from wormgear_cli.drive.spur import base_radius
-
         part = sc.def_part(value("eccentricity_mm")) if sc.def_part is not None else \
             sc.deflection / base_radius(st)
         assert ctx.registry is not None  # (context() builds it)
@@ -293,8 +290,6 @@ def budget_totals(ctx: Context, values: dict) -> dict[str, np.ndarray]:
     stage's eccentricity: the kinematic maximum of Delta phi_cc at no load, by its interpolant, less
     the curve's mean: its periodic part), and its static lines (:func:`_static`).
     """
-    from wormgear_cli.analysis.budget import statistical_total
-
     reg = ctx.registry
     assert reg is not None  # (context() builds it)
     train: Any = reg.train  # (the registry's train is typed object in drive.registry)

@@ -9,6 +9,7 @@ same floats (``--summarize`` reproduces the run's report exactly).
 
 from __future__ import annotations
 
+import io
 import itertools
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,7 +18,7 @@ from typing import NamedTuple
 import numpy as np
 
 from wormgear_cli.errors import DataError
-from wormgear_cli.tolerance.engine import Block, Setup, Summary, drawn_columns
+from wormgear_cli.tolerance.engine import Block, Setup, Summary, drawn_columns, not_sampled
 from wormgear_cli.tolerance.metrics import METRIC_SETS
 from wormgear_cli.tolerance.sampling import BLOCK
 from wormgear_cli.units import ANGLE_UNITS, RAD_PER_UNIT
@@ -201,8 +202,6 @@ def npy_dtype(s: Setup) -> np.dtype:
 def npy_header(s: Setup) -> bytes:
     """The .npy header of the run's samples (a structured array of :func:`npy_dtype`, one
     record per sample of [start, stop)), written before the rows."""
-    import io
-
     buf = io.BytesIO()
     np.lib.format.write_array_header_1_0(buf, {"descr": np.lib.format.dtype_to_descr(npy_dtype(s)),
                                                "fortran_order": False, "shape": (s.stop - s.start,)})
@@ -310,7 +309,6 @@ def document(s: Setup, summary: Summary, allocation: dict | None = None, shard: 
         "varied": varied,
         "phases": "uniform in [0, 360) deg",
     }
-    from wormgear_cli.tolerance.engine import not_sampled
 
     skipped = not_sampled(s.spec)
     if skipped:

@@ -173,6 +173,7 @@ class Yield:
 
 def binomial_yield(k: int, n: int, level: float = 0.95) -> Yield:
     """Yield k/n with its Clopper-Pearson interval (``scipy.stats.binomtest``)."""
+    # lazy: scipy.stats is slow to import (a large part of a second); only this path needs it
     from scipy.stats import binomtest
 
     ci = binomtest(int(k), int(n)).proportion_ci(confidence_level=level, method="exact")

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from wormgear_cli.analysis.requirements import evaluate
+from wormgear_cli.analysis.requirements import deprecations, evaluate
+from wormgear_cli.errors import WormgearError
+from wormgear_cli.units import ARCSEC
 
 if TYPE_CHECKING:
     from wormgear_cli.tolerance.engine import YieldCheck
@@ -54,10 +57,9 @@ def check_file(path) -> FileCheck:
     A spec error is not raised: it is returned as an invalid :class:`FileCheck` with the
     error's lines as ``problems``.
     """
+    # lazy: analysis.accuracy, analysis.sanity, spec.loader pull in numpy, ctypes; this module loads without them
     from wormgear_cli.analysis.accuracy import analyze
-    from wormgear_cli.analysis.requirements import deprecations
     from wormgear_cli.analysis.sanity import check_angles
-    from wormgear_cli.errors import WormgearError
     from wormgear_cli.spec.loader import load_spec
 
     name = str(path)
@@ -68,11 +70,13 @@ def check_file(path) -> FileCheck:
         verdicts = evaluate(spec, result)
         yc, by_yield = None, set()
         if spec.requirements.min_yield is not None:  # a Monte Carlo estimate: imported only then
+            # lazy: keeps tolerance.engine off `check`'s start-up
             from wormgear_cli.tolerance.engine import YIELD_REQUIREMENTS
 
             yc = check_yield(spec)
             by_yield = {f"requirements.{a}_arcsec" for a in (*YIELD_REQUIREMENTS, *ISO_YIELD)}  # what the yield counts
         elif "statistics" in spec.raw:  # validated even when no yield is required
+            # lazy: keeps tolerance.quantities off `check`'s start-up
             from wormgear_cli.tolerance.quantities import statistics_table
 
             statistics_table(spec)
@@ -120,14 +124,13 @@ def check_yield(spec, samples: int | None = None, seed: int = 0):
     ``reading_scatter_arcsec`` s adds 4 s to each sampled A: the model's runs are alike).  A target
     inside the 95 % interval is undecided (and fails).  Raises SpecError when there is no limit to
     count the yield against."""
-    import numpy as np
+    import numpy as np  # lazy: numpy only on this path
 
-    from wormgear_cli.tolerance import engine
+    from wormgear_cli.tolerance import engine  # lazy: keeps tolerance.engine off `check`'s start-up
 
     if not any(getattr(spec.requirements, a) is not None for a in ISO_YIELD):
         return engine.check_yield(spec, samples or engine.CHECK_SAMPLES, seed)
-    from wormgear_cli.tolerance import statistics as stats
-    from wormgear_cli.units import ARCSEC
+    from wormgear_cli.tolerance import statistics as stats  # lazy: keeps tolerance.statistics off `check`'s start-up
 
     s = _iso_setup(spec, samples or engine.CHECK_SAMPLES, seed)
     lim = dict(engine.limits(s))
@@ -150,10 +153,9 @@ def check_yield(spec, samples: int | None = None, seed: int = 0):
 
 def _iso_setup(spec, samples: int, seed: int):
     """The tolerance engine's run (every metric, arcsec) with its ISO 230-2 test on the spec's plan."""
-    import dataclasses
+    import numpy as np  # lazy: numpy only on this path
 
-    import numpy as np
-
+    # lazy: analysis.acceptance pulls in numpy, ctypes; this module loads without it (the next imports alike)
     from wormgear_cli.analysis.acceptance import DWELL_S, plan_targets
     from wormgear_cli.tolerance import engine
     from wormgear_cli.tolerance import metrics as metrics_mod

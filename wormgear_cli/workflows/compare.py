@@ -11,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from wormgear_cli.errors import UsageError
+
 #: the compared totals: key -> (label, where in analyze's document, under "total" / "total_with_budget")
 TOTALS = {
     "total_transmission_error": ("total TE (paper)", "total", "transmission_error"),
@@ -43,6 +45,7 @@ def _row(values: list) -> dict:
 def _yields(specs: Sequence, samples: int, options: Options, progress: Callable[[int], None] | None) -> dict:
     """The ``yield`` section: per sampled requirement and ``all``, each drive against its own limits
     (``samples`` built drives each)."""
+    # lazy: tolerance.engine pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.tolerance import engine
 
     per_drive: list[dict] = []
@@ -79,9 +82,9 @@ def compare(specs: Sequence, files: Sequence[str], options: Options,
     UsageError
         Fewer than :data:`MIN_DRIVES` drives.
     """
+    # lazy: analysis.accuracy, analysis.budget pull in numpy, ctypes; this module loads without them
     from wormgear_cli.analysis.accuracy import analyze
     from wormgear_cli.analysis.budget import budget
-    from wormgear_cli.errors import UsageError
 
     if len(specs) < MIN_DRIVES:
         raise UsageError(f"compare needs at least {MIN_DRIVES} drives, got {len(specs)}")

@@ -26,20 +26,37 @@ strongest period for a mount).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wormgear_cli.analysis.accuracy import geometry
+from wormgear_cli.compensation import pec
+from wormgear_cli.compensation.model import fit_plan, parameters, plan_model
+from wormgear_cli.compensation.noise import noise_components
+from wormgear_cli.compensation.pec import continuous
+from wormgear_cli.compensation.predict import Figure, predict_table
+from wormgear_cli.compensation.scan import MAX_ORDERS, strongest_orders
+from wormgear_cli.compensation.table import CorrectionTable, TableGrid, build_table, interpolation_loss, uncarried
 from wormgear_cli.errors import DataError, UsageError
+from wormgear_cli.measurement.checks import structure_findings
+from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
+from wormgear_cli.measurement.iso230 import group_targets, withhold_directional
+from wormgear_cli.measurement.readers import read_measurement
+from wormgear_cli.output import writers
+from wormgear_cli.output.writers import PEC_CURVE, WriteOptions
+from wormgear_cli.spec.loader import load_spec
+from wormgear_cli.units import to_unit
+from wormgear_cli.workflows.measure import _label_for, _order_notes, _orders_asked
+from wormgear_cli.workflows.measure import strongest_orders as measured_strongest_orders
 
 if TYPE_CHECKING:
     from wormgear_cli.compensation.model import CorrectionModel, ModelPlan, TargetTest
     from wormgear_cli.compensation.pec import PecCurve, PecPrediction
     from wormgear_cli.compensation.predict import TablePrediction
     from wormgear_cli.compensation.scan import Selection
-    from wormgear_cli.compensation.table import CorrectionTable, TableGrid
     from wormgear_cli.measurement.orders import OrdersAnalysis
     from wormgear_cli.output.writers import Writer
 
@@ -79,8 +96,6 @@ class CompensateOptions:
 
     def writer(self):
         """The writer: ``format``, else the one owning ``output``'s file name ending."""
-        from wormgear_cli.output import writers
-
         if self.format is not None:
             return writers.get(self.format)
         found = writers.for_path(self.output)
@@ -180,17 +195,11 @@ def choose_orders(options: CompensateOptions) -> OrderChoice:
     physical: list = []
     priority = worm = name = None
     if options.drive is not None:
-        from wormgear_cli.analysis.accuracy import geometry
-        from wormgear_cli.spec.loader import load_spec
-        from wormgear_cli.workflows.measure import _orders_asked
-
         spec = load_spec(options.drive)
         _, _, priority, physical, name = _orders_asked(spec, None, options.harmonics)
         priority = tuple(priority)
         worm = float(geometry(spec).worm_order)
     if options.orders is not None:
-        from wormgear_cli.workflows.measure import _label_for
-
         labels = tuple(_label_for(k, physical) for k in options.orders) if physical else None
         return OrderChoice(tuple(options.orders), labels, None, "--orders", worm, name)
     if physical:
@@ -203,8 +212,6 @@ def compensate(data, options: CompensateOptions | None = None, read_options=None
     """Read the measurement file ``data`` and make its correction (:func:`compensate_measurement`).
 
     Raises DataError, SpecError, UsageError."""
-    from wormgear_cli.measurement.readers import read_measurement
-
     options = options or CompensateOptions()
     options.check()
     _check_applies(options, options.writer())  # a bad --format or a stray option fails before the file is read
@@ -218,8 +225,6 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
     The one call a reader of another kind (a guide log) needs: read the file
     into a Measurement (angle: the axis angle; error: actual - ideal; time;
     run: one per session), then call this."""
-    from wormgear_cli.output.writers import PEC_CURVE, WriteOptions
-
     options = options or CompensateOptions()
     options.check()
     writer = options.writer()
@@ -241,8 +246,6 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
         written = details.table
     exceeded = options.max_correction is not None and largest > options.max_correction
     if exceeded:
-        from wormgear_cli.units import to_unit
-
         u = options.unit
         warnings.append(f"the largest correction, {to_unit(largest, u):.4g} {u}, exceeds --max-correction "
                         f"{to_unit(options.max_correction, u):.4g} {u}")
@@ -258,14 +261,12 @@ def _check_applies(options: CompensateOptions, writer) -> None:
     """UsageError for an option the file being written has no use for (it would be ignored without a
     word): a table's (--points, --range, --type) with a PEC curve, a mount's (--worm-period,
     --steps-per-worm) with a table, --type with another table than LinuxCNC's."""
-    from wormgear_cli.output.writers import PEC_CURVE
-
-    pec = writer.accepts == PEC_CURVE
+    is_pec = writer.accepts == PEC_CURVE
     table, mount = "a table (--format linuxcnc or csv)", "a mount's PEC curve (--format eqmod)"
-    rules = [("--points", options.points, not pec, table), ("--range", options.range_deg, not pec, table),
+    rules = [("--points", options.points, not is_pec, table), ("--range", options.range_deg, not is_pec, table),
              ("--type", options.file_type, writer.name == "linuxcnc", "LinuxCNC's table (--format linuxcnc)"),
-             ("--worm-period", options.worm_period_s, pec, mount), ("--steps-per-worm", options.steps_per_worm, pec,
-                                                                    mount)]
+             ("--worm-period", options.worm_period_s, is_pec, mount),
+             ("--steps-per-worm", options.steps_per_worm, is_pec, mount)]
     for flag, value, applies, whose in rules:
         if value is not None and not applies:
             raise UsageError(f"{flag} is an option of {whose}, not of the {writer.name} file being written; drop it "
@@ -286,11 +287,6 @@ def _select_table_orders(theta, y, d, run, candidates=None) -> Selection:
     the per-target means (:func:`~wormgear_cli.compensation.scan.strongest_orders`) among
     ``candidates`` (default: whole orders 1 to the Nyquist order of the mean target spacing, at
     most :data:`SEARCH_MAX_ORDER`)."""
-    from wormgear_cli.compensation.noise import noise_components
-    from wormgear_cli.compensation.scan import MAX_ORDERS, strongest_orders
-    from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
-    from wormgear_cli.measurement.iso230 import group_targets
-
     index, targets = group_targets(theta)
     cell = 2 * index + (d < 0)
     _, first, ci, counts = np.unique(cell, return_index=True, return_inverse=True, return_counts=True)
@@ -329,10 +325,6 @@ def _binned(at, dc, means, counts, cov):
 
 def _table_path(m, options: CompensateOptions, writer: Writer,
                 choice: OrderChoice) -> tuple[TableDetails, list[str], list[str], OrderChoice]:
-    from wormgear_cli.compensation.model import fit_plan, parameters, plan_model
-    from wormgear_cli.compensation.predict import predict_table
-    from wormgear_cli.compensation.table import TableGrid, build_table, interpolation_loss, uncarried
-
     theta, y, d, run = m.angle, m.error, m.direction, m.run
     span = options.range_deg or _default_range(m.angle)
     grid = TableGrid(options.points or writer.default_points or 361, *span)
@@ -374,8 +366,6 @@ def _default_range(theta) -> tuple[float, float]:
     """The table's span when --range is not given [deg]: 0 to 360 for data over a full turn; the
     measured arc rounded out to whole degrees for a partial one (a table over the whole turn would
     spend its points where nothing was measured, and spread them too far for the orders seen)."""
-    from wormgear_cli.measurement.coverage import coverage
-
     if coverage(theta).full_turn:
         return 0.0, 360.0
     deg = np.degrees(theta)
@@ -386,9 +376,6 @@ def _default_range(theta) -> tuple[float, float]:
 def _withheld(prediction):
     """The prediction with every figure that needs the directions told apart withheld (NaN):
     all but M, as measured and after correction (``measure`` withholds the same)."""
-    from wormgear_cli.compensation.predict import Figure
-    from wormgear_cli.measurement.iso230 import withhold_directional
-
     before = withhold_directional(prediction.before, "directions mixed: one-direction figures withheld")
     before = replace(before, B=math.nan)
     after = {k: (v if k == "M" else Figure(math.nan, math.nan, math.nan)) for k, v in prediction.after.items()}
@@ -398,9 +385,6 @@ def _withheld(prediction):
 def _structure(m) -> tuple[list, list, bool]:
     """What the file does not state (``measure``'s checks), as warnings and notes for a table, and
     whether forward and reverse visits are mixed."""
-    from wormgear_cli.measurement.checks import structure_findings
-    from wormgear_cli.measurement.iso230 import group_targets
-
     findings, mixed = structure_findings(m, group_targets(m.angle)[0])
     warnings = [f.text for f in findings if f.warning]
     notes = [f.text for f in findings if not f.warning and f.text]
@@ -412,9 +396,6 @@ def _structure(m) -> tuple[list, list, bool]:
 
 def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple[list, list]:
     """The warnings and notes of the table path, as sentences (angles in ``options.unit``)."""
-    from wormgear_cli.units import to_unit
-    from wormgear_cli.workflows.measure import _order_notes
-
     u = options.unit
     warnings, notes = [], list(_order_notes(t.analysis))
     if t.selection is not None:
@@ -474,9 +455,6 @@ def _worm_order(m, th, run, options: CompensateOptions,
     (None: not taken from the record)) of the tracking rows ``m``; DataError when none can be had.
     Without a drive or orders, the strongest period ``measure`` finds
     (:func:`~wormgear_cli.workflows.measure.strongest_orders`)."""
-    from wormgear_cli.compensation import pec
-    from wormgear_cli.workflows.measure import strongest_orders
-
     if options.worm_period_s is not None:
         return pec.order_of(options.worm_period_s), f"--worm-period {options.worm_period_s:g} s", None
     if choice.worm_order is not None:
@@ -485,7 +463,7 @@ def _worm_order(m, th, run, options: CompensateOptions,
         whole = [k for k in choice.orders if pec.cycles_covered(th, run, k) >= 1.0]
         if whole:
             return min(whole), "the lowest of --orders with a whole cycle in the record", None
-    found = [p for p in strongest_orders(m).significant
+    found = [p for p in measured_strongest_orders(m).significant
              if pec.cycles_covered(th, run, p.order) >= 1.0 and pec.period_of(p.order) >= pec.MIN_WORM_PERIOD_S]
     if not found:
         raise DataError(f"{m.source}: no period of {pec.MIN_WORM_PERIOD_S:g} s or longer stands out of the noise in "
@@ -497,7 +475,6 @@ def _rows(m, keep: np.ndarray):
     """The measurement ``m`` with only the rows ``keep`` (``m`` itself when every row is kept)."""
     if keep.all():
         return m
-    from dataclasses import fields, replace
 
     n = len(m)
     arrays = {f.name: getattr(m, f.name) for f in fields(m)}
@@ -506,8 +483,6 @@ def _rows(m, keep: np.ndarray):
 
 def _pec_path(m, options: CompensateOptions,
               choice: OrderChoice) -> tuple[PecDetails, list[str], list[str], OrderChoice]:
-    from wormgear_cli.compensation import pec
-
     warnings, notes = [], []
     keep = np.ones(len(m), dtype=bool)
     if np.any(m.direction > 0) and np.any(m.direction < 0):
@@ -570,7 +545,6 @@ def _tracking_rate(m, keep) -> float | None:
     start), or None without a time column."""
     if "time_s" not in m.present or not np.ptp(m.time[keep]) > 0:
         return None
-    from wormgear_cli.compensation.pec import continuous
 
     run = m.run[keep]
     th = continuous(m.angle[keep], run)
@@ -587,8 +561,6 @@ def _tracking_rate(m, keep) -> float | None:
 
 
 def _u(x, unit: str):
-    from wormgear_cli.units import to_unit
-
     x = float(x)
     return float(to_unit(x, unit)) if math.isfinite(x) else None
 

@@ -46,7 +46,7 @@ class MountParts:
 
 def mount_parts(spec) -> MountParts:
     """The :class:`MountParts` of a loaded drive spec."""
-    from wormgear_cli.drive.train import of, orders, shaft_label
+    from wormgear_cli.drive.train import of, orders, shaft_label  # lazy: keeps drive.train off `measure`'s start-up
 
     t = of(spec)
     worms = [s for s in t.stages if s.kind == "worm"]
@@ -104,6 +104,7 @@ def guide_periodic_error(m, dominant, mount: MountParts | None = None,
     ``dominant``: its :class:`~wormgear_cli.measurement.dominant.Dominant` (scanned with a drift per
     run); ``mount``: the :class:`MountParts` of ``--drive`` (None: the worm order is the strongest
     period found).  The worm harmonics are the first ``harmonics`` multiples below the Nyquist limit."""
+    # lazy: keeps measurement.periodic_error off `measure`'s start-up
     from wormgear_cli.measurement.periodic_error import periodic_error
 
     nyquist = dominant.nyquist if dominant is not None and math.isfinite(dominant.nyquist) else math.inf

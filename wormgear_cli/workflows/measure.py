@@ -27,11 +27,27 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from wormgear_cli.errors import UsageError
+from wormgear_cli.measurement.arrays import unique as lean_unique
 from wormgear_cli.measurement.checks import (  # noqa: F401  (re-exported)
     Finding,
     duplicate_rows,
     guide_log_findings,
     structure_findings,
+)
+from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
+from wormgear_cli.measurement.readers import read_measurement
+from wormgear_cli.measurement.resolution import reading_resolution
+from wormgear_cli.spec.loader import load_spec
+from wormgear_cli.units import to_unit
+from wormgear_cli.workflows.guidelog import (
+    ISO_NOT_APPLICABLE,
+    guide_doc,
+    guide_periodic_error,
+    guide_verdict,
+    is_guide_log,
+    longest_run,
+    mount_parts,
 )
 
 if TYPE_CHECKING:  # the records' types only: the modules are imported where they are used
@@ -83,8 +99,6 @@ class MeasureResult:
         m, a = self.measurement, self.analysis
         flags = [f.verdict for f in self.findings if f.verdict]
         if self.figures is None:
-            from wormgear_cli.workflows.guidelog import guide_verdict
-
             return guide_verdict(m, self.guide) + ("; " + "; ".join(flags) if flags else "")
         cov = a.coverage
         assert cov is not None  # (analyse_orders always measures the coverage)
@@ -99,8 +113,6 @@ class MeasureResult:
 
 def parse_orders(text: str) -> list[float]:
     """``"1,8,240.5"`` -> [1.0, 8.0, 240.5]; UsageError unless every item is a finite number in (0, MAX_ORDER]."""
-    from wormgear_cli.errors import UsageError
-
     out = []
     for item in (t.strip() for t in text.split(",")):
         try:
@@ -147,12 +159,6 @@ def measure(data: str | Path, options=None, drive: str | Path | None = None, ord
     DataError, SpecError, UsageError
         Bad file, bad spec, bad option.
     """
-    from wormgear_cli.measurement.arrays import unique as lean_unique
-    from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
-    from wormgear_cli.measurement.readers import read_measurement
-    from wormgear_cli.measurement.resolution import reading_resolution
-    from wormgear_cli.workflows.guidelog import is_guide_log
-
     spec = _load_drive(drive)
     m = read_measurement(data, options=options)
     if is_guide_log(m):
@@ -177,7 +183,6 @@ def _load_drive(drive):
     """The loaded drive spec of ``--drive`` (None without one)."""
     if drive is None:
         return None
-    from wormgear_cli.spec.loader import load_spec
 
     return load_spec(drive)
 
@@ -186,8 +191,6 @@ def _measure_guide_log(m, spec, orders, harmonics: int) -> MeasureResult:
     """``measure`` of a PHD2 guide log: no ISO 230-2 figures (every frame its own target); each session
     its own offset and drift; the orders asked for (or the drive's), the strongest orders, the periodic
     error."""
-    from wormgear_cli.workflows.guidelog import guide_periodic_error, mount_parts
-
     order_list, labels, priority, physical, drive_name = _orders_asked(spec, orders, harmonics,
                                                                        default=())
     findings = guide_log_findings(m)
@@ -201,13 +204,14 @@ def _orders_asked(spec, orders, harmonics, default=DEFAULT_ORDERS):
     """(orders to fit, their labels or None, tie-break priority or None, the drive's (order, label) pairs,
     the drive's name) from the options (``spec``: the loaded drive or None; ``default``: the orders
     without either)."""
+    # lazy: keeps measurement.harmonics off `measure`'s start-up
     from wormgear_cli.measurement.harmonics import physical_orders, physical_priority
 
     physical: list = []
     priority = None
     drive_name = None
     if spec is not None:
-        from wormgear_cli.analysis.accuracy import geometry
+        from wormgear_cli.analysis.accuracy import geometry  # lazy: keeps analysis.accuracy off `measure`'s start-up
 
         drive_name = spec.drive.name
         geo = geometry(spec)  # the worm's starts are part of the geometry
@@ -226,6 +230,7 @@ def _orders_asked(spec, orders, harmonics, default=DEFAULT_ORDERS):
 
 def _orders_and_dominant(m, order_list, labels, priority, physical, unique):
     """The joint fit at the orders asked for, and the strongest orders of the data."""
+    # lazy: keeps measurement.orders off `measure`'s start-up
     from wormgear_cli.measurement.orders import OrdersOptions, analyse_orders
 
     time = m.time if "time_s" in m.present else None
@@ -242,13 +247,13 @@ def strongest_orders(m, physical=()):
     (:func:`~wormgear_cli.measurement.dominant.dominant_orders`: each guide-log session its own offset and
     drift; ``physical``: the drive's (order, label) pairs that name them).  ``measure``'s ``dominant``, and
     the worm period ``compensate`` takes without a drive."""
+    # lazy: keeps measurement.dominant off `measure`'s start-up
     from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
 
     time = m.time if "time_s" in m.present else None
     per_run = m.run_drift
     window = 0.0
     if per_run:  # the sessions' relative phases are known as well as the logged hour angle: half a resolution
-        from wormgear_cli.workflows.guidelog import longest_run
 
         window = math.pi / max(longest_run(m.angle, m.run), 1e-12)
     return dominant_orders(m.angle, m.error, m.direction, time, m.run,
@@ -259,6 +264,7 @@ def _left_outside(m, analysis) -> tuple:
     """When the fit's residual is more than EXCESS_FACTOR times the point-to-point noise: the significant
     strongest orders of the data with the fitted orders held (projected out), outside their groups;
     else ()."""
+    # lazy: keeps diagnosis.thresholds, measurement.dominant off `measure`'s start-up
     from wormgear_cli.diagnosis.thresholds import EXCESS_FACTOR
     from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
 
@@ -275,8 +281,6 @@ def _left_outside(m, analysis) -> tuple:
 
 def _span_finding(analysis, unit: str) -> Finding | None:
     """The partial span, the orders beyond it and what stands for the slow part (with its size in ``unit``)."""
-    from wormgear_cli.units import to_unit
-
     cov = analysis.coverage
     if cov.full_turn or cov.distinct < 2:
         return None
@@ -305,8 +309,6 @@ def _span_finding(analysis, unit: str) -> Finding | None:
 def _excess_finding(analysis, outside: tuple, unit: str) -> Finding | None:
     """A note when the fit's residual is far above the point-to-point noise and the strongest content of
     the data lies outside the orders fitted (``outside``: :func:`_left_outside`; angles in ``unit``)."""
-    from wormgear_cli.units import to_unit
-
     if not outside:
         return None
     noise, rms = analysis.point_noise, analysis.residual_rms
@@ -380,15 +382,12 @@ def report(result: MeasureResult, unit: str, per_target: bool = True) -> dict:
 
     ``per_target`` False leaves the per-target list out (the table format
     does not show it beyond 100 targets; saves memory on long files)."""
-    from wormgear_cli.units import to_unit
-
     m, figures, analysis = result.measurement, result.figures, result.analysis
 
     def a(x) -> float | None:
         x = float(x)
         return float(to_unit(x, unit)) if math.isfinite(x) else None
 
-    from wormgear_cli.workflows.guidelog import ISO_NOT_APPLICABLE, guide_doc
 
     findings = list(result.findings) + [f for f in (_span_finding(analysis, unit),
                                                     _excess_finding(analysis, result.outside, unit)) if f]
@@ -460,8 +459,6 @@ def target_row_blocks(t, unit: str, block: int | None = None):
 def _target_rows(t, unit: str, part: slice = slice(None)) -> list[dict]:
     """The per-target list of the document (the targets ``part``): numbers in ``unit``; s and R of a cell
     whose readings are all equal are None (below the resolution of the data), said by ``below_resolution``."""
-    from wormgear_cli.units import to_unit
-
     def column(values, blank=None) -> list:
         # NaN (undefined) stays NaN here: null in JSON, empty in CSV, "-" in tables
         values = np.asarray(values, dtype=float)[part]
@@ -510,8 +507,6 @@ def _resolution_doc(result: MeasureResult, a) -> dict | None:
 
 def _resolution_notes(result: MeasureResult, unit: str) -> list[str]:
     """A sentence for the cells whose readings are all equal: their s and R are below the resolution."""
-    from wormgear_cli.units import to_unit
-
     assert result.figures is not None  # (a measurement with ISO 230-2 figures)
     t = result.figures.targets
     if t.equal_up is None or not (np.any(t.equal_up) or np.any(t.equal_down)):

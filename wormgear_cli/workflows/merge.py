@@ -58,6 +58,7 @@ def check_drive(drive: Path, parts: list[dict]) -> None:
 
 def tolerance_setup(spec, parts: list[dict], jobs: int = 1):
     """The unsharded run's :class:`~wormgear_cli.tolerance.engine.Setup`, from the parts' parameters."""
+    # lazy: tolerance.engine pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.tolerance import engine
 
     p = parts[0]["parameters"]
@@ -68,6 +69,7 @@ def tolerance_setup(spec, parts: list[dict], jobs: int = 1):
 
 def tolerance_blocks(s, parts: list[dict]) -> Iterator:
     """The samples of the parts as the unsharded run's blocks (same boundaries, same values)."""
+    # lazy: tolerance.engine pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.tolerance import engine, report
 
     def each():
@@ -82,6 +84,7 @@ def tolerance_blocks(s, parts: list[dict]) -> Iterator:
 
 def tolerance_summary(s, parts: list[dict]):
     """The unsharded run's :class:`~wormgear_cli.tolerance.engine.Summary` from the parts."""
+    # lazy: tolerance.engine pulls in numpy, ctypes; this module loads without it
     from wormgear_cli.tolerance import engine
 
     return engine.summarize(s, lambda: tolerance_blocks(s, parts))

@@ -8,13 +8,18 @@ to the output unit here.
 
 from __future__ import annotations
 
+import io
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
+from wormgear_cli.analysis.simulate import aligned_phases, periodic_sources
+from wormgear_cli.analysis.simulate import simulate as run
+from wormgear_cli.analysis.synth import resolve_effects
 from wormgear_cli.output.formats import csv_text, fmt_number, json_text, one_row_per_line
-from wormgear_cli.physics.effects import Signals
+from wormgear_cli.physics.effects import Signals, params_from_keys, params_to_keys
+from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K, predicted_drift_arcsec_per_K
 from wormgear_cli.units import to_unit
 
 #: --phases values: as in the spec, or aligned so every source peaks at 0 deg
@@ -32,8 +37,6 @@ class SimulationReport:
 
 def phase_map(spec, which: str) -> dict | None:
     """Source name -> phase [rad] for ``--phases`` ``which``; None keeps the spec's."""
-    from wormgear_cli.analysis.simulate import aligned_phases
-
     if which == "spec":
         return None
     return aligned_phases(spec, "error" if which == "aligned-error" else "reversal")
@@ -45,8 +48,6 @@ def effect_params(spec, requested: dict) -> dict | None:
     when nothing is requested."""
     if not requested:
         return None
-    from wormgear_cli.analysis.synth import resolve_effects
-    from wormgear_cli.physics.effects import params_from_keys
 
     return {n: params_from_keys(n, v) for n, v in resolve_effects(spec, requested).items()}
 
@@ -59,10 +60,7 @@ def _summary(v) -> dict:
 def context(spec, unit: str, phases: dict | None, effects: dict | None) -> dict:
     """Spec-level facts shared by both JSON documents: sources (order, amplitude in ``unit``,
     phase), effects, the analyze totals and the predicted thermal centre-distance change."""
-    from wormgear_cli.analysis.accuracy import analyze
-    from wormgear_cli.analysis.simulate import periodic_sources
-    from wormgear_cli.physics.effects import params_to_keys
-    from wormgear_cli.physics.thermal import predicted_centre_distance_um_per_K, predicted_drift_arcsec_per_K
+    from wormgear_cli.analysis.accuracy import analyze  # lazy: keeps analysis.accuracy off `simulate`'s start-up
 
     a = analyze(spec)
     sources = {}
@@ -87,8 +85,6 @@ def dense(spec, points: int, revs: float, unit: str, fmt: str, temperature_c: fl
     end excluded).  CSV columns: angle_deg, forward_<unit>, reverse_<unit>, common_<unit>
     (mean of both), lost_motion_<unit> (reverse - forward); ``fmt`` "json" gives the
     document with summaries and the curve."""
-    from wormgear_cli.analysis.simulate import simulate as run
-
     phases = phase_map(spec, which)
     angle_deg = np.arange(points) * (360.0 * revs / points)
     theta = np.radians(angle_deg)
@@ -128,8 +124,7 @@ AT_ROWS_PER_TASK = 50_000
 def _at_lines(state, span: tuple[int, int]) -> str:
     """CSV lines of rows [a, b) of the --at file with their simulated value (``j``: the index of
     the simulated column when the file has it already, else None: appended)."""
-    import csv
-    import io
+    import csv  # lazy: keeps csv off `simulate`'s start-up
 
     rows, sim, j = state
     a, b = span
@@ -155,10 +150,9 @@ def at_rows(spec, at, unit: str, fmt: str, temperature_c: float = 20.0, load_nm:
     errors and, when the file has errors, the mean and RMS of measured - simulated.  ``jobs`` > 1:
     the CSV rows are formatted by that many worker processes (the same text).  Raises the
     reader's errors for a bad file."""
-    import csv
-    import io
+    import csv  # lazy: keeps csv off `simulate`'s start-up
 
-    from wormgear_cli.analysis.simulate import simulate as run
+    # lazy: keeps batch.pool, measurement.readers off `simulate`'s start-up
     from wormgear_cli.batch.pool import ordered_map
     from wormgear_cli.measurement.readers import read_measurement
 

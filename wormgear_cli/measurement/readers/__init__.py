@@ -30,6 +30,8 @@ import importlib
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
+from wormgear_cli.errors import DataError, UsageError
+
 if TYPE_CHECKING:  # the record module loads numpy and the effect catalogue: only when a file is read
     from wormgear_cli.measurement.reader import Measurement, ReadOptions
 
@@ -76,7 +78,6 @@ def find_format(name: str) -> InputFormat:
     for f in FORMATS:
         if f.name == name:
             return f
-    from wormgear_cli.errors import UsageError
 
     raise UsageError(f"--input-format {name}: expected one of auto, {', '.join(format_names())}")
 
@@ -94,8 +95,6 @@ def read_source(source, name: str, options: ReadOptions) -> Measurement:
     """A :mod:`~.source`'s measurement in its format (named in ``options`` or detected from its head)."""
     fmt = find_format(options.input_format) if options.input_format else detect_format(source.head(HEAD_CHARS))
     if options.guidelog.given and fmt.name != "phd2":
-        from wormgear_cli.errors import UsageError
-
         raise UsageError(f"{', '.join(options.guidelog.given)}: only for a PHD2 guide log; {name} is read as "
                          f"{fmt.title} (--input-format phd2 if it is a guide log)")
     if fmt.read_source:
@@ -105,7 +104,7 @@ def read_source(source, name: str, options: ReadOptions) -> Measurement:
 
 def _asked(options: ReadOptions | None, require_error: bool) -> ReadOptions:
     """``options`` (default: canonical names and units, format detected) with ``require_error``."""
-    from wormgear_cli.measurement.reader import ReadOptions
+    from wormgear_cli.measurement.reader import ReadOptions  # lazy: keeps measurement.reader off `--help`'s start-up
 
     options = options or ReadOptions()
     if options.require_error != require_error:
@@ -133,6 +132,7 @@ def parse_measurement(text: str, name: str = "<data>", require_error: bool = Tru
     DataError
         One line per problem, naming file, line and column.
     """
+    # lazy: keeps measurement.readers.source off `--help`'s start-up
     from wormgear_cli.measurement.readers.source import TextSource, normalised
 
     options = _asked(options, require_error)
@@ -159,7 +159,7 @@ def read_measurement(path: str | Path, require_error: bool = True, options: Read
     DataError
         One line per problem, naming file, line and column.
     """
-    from wormgear_cli.errors import DataError
+    # lazy: keeps measurement.reader, measurement.readers.source, spec.filekind off `--help`'s start-up
     from wormgear_cli.measurement.reader import MAX_LINE_BYTES
     from wormgear_cli.measurement.readers.source import open_source
     from wormgear_cli.spec.filekind import looks_like_drive_lines

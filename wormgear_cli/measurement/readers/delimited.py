@@ -21,6 +21,7 @@ import itertools
 
 from wormgear_cli.errors import DataError
 from wormgear_cli.measurement.reader import REQUIRED, SNIFF_LINES, Measurement, ReadOptions
+from wormgear_cli.measurement.readers.source import TextSource
 from wormgear_cli.measurement.readers.table import TableSource, build_measurement
 from wormgear_cli.measurement.readers.text import NUMBER, DelimitedBody, detect_dialect, split_cells
 
@@ -116,8 +117,6 @@ def _first_is_not_header(candidates) -> bool:
 
 def read_table(text: str, name: str, options: ReadOptions) -> Measurement:
     """Read a delimited table (see the module doc); ``text`` with ``\\n`` line ends, no BOM."""
-    from wormgear_cli.measurement.readers.source import TextSource
-
     return read_table_source(TextSource(text, name, options.block_chars), name, options)
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from wormgear_cli.errors import DataError
+from wormgear_cli.files import check_text_file, read_text_file
 from wormgear_cli.measurement.reader import BLOCK_CHARS
 
 _CHANGED = "{}: the file changed while it was read; read it again when it is complete"
@@ -190,8 +191,6 @@ def open_source(path: str | Path, expected: str, max_bytes: int, max_line_bytes:
         As :func:`wormgear_cli.files.read_text_file` (missing, a directory, binary, too large, a
         line too long, not UTF-8).
     """
-    from wormgear_cli.files import check_text_file, read_text_file
-
     name = str(path)
     try:
         regular = stat.S_ISREG(os.stat(path).st_mode)

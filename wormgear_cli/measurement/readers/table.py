@@ -19,6 +19,7 @@ Everything inferred is said in the record's ``notes``; what looks wrong in its `
 
 from __future__ import annotations
 
+import datetime
 import math
 from dataclasses import dataclass, field
 
@@ -169,7 +170,6 @@ def _time(src: TableSource, index: dict, hunit: dict, values: dict, notes: list)
     if unit == "filetime":
         first = float(t[0])
         values["time_s"] = (t - first) * TIME_SCALE[unit]
-        import datetime
 
         when = datetime.datetime.fromtimestamp((first - FILETIME_UNIX_EPOCH) * 1e-7, datetime.UTC)
         notes.append(f"time from the FILETIME column {src.header[index['time_s']]!r} (100 ns ticks), counted from "

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import bisect
 import csv
+import io
 import re
 from collections.abc import Sequence
 from typing import NamedTuple
@@ -18,6 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from wormgear_cli.errors import DataError
+from wormgear_cli.measurement.readers.source import TextSource
 from wormgear_cli.measurement.readers.values import direction_cells, lenient_floats
 
 _DELIMS = ("\t", ";", ",")
@@ -181,8 +183,6 @@ class DelimitedBody:
     the blocks (the text itself is not kept)."""
 
     def __init__(self, body, first_line: int, delim: str, ncols: int, name: str, end_tag: str | None = None):
-        from wormgear_cli.measurement.readers.source import TextSource
-
         self.source = TextSource(body, name, first_line=first_line) if isinstance(body, str) else body
         self.first_line, self.delim, self.ncols, self.name, self.end_tag = first_line, delim, ncols, name, end_tag
         self.blank_rows: list[int] = []  # first three lines of rows whose every cell is empty (",,,"), left out
@@ -286,8 +286,6 @@ class DelimitedBody:
     def _fast(self, text: str, cols: list[int], decimal_comma: bool, direction: int | None, words: bool):
         """(float matrix of the numeric columns, their positions in ``cols``, the direction's cells as
         strings when ``words``) of a block, or None when a cell is not a plain number."""
-        import io
-
         if decimal_comma:
             text = text.replace(",", ".")
         numeric = [i for i in range(len(cols)) if not (words and i == direction)]

@@ -23,6 +23,7 @@ import re
 from wormgear_cli.errors import DataError
 from wormgear_cli.measurement.reader import Measurement, ReadOptions
 from wormgear_cli.measurement.readers.header import quote, stated_unit
+from wormgear_cli.measurement.readers.source import TextSource
 from wormgear_cli.measurement.readers.table import TableSource, build_measurement
 from wormgear_cli.measurement.readers.text import NUMBER, DelimitedBody, decimal_comma, split_cells
 
@@ -114,8 +115,6 @@ def _roles(names: list[str], props: dict) -> tuple[tuple, str, str]:
 
 def read_twincat_scope(text: str, name: str, options: ReadOptions) -> Measurement:
     """Read a TwinCAT Scope CSV export (see the module doc); ``text`` with ``\\n`` line ends, no BOM."""
-    from wormgear_cli.measurement.readers.source import TextSource
-
     return read_twincat_source(TextSource(text, name, options.block_chars), name, options)
 
 

@@ -12,17 +12,16 @@ from __future__ import annotations
 import numpy as np
 
 from wormgear_cli.errors import DataError
+from wormgear_cli.physics.signals import CONDITIONS, SIGNALS
 
 #: plausible range of each numeric column (inclusive, in the canonical unit); a value outside is a data error
 RANGES = {
     "angle_deg": (-3.6e6, 3.6e6),  # 10 000 turns either way
     "actual_deg": (-3.6e6, 3.6e6),
     "error_arcsec": (-1e7, 1e7),
-    "direction": (-1.0, 1.0),
+    "direction": (SIGNALS["direction"].lo, SIGNALS["direction"].hi),
     "run": (-1e9, 1e9),
-    "load_Nm": (-1e9, 1e9),
-    "temperature_C": (-100.0, 300.0),
-    "time_s": (-1e10, 1e10),
+    **{s.column: (s.lo, s.hi) for s in CONDITIONS},  # load, temperature, time: their records' ranges
     "velocity": (-1e12, 1e12),
 }
 
