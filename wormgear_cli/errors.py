@@ -63,8 +63,12 @@ class UsageError(WormgearError):
 def did_you_mean(word: str, choices, *, show=str, otherwise: str = "", cutoff: float = 0.6) -> str:
     """The hint of every "unknown key" message: `` (did you mean X?)`` for the closest of
     ``choices`` to ``word`` (difflib ratio >= ``cutoff``), shown through ``show`` (a prefix,
-    quotes), else ``otherwise`` (e.g. the list of valid names, or nothing)."""
-    near = difflib.get_close_matches(word, list(choices), n=1, cutoff=cutoff)
+    quotes), else ``otherwise`` (e.g. the list of valid names, or nothing).  A choice that differs
+    from ``word`` in case only is the closest (``max_iso230_a_arcsec`` -> ``max_iso230_A_arcsec``,
+    where difflib alone finds ``_M_`` as near)."""
+    choices = list(choices)
+    same = [c for c in choices if c.lower() == word.lower()]
+    near = same[:1] or difflib.get_close_matches(word, choices, n=1, cutoff=cutoff)
     return f" (did you mean {show(near[0])}?)" if near else otherwise
 
 

@@ -115,6 +115,9 @@ def test_spec_is_immutable(mch50_spec):
          'd.toml: drive.name: expected a single-line name without control characters, got "MCH50\\nrev B"'),
         (("assembly", "worm_phase_deg", 10.0),
          "d.toml: assembly.worm_phase_deg: unknown key (did you mean assembly.worm_eccentricity_phase_deg?)"),
+        # a key that differs in case only is the one meant (difflib alone would offer max_iso230_M_arcsec)
+        (("requirements", "max_iso230_a_arcsec", 20.0),
+         "d.toml: requirements.max_iso230_a_arcsec: unknown key (did you mean requirements.max_iso230_A_arcsec?)"),
         (("effects", "thermal_backlsh", {"centre_distance_um_per_K": 1.0}),
          "d.toml: effects.thermal_backlsh: unknown effect (did you mean effects.thermal_backlash?)"),
         (("effects", "thermal_backlash", {"reference_temperature_C": 20.0}),
