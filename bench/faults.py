@@ -274,6 +274,13 @@ FAULTS: dict[str, Fault] = {
     "table-one-direction-means": Fault(
         "compensation/model.py", "(np.ones(d.shape, dtype=bool),) * 2", "(d > 0, d < 0)",
         "one direction's per-target means put into its own column only", ("tests/cli/test_compensate.py",)),
+    "pec-undetermined-threshold": Fault(
+        "workflows/compensate.py", "PEC_UNDETERMINED = 0.5", "PEC_UNDETERMINED = 5.0",
+        "a PEC curve accepted while its standard error is twice the curve", ("tests/cli/test_compensate.py",)),
+    "pec-se-without-drift": Fault(
+        "compensation/pec.py", "    x, scale, drifts = _design(th, np.asarray(run), ords, degree)",
+        "    x, scale, drifts = _design(th, np.asarray(run), ords, 0)",
+        "the curve's standard error computed as if the sessions had no drift", ("tests/cli/test_compensate.py",)),
     "sweep-figures-torque-scale": Fault(
         "analysis/sweep.py", "ref.gear_force * (ref.r2 / r2 if torque", "ref.gear_force * (r2 / ref.r2 if torque",
         "a design's swept-stage force scaled the wrong way under the torque hold", ("tests/cli/test_sweep.py",)),

@@ -142,11 +142,27 @@ def test_field_directions_not_stated_are_warned_about(runner):
     assert not [line for line in r.stderr.splitlines() if line.startswith(("as measured:", "predicted after"))]
 
 
-def test_a_mount_record_under_two_worm_cycles_is_not_cross_validated(runner):
-    r = run(runner, FIELD / "time-restarts-no-run.csv", "-f", "eqmod", "--drive", FIELD / "telescope-mount.toml")
+def test_a_mount_record_under_two_worm_cycles_is_not_cross_validated(runner, tmp_path):
+    data = tmp_path / "short.csv"
+    data.write_text(_mount_rows(lambda t: t < 900))  # 1.5 worm cycles in one session
+    r = run(runner, data, "-f", "eqmod", "--drive", FIELD / "telescope-mount.toml")
     assert r.exit_code == 0, r.stderr
-    assert "1.07 worm cycles recorded" in r.stderr and "as measured, not predicted" in r.stderr
-    assert "warning: the record holds 1.1 worm cycles: fewer than two" in r.stderr
+    assert "1.5 worm cycles recorded" in r.stderr and "as measured, not predicted" in r.stderr
+    assert "warning: the record holds 1.5 worm cycles: fewer than two" in r.stderr
+
+
+def test_a_record_of_sessions_short_beside_the_worm_period_is_refused(runner):
+    """The field case's two sessions of 5 minutes beside a 10-minute worm period: each session's cubic
+    drift looks like a piece of the curve, whose standard error is 75 % of the curve itself (it came
+    out at 200 arcsec peak to peak from a record whose order 144 measure finds small).  Refused, naming
+    the sessions' length and the worm period (it had been written with a warning about cycles only)."""
+    r = run(runner, FIELD / "time-restarts-no-run.csv", "-f", "eqmod", "--drive", FIELD / "telescope-mount.toml")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {FIELD / 'time-restarts-no-run.csv'}: the record does not determine a PEC curve: the "
+                        "curve's standard error is 45 arcsec RMS over the worm cycle, 75% of the curve itself (59.7 "
+                        "arcsec RMS); the sessions (the longest 325.3 s) are short beside the worm period (598.4 s), "
+                        "so each session's drift looks like a piece of the curve; record sessions of at least a worm "
+                        "period, or fit fewer harmonics (--harmonics)\n")
 
 
 def test_a_record_too_sparse_for_its_pec_curve_is_refused(runner, tmp_path):
@@ -217,6 +233,39 @@ def test_a_record_missing_a_quarter_of_every_worm_cycle_is_refused(runner, tmp_p
     r = run(runner, data, "--drive", FIELD / "telescope-mount.toml", "-o", tmp_path / "gaps.pec")
     assert r.exit_code == 2 and not (tmp_path / "gaps.pec").exists()
     assert "the rows leave 2 of 12 equal parts of the worm cycle (period 598.4 s) without a reading" in r.stderr
+
+
+def test_short_sessions_covering_every_worm_phase_give_no_pec_curve(runner, tmp_path):
+    """Breaker trial: ten 100 s sessions of a 16 arcsec peak-to-peak worm error (period 478.7 s), their
+    starts spread over the cycle so that every phase is read: the curve had come out at 99 arcsec
+    peak to peak with '6.31 left' promised.  200 s sessions give one within 10 % here, with a warning
+    (its standard error is 25 % of it); 500 s sessions (a worm period) one within 2 %, with none."""
+    period = 86164.0905 / 180
+
+    def record(duration):
+        rng = np.random.default_rng(0)
+        rows = []
+        for r in range(10):
+            t = r * 0.55 * period * duration / 100 + np.arange(0.0, duration, 2.0)
+            e = 8.0 * np.sin(2 * np.pi * t / period + 0.3) + rng.normal(0.0, 0.3, t.size)
+            rows += [f"{360 * s / 86164.0905:.7f},{x:.4f},{s:.1f},{r + 1}\n" for s, x in zip(t, e)]
+        path = tmp_path / f"s{duration}.csv"
+        path.write_text("angle_deg,error_arcsec,time_s,run\n" + "".join(rows))
+        return path
+
+    r = run(runner, record(100), "-f", "eqmod", "--worm-period", "478.689", "-o", tmp_path / "s100.pec")
+    assert r.exit_code == 2 and not (tmp_path / "s100.pec").exists()
+    assert "the record does not determine a PEC curve" in r.stderr and "the longest 98 s" in r.stderr
+    r = run(runner, record(200), "-f", "eqmod", "--worm-period", "478.689", "-o", tmp_path / "s200.pec")
+    assert r.exit_code == 0 and "warning: the PEC curve is uncertain: the curve's standard error is" in r.stderr
+    assert "25% of the curve itself" in r.stderr
+    pe = [float(line.split()[-1]) for line in (tmp_path / "s200.pec").read_text().splitlines() if line[:1].isdigit()]
+    assert abs(max(pe) - min(pe) - 16.0) < 1.6
+    out = tmp_path / "s500.pec"
+    r = run(runner, record(500), "-f", "eqmod", "--worm-period", "478.689", "-o", out)
+    assert r.exit_code == 0 and "the PEC curve is uncertain" not in r.stderr, r.stderr
+    pe = [float(line.split()[-1]) for line in out.read_text().splitlines() if line and line[0].isdigit()]
+    assert len(pe) == 479 and abs(max(pe) - min(pe) - 16.0) < 0.32
 
 
 def test_a_worm_period_shorter_than_a_minute_is_not_taken_from_a_record(runner, tmp_path):

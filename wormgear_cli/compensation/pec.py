@@ -223,6 +223,34 @@ def pec_curve(theta, y, run, worm_order: float, orders: Sequence[float]) -> PecC
                     cycles_covered(th, run, worm_order))
 
 
+def curve_standard_error(th, run, curve: PecCurve, degree: int = DRIFT_DEGREE) -> float:
+    """RMS over one worm cycle [rad] of the pointwise standard error of ``curve`` (the sum of its
+    carried harmonics), from the fit :func:`fit_harmonics` made: the harmonic terms' covariance
+    s^2 (X'X)^-1 of that design (a drift per run beside them), s^2 the residual mean square.
+
+    Small beside the curve when each run spans worm cycles; large when the runs are short beside
+    the worm period, so that a run's drift and a piece of the curve look alike and the fit trades
+    one for the other, noise included.  inf when the design cannot be inverted.  White residuals
+    are assumed, so on a guide log's correlated seeing it is a lower bound."""
+    ords = curve.fit.orders
+    x, scale, drifts = _design(th, np.asarray(run), ords, degree)
+    n, p = x.shape
+    res = curve.fit.residual
+    s2 = float(res @ res) / max(n - p, 1)
+    xs = x / scale
+    try:
+        inv = np.linalg.inv(xs.T @ xs)
+    except np.linalg.LinAlgError:
+        return math.inf
+    h = scale[drifts:]
+    cov = s2 * inv[drifts:, drifts:] / np.outer(h, h)
+    turn = 2.0 * math.pi / curve.worm_order
+    grid = curve.reference + turn * np.arange(PP_POINTS) / PP_POINTS
+    g = harmonic_columns(grid, ords) * np.repeat(np.isin(ords, curve.harmonics), 2)  # the carried terms only
+    var = np.einsum("ij,jk,ik->i", g, cov, g)
+    return float(np.sqrt(np.mean(np.maximum(var, 0.0)))) if np.all(np.isfinite(var)) else math.inf
+
+
 def cycle_folds(th, run, worm_order: float) -> np.ndarray:
     """Fold of each row: its whole worm cycle within its run (counted from the run's first angle);
     a cycle holding less than :data:`MIN_FOLD_CYCLES` of a cycle joins its neighbour."""

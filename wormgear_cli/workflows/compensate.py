@@ -481,6 +481,33 @@ def _rows(m, keep: np.ndarray):
     return replace(m, **{k: v[keep] for k, v in arrays.items() if isinstance(v, np.ndarray) and v.shape[:1] == (n,)})
 
 
+#: a PEC curve whose standard error (RMS over the worm cycle) exceeds this fraction of the curve's own
+#: RMS is refused: the record does not determine it (its sessions' drifts look like pieces of it)
+PEC_UNDETERMINED = 0.5
+#: ... and above this fraction a warning says how uncertain it is (real guide logs: under 0.1)
+PEC_UNCERTAIN = 0.15
+
+
+def _check_determined(source: str, th, run, curve, period: float, unit: str, warnings: list[str]) -> None:
+    """DataError when the record does not determine the curve (:data:`PEC_UNDETERMINED`); a warning
+    when it fixes it only roughly (:data:`PEC_UNCERTAIN`)."""
+    se = pec.curve_standard_error(th, run, curve)
+    rms = float(np.sqrt(np.mean(curve.pe ** 2)))
+    ratio = se / rms if rms > 0 else math.inf
+    if ratio <= PEC_UNCERTAIN:
+        return
+    longest = max(float(np.ptp(th[run == r])) for r in np.unique(run)) / (2.0 * math.pi / curve.worm_order) * period
+    said = (f"the curve's standard error is {to_unit(se, unit):.3g} {unit} RMS over the worm cycle, "
+            f"{ratio:.0%} of the curve itself ({to_unit(rms, unit):.3g} {unit} RMS)"
+            if math.isfinite(ratio) else "the curve's standard error cannot be had")
+    why = (f"the sessions (the longest {longest:.4g} s) are short beside the worm period ({period:.4g} s), so "
+           "each session's drift looks like a piece of the curve")
+    if ratio > PEC_UNDETERMINED:
+        raise DataError(f"{source}: the record does not determine a PEC curve: {said}; {why}; record sessions of "
+                        "at least a worm period, or fit fewer harmonics (--harmonics)")
+    warnings.append(f"the PEC curve is uncertain: {said}; {why}")
+
+
 def _pec_path(m, options: CompensateOptions,
               choice: OrderChoice) -> tuple[PecDetails, list[str], list[str], OrderChoice]:
     warnings, notes = [], []
@@ -518,6 +545,7 @@ def _pec_path(m, options: CompensateOptions,
                         f"{period:.4g} s) without a reading: the curve is not determined there; record at least "
                         "one worm period without gaps")
     curve = pec.pec_curve(theta, y, run, worm, orders)
+    _check_determined(m.source, th, run, curve, period, options.unit, warnings)
     prediction = pec.predict_pec(theta, y, run, curve)
     source = where if options.orders is None or options.worm_period_s or choice.worm_order else "--orders"
     choice = OrderChoice(tuple(orders), choice.labels, None, source, worm, choice.drive_name)
