@@ -19,6 +19,15 @@ settings.register_profile("ci", deadline=None, derandomize=True, database=None)
 settings.load_profile("ci" if os.environ.get("CI") else "dev")
 
 
+def pytest_configure(config):
+    """The costly property tests draw their full count of examples in CI and in any run of the slow
+    set, a quarter in the everyday run (tests/support/examples.py)."""
+    from tests.support import examples
+
+    examples.FULL = (bool(os.environ.get("CI")) or os.environ.get("WORMGEAR_TEST_EXAMPLES") == "full"
+                     or (config.getoption("markexpr") or "").strip() != "not slow")
+
+
 @pytest.fixture
 def runner() -> CliRunner:
     return CliRunner()
