@@ -247,6 +247,8 @@ def run_faults(names, changed: bool, timeout: int) -> int:
 
 
 def main(argv=None) -> int:
+    # the property tests draw their full count of examples, as in CI (tests/support/examples.py)
+    os.environ.setdefault("WORMGEAR_TEST_EXAMPLES", "full")
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("target", nargs="*", help="a mutmut target (see --list), or fault names with --faults")
     ap.add_argument("--faults", action="store_true", help="run the hand-made faults of bench/faults.py")

@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 
 import pytest
+import typer.testing
 from hypothesis import settings
 from typer.testing import CliRunner
 
@@ -17,6 +18,32 @@ from tests.support.paths import CONFIGS, MCH50, ROOT  # noqa: F401  (the shared 
 settings.register_profile("dev", deadline=None)
 settings.register_profile("ci", deadline=None, derandomize=True, database=None)
 settings.load_profile("ci" if os.environ.get("CI") else "dev")
+
+
+def pytest_configure(config):
+    """The costly property tests draw their full count of examples in CI and in any run of the slow
+    set, a quarter in the everyday run (tests/support/examples.py)."""
+    from tests.support import examples
+
+    examples.FULL = (bool(os.environ.get("CI")) or os.environ.get("WORMGEAR_TEST_EXAMPLES") == "full"
+                     or (config.getoption("markexpr") or "").strip() != "not slow")
+
+
+# typer's CliRunner.invoke turns the Typer app into a click command on every call
+# (typer.main.get_command: every command's signature and annotations read again, about 0.05 s of
+# CPU, a call of any test that runs the CLI in process).  The program does that once per process;
+# the runners here do it once per app and invoke that same command every time.
+_COMMANDS: dict[int, tuple] = {}
+
+
+def _command_of(app):
+    if id(app) not in _COMMANDS:
+        _COMMANDS[id(app)] = (app, _get_command(app))  # (the app kept, so its id is not reused)
+    return _COMMANDS[id(app)][1]
+
+
+_get_command = typer.testing._get_command
+typer.testing._get_command = _command_of
 
 
 @pytest.fixture

@@ -27,28 +27,33 @@ MANY_DRAWS = 1000
 
 
 def _random_phase_peaks(spec, draws: int, seed: int) -> np.ndarray:
-    """max over one turn of the budget's periodic lines at random phases, one per draw [rad]."""
+    """max over one turn of the budget's periodic lines at random phases, one per draw [rad].
+
+    The phases are drawn as a (draws, lines) array: the same numbers, in the same order, as one draw
+    per line per turn.  Sinusoids of one order are summed as complex amplitudes (one sine per order);
+    the turns are evaluated together, block by block of the grid, as one matrix product."""
     reg = analyze(spec).registry
     lines = [s for s in reg.periodic(all_budget_sources=True) if (s.peak or s.amplitude) > 0.0]
     top = max(s.order for s in lines)
     theta = np.linspace(0.0, 2.0 * np.pi, int(24 * top) + 1)
-    rng = np.random.default_rng(seed)
-    peaks = np.empty(draws)
-    basis: dict = {}
-    for k in range(draws):
-        total = np.zeros_like(theta)
-        phasors: dict = {}  # sinusoids of one order summed as complex amplitudes: one sine per order
-        for s in lines:
-            phase = rng.uniform(0.0, 2.0 * np.pi)
-            if getattr(s.curve, "sine", None) is not None:
-                phasors[s.order] = phasors.get(s.order, 0j) + s.amplitude * np.exp(1j * phase)
-            else:  # the paper's gear curve: its periodic part
-                total += s.curve(theta, phase) - s.offset
-        for order, p in phasors.items():  # |p| sin(o t + arg p) = Im(p) cos(o t) + Re(p) sin(o t)
-            if order not in basis:
-                basis[order] = (np.sin(order * theta), np.cos(order * theta))
-            total += p.real * basis[order][0] + p.imag * basis[order][1]
-        peaks[k] = total.max()
+    phases = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, (draws, len(lines)))
+    sine = [getattr(s.curve, "sine", None) is not None for s in lines]
+    orders = list(dict.fromkeys(s.order for s, is_sine in zip(lines, sine) if is_sine))
+    phasors = np.zeros((draws, len(orders)), complex)
+    for j, (s, is_sine) in enumerate(zip(lines, sine)):
+        if is_sine:
+            phasors[:, orders.index(s.order)] += s.amplitude * np.exp(1j * phases[:, j])
+    peaks = np.full(draws, -np.inf)
+    block = 1 << 14
+    for start in range(0, theta.size, block):
+        t = theta[start:start + block]
+        arg = np.outer(orders, t)  # |p| sin(o t + arg p) = Re(p) sin(o t) + Im(p) cos(o t)
+        total = phasors.real @ np.sin(arg) + phasors.imag @ np.cos(arg)
+        for j, is_sine in enumerate(sine):
+            if not is_sine:  # the paper's gear curve: its periodic part
+                for k in range(draws):
+                    total[k] += lines[j].curve(t, phases[k, j]) - lines[j].offset
+        peaks = np.maximum(peaks, total.max(axis=1))
     return peaks
 
 

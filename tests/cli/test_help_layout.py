@@ -3,6 +3,7 @@ at any terminal width (click wraps at hyphens: --face- / width-mm)."""
 
 from __future__ import annotations
 
+import functools
 import re
 import shlex
 
@@ -21,9 +22,15 @@ SHELL_WORD = re.compile(r"""(?:[^\s"']+|"[^"]*"|'[^']*')+""")
 def _help(runner, name: str, width: int) -> str:
     """``COLUMNS=width wormgear NAME --help``: click draws help min(width, 80) - 2 columns wide, at
     least 50 (the test runner forces 80, so the width is given to the context, as the CLI's is)."""
+    return _drawn_help(name, max(min(width, 80) - 2, 50))
+
+
+@functools.cache
+def _drawn_help(name: str, drawn: int) -> str:
+    """A command's help drawn ``drawn`` columns wide (drawn once: several widths draw alike, and two
+    tests read each)."""
     from typer._click import Context
 
-    drawn = max(min(width, 80) - 2, 50)
     cmd = COMMANDS[name]
     group = get_command(app)
     root = Context(group, info_name="wormgear", terminal_width=drawn, max_content_width=drawn)

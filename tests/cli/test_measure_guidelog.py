@@ -34,10 +34,18 @@ HEQ5 = CONFIGS / "heq5-spur-worm.toml"  # 135-tooth wheel, 9:47 motor gears: the
 SIDEREAL = 86164.0905
 
 
+#: stdout of ``measure ARGS --format json`` by its arguments: several tests read the same run of a
+#: shipped log (a file a test writes under tmp_path has a path of its own)
+_MEASURED: dict[tuple[str, ...], str] = {}
+
+
 def measure_json(runner, *args) -> dict:
-    result = runner.invoke(app, ["measure", *map(str, args), "--format", "json"])
-    assert result.exit_code == 0, result.stderr
-    return json.loads(result.stdout)
+    key = tuple(map(str, args))
+    if key not in _MEASURED:
+        result = runner.invoke(app, ["measure", *key, "--format", "json"])
+        assert result.exit_code == 0, result.stderr
+        _MEASURED[key] = result.stdout
+    return json.loads(_MEASURED[key])
 
 
 def by_order(doc: dict) -> dict:

@@ -107,3 +107,60 @@ def test_with_two_effects_the_named_interval_covers_the_truth_or_the_second_is_r
             assert likely and likely[0]["name"] == "thermal_backlash" and likely[0]["mode"] == "differential"
             assert likely[0]["rms_with_arcsec"] < likely[0]["rms_arcsec"]
             assert "likely" in doc["verdict"] and "thermal_backlash" in doc["verdict"]
+
+
+def test_the_same_order_range_is_the_profile_region_derived_by_hand(mch50_spec):
+    """The range of sizes of a same-order effect against a derivation written here (issue 26).
+
+    White noise, an offset, one spec source of fixed size A = 2 arcsec and free phase on order 8, and the
+    effect on order 8 (intermediate shaft runout, a pure first harmonic of ``u`` arcsec per um): together
+    they make an order-8 phasor of any size m between |A - a u| and A + a u.  With the targets evenly
+    spaced over a turn, sin 8t and cos 8t are orthogonal to each other and to the offset with the same
+    squared norm Q, so the least cost at size m is RSS + Q (R - m)^2 (R, RSS: the plain least-squares fit
+    of offset + sin + cos, here statsmodels OLS).  The 95 % profile region {c <= c_min (1 + F / dof)},
+    F = F(0.95; 1, dof) = t(0.975, dof)^2 (scipy.stats.f, not the package's t), dof = n - 4 (offset, the
+    effect's two columns, the source's phase) is then |R - m| <= delta = sqrt(F RSS / (dof Q)) (the t
+    interval of the size), and the effect's sizes are [(R - A - delta) / u, (R + A + delta) / u]."""
+    import math
+
+    import statsmodels.api as sm
+    from scipy import stats
+
+    from wormgear_cli import diagnosis as dg
+    from wormgear_cli.analysis.accuracy import geometry
+    from wormgear_cli.diagnosis.inference import Found, same_order_range
+    from wormgear_cli.diagnosis.phases import PhaseSource, effect_contrib
+    from wormgear_cli.physics.effects import EFFECTS, Signals
+
+    g = geometry(mch50_spec)
+    n, a_src = 96, 2.0
+    theta = np.arange(n) * 2.0 * np.pi / n
+    d = np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+    sig = Signals.make(theta, d)
+    name = "intermediate_shaft_runout"
+    cand = dg.candidate(name, sig, g)
+    assert cand is not None and cand.order == 8.0
+    s, c = np.sin(8.0 * theta), np.cos(8.0 * theta)
+    eff = EFFECTS[name]
+    one_um = effect_contrib(eff, {**cand.fixed, eff.amplitude: 1e-3}, g)(sig, 0.0)  # 1 um (internal mm)
+    harmonic = np.linalg.lstsq(np.column_stack([np.ones(n), s, c]), one_um, rcond=None)[0]
+    u = math.hypot(harmonic[1], harmonic[2])  # arcsec per um
+    y = 3.0 + 12.0 * np.sin(8.0 * theta + 0.7) + np.random.default_rng(5).normal(0.0, 15.0, n)
+
+    source = PhaseSource("spec_source", "", 8.0, a_src, 0.0, lambda sg, psi: a_src * np.sin(8.0 * sg.theta + psi))
+    ctx = dg.FitContext(y, sig, dg.make_groups(d, np.arange(n)), np.zeros(n), (source,), (0.0,))
+    lin = np.column_stack([np.ones(n), cand.columns])
+    state = dg.fit_model(ctx, lin)
+    found = Found(name, cand.kind, dg.candidate_params(cand, state.beta[1:3]), {}, 0.0, 0.0, 0.0, 0.0, None, 1)
+    same_order_range(found, ctx, state, lin, slice(1, 3), cand, g, steps=14)  # bisected to 2^-14 of the span
+    lo, hi = found.intervals["eccentricity_um"]
+
+    ols = sm.OLS(y, np.column_stack([np.ones(n), s, c])).fit()
+    r = math.hypot(ols.params[1], ols.params[2])
+    q = float(np.sum((s - s.mean()) ** 2))
+    assert float(c @ s) == pytest.approx(0.0, abs=1e-9) and float(c @ c) == pytest.approx(q, rel=1e-12)
+    dof = n - 4
+    delta = math.sqrt(stats.f.ppf(0.95, 1, dof) * ols.ssr / (dof * q))
+    assert r - a_src - delta > 0.0  # (so the lower end is not 0)
+    assert lo == pytest.approx((r - a_src - delta) / u, rel=1e-3)
+    assert hi == pytest.approx((r + a_src + delta) / u, rel=1e-3)

@@ -10,12 +10,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from tests.support.examples import examples
 from wormgear_cli.measurement import arrays
 from wormgear_cli.measurement.serial import lag1_autocorrelation, point_noise, serial_blocks
 
 FLOATS = hnp.arrays(np.float64, st.integers(0, 300), elements=st.sampled_from(
     [0.0, -0.0, 1.5, -2.25, 3.0, 1e300, -1e-300, np.nan, np.inf, 7.125]))
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(x=st.one_of(FLOATS, hnp.arrays(np.int64, st.integers(0, 300), elements=st.integers(-50, 50)),
                    hnp.arrays(np.int64, st.integers(1, 50), elements=st.integers(-2**62, 2**62)),
                    hnp.arrays(np.int8, st.integers(1, 50)), hnp.arrays(np.bool_, st.integers(1, 50)),
@@ -40,7 +41,7 @@ def test_unique_of_long_arrays_across_blocks():
             np.testing.assert_array_equal(g, np.ravel(w))
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(mask=hnp.arrays(np.bool_, st.integers(1, 3 * 700)), block=st.integers(1, 70))
 def test_ranks_and_order(mask, block):
     old = arrays.RANK_BLOCK

@@ -18,6 +18,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tests.support.examples import examples
 from wormgear_cli.errors import WormgearError
 from wormgear_cli.measurement.reader import ReadOptions
 from wormgear_cli.measurement.readers import parse_measurement, read_measurement
@@ -123,7 +124,7 @@ def written(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name", list(CASES))
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=examples(40), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_blocks_read_as_the_whole_text(written, name, data):
     path, text, options = written[name]
