@@ -442,3 +442,16 @@ def test_the_shipped_eq6_log_is_session_3_of_the_night(runner):
     assert [it["common"]["amplitude"] for it in shipped["orders"]["items"]] == \
         [it["common"]["amplitude"] for it in night["orders"]["items"]]
     assert by_order(shipped)[180.0]["common"]["amplitude"] == pytest.approx(2.34, abs=0.1)
+
+
+def test_orders_asked_for_give_the_worm_order_of_the_periodic_error(runner):
+    """New-user trial: --orders 180 on the CGE log still gave the periodic error at the strongest
+    period (order 180.93); the lowest order asked for is the worm's, as with a drive's 180-tooth wheel,
+    and the two give the same figures (a drive names the parts, the orders do not)."""
+    asked = measure_json(runner, CGE, "--orders", "180,360")["periodic_error"]
+    drive = measure_json(runner, CGE, "--drive", CONFIGS / "cge-pro-ra.toml")["periodic_error"]
+    assert asked["worm_order"] == 180.0 and asked["worm_period_s"] == pytest.approx(SIDEREAL / 180.0)
+    assert asked["worm_from"] == "the lowest of the orders asked for (its period within a session)"
+    assert asked["peak_to_peak"] == pytest.approx(drive["peak_to_peak"], rel=0.02)
+    strongest = measure_json(runner, CGE)["periodic_error"]
+    assert strongest["worm_order"] != 180.0 and strongest["worm_from"].startswith("the strongest period found")

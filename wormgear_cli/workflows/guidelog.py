@@ -98,12 +98,13 @@ def _resolvable(order: float, longest: float, nyquist: float) -> bool:
 
 
 def guide_periodic_error(m, dominant, mount: MountParts | None = None,
-                         harmonics: int = PE_HARMONICS) -> GuideResult:
+                         harmonics: int = PE_HARMONICS, orders=None) -> GuideResult:
     """The periodic error of the guide log ``m`` (a :class:`~wormgear_cli.measurement.reader.Measurement`).
 
     ``dominant``: its :class:`~wormgear_cli.measurement.dominant.Dominant` (scanned with a drift per
-    run); ``mount``: the :class:`MountParts` of ``--drive`` (None: the worm order is the strongest
-    period found).  The worm harmonics are the first ``harmonics`` multiples below the Nyquist limit."""
+    run); ``mount``: the :class:`MountParts` of ``--drive`` (None: the worm order is the lowest of
+    ``orders`` (``--orders``) the sessions resolve, else the strongest period found).  The worm
+    harmonics are the first ``harmonics`` multiples below the Nyquist limit."""
     # lazy: keeps measurement.periodic_error off `measure`'s start-up
     from wormgear_cli.measurement.periodic_error import periodic_error
 
@@ -114,6 +115,9 @@ def guide_periodic_error(m, dominant, mount: MountParts | None = None,
         order, label = mount.worm
         starts = "" if mount.starts == 1 else f" / {mount.starts} starts"
         worm_from = f"the drive's worm ({mount.wheel_teeth}-tooth wheel{starts})"
+    elif orders and any(_resolvable(k, longest, nyquist) for k in orders):
+        order = min(k for k in orders if _resolvable(k, longest, nyquist))
+        worm_from = "the lowest of the orders asked for (its period within a session)"
     elif dominant is not None and dominant.significant:
         order = dominant.significant[0].order
         worm_from = "the strongest period found" + (" (the drive has no worm)" if mount is not None else

@@ -196,7 +196,7 @@ def _measure_guide_log(m, spec, orders, harmonics: int) -> MeasureResult:
     findings = guide_log_findings(m)
     analysis, dominant = _orders_and_dominant(m, order_list, labels, priority, physical, None)
     outside = _left_outside(m, analysis) if order_list else ()
-    guide = guide_periodic_error(m, dominant, None if spec is None else mount_parts(spec))
+    guide = guide_periodic_error(m, dominant, None if spec is None else mount_parts(spec), orders=orders)
     return MeasureResult(m, None, analysis, drive_name, tuple(findings), False, dominant, outside, None, guide)
 
 
