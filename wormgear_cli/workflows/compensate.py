@@ -403,12 +403,18 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
         notes.append(f"orders selected by a forward selection on the per-target means: {chosen} of "
                      f"{len(t.selection.candidates)} candidates; stopped because {t.selection.reason}")
     spacing = t.grid.spacing_deg
-    amplitude = {it.order: it.common[0] for it in t.analysis.items if it.fitted}
+    amplitude = {it.order: it.common[:2] for it in t.analysis.items if it.fitted}
+    top = max((a for a, _ in amplitude.values() if math.isfinite(a)), default=0.0)
     for k in t.dropped:
-        amp = amplitude.get(k, math.nan)
-        warnings.append(f"order {k:g} has a period of {360.0 / k:.4g} deg, {360.0 / k / spacing:.2g} table spacings "
-                        f"of {spacing:.4g} deg: a table of {t.grid.points} points cannot carry it (fewer than 4 "
-                        f"spacings per period), so it is left out and its {to_unit(amp, u):.3g} {u} amplitude stays")
+        amp, se = amplitude.get(k, (math.nan, math.nan))
+        said = (f"order {k:g} has a period of {360.0 / k:.4g} deg, {360.0 / k / spacing:.2g} table spacings of "
+                f"{spacing:.4g} deg: a table of {t.grid.points} points cannot carry it (fewer than 4 spacings per "
+                f"period), so it is left out")
+        if amp > max(2.0 * se, 1e-3 * top) or not math.isfinite(amp):  # what stays is worth a warning
+            warnings.append(f"{said} and its {to_unit(amp, u):.3g} {u} amplitude stays")
+        else:  # within twice its standard error, or a thousandth of the largest order: nothing is lost
+            notes.append(f"{said}; its amplitude, {to_unit(amp, u):.2g} {u}, is negligible (within twice its "
+                         f"standard error, {to_unit(se, u):.2g} {u}, or under a thousandth of the largest order's)")
     cov = t.plan.coverage
     deg = np.degrees(theta)
     slack = max(spacing, 1.0)  # the default span is the measured arc rounded out to whole degrees
