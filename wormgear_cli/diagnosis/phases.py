@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from wormgear_cli.diagnosis.design import orthonormal
-from wormgear_cli.diagnosis.mixed import Cross, VarFit, reml
-from wormgear_cli.diagnosis.runs import Groups, pass_sums
+from wormgear_cli.diagnosis.mixed import Cross, VarFit, gls_quadratic, reml
+from wormgear_cli.diagnosis.runs import Groups
 from wormgear_cli.units import ARCSEC
 
 if TYPE_CHECKING:
@@ -336,9 +336,8 @@ def _to_rows(a, spread):
 
 
 def gls_cost(r, groups, gp, gr):
-    cr = Cross(np.zeros((1, 1)), np.zeros(1), float(r @ r), np.zeros((groups.passes, 1)), pass_sums(r, groups),
-               groups)
-    return float(cr.weighted([gp], [gr])[2][0])
+    """r' V~^-1 r [arcsec^2] of a residual r (N,) at variance ratios gp, gr (:func:`mixed.gls_quadratic`)."""
+    return gls_quadratic(r, groups, gp, gr)
 
 
 def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iters=40, parts=None) -> PhaseFit:
