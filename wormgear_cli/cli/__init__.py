@@ -42,8 +42,8 @@ def one_blas_thread(environ) -> bool:
 
     Why: the commands' matrices are small (a diagnose fit is 2305 x 90), so a second BLAS
     thread only spins: measured on the 19-session EQ6 guide log, ``diagnose`` took 185 s of
-    CPU with OpenBLAS's default threads against 17 s on one (bench/bench_diagnose.py
-    --threads), and the threaded sums, split differently, changed the report in the 5th digit:
+    CPU with OpenBLAS's default threads against 17 s on one (bench/bench_cases.py
+    --env default), and the threaded sums, split differently, changed the report in the 5th digit:
     one thread makes the result the same whatever the machine's core count."""
     if any(environ.get(name) for name in BLAS_THREAD_VARIABLES):
         return False
