@@ -14,6 +14,7 @@ from __future__ import annotations
 import atexit
 import gc
 import importlib
+import os
 import signal
 import sys
 
@@ -30,6 +31,29 @@ COMMAND_MODULES = {
     "compare": "compare",
     "compensate": "compensate",
 }
+
+
+#: the thread-count variables of the BLAS libraries numpy may be built with (OpenBLAS reads the first
+#: three, MKL, BLIS and Accelerate their own)
+BLAS_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                         "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS")
+
+
+def one_blas_thread(environ) -> bool:
+    """Run numpy's BLAS on one thread unless the user chose a thread count: when none of
+    :data:`BLAS_THREAD_VARIABLES` is set in ``environ`` (a mutable mapping, e.g. ``os.environ``),
+    set them all to 1 and return True.  Must run before numpy is imported to take effect.
+
+    Why: the commands' matrices are small (a diagnose fit is 2305 x 90), so a second BLAS
+    thread only spins: measured on the 19-session EQ6 guide log, ``diagnose`` took 185 s of
+    CPU with OpenBLAS's default threads against 17 s on one (bench/bench_cases.py
+    --env default), and the threaded sums, split differently, changed the report in the 5th digit:
+    one thread makes the result the same whatever the machine's core count."""
+    if any(environ.get(name) for name in BLAS_THREAD_VARIABLES):
+        return False
+    for name in BLAS_THREAD_VARIABLES:
+        environ[name] = "1"
+    return True
 
 
 def _register(modules) -> None:
@@ -51,6 +75,7 @@ def main() -> None:
     are replaced and the stop signals handled (:func:`wormgear_cli.files.start_cli`), so
     Ctrl-C, SIGTERM and SIGHUP are one line and exit 128 + N from the first instruction on;
     once the exit code is known, a late signal ends the process at once with it, quietly."""
+    one_blas_thread(os.environ)  # before numpy is imported
     # start-up: what is loaded so far (the interpreter, numpy and typer: the bulk of the heap) is never
     # garbage, so keep the collector from walking it again: a full collection during the command's
     # imports otherwise costs more than all of them (tens of ms)

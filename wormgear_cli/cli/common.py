@@ -24,7 +24,7 @@ from collections.abc import Iterable
 from enum import Enum
 from functools import lru_cache
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from typer._click.globals import get_current_context
@@ -500,6 +500,51 @@ class Progress:
     def advance(self, n: int) -> None:
         if self.bar is not None:
             self.bar.advance(self.task, n)
+
+
+class Stages:
+    """A spinner on stderr with the text of the stage the work is in (``update(text)``), for work
+    whose length is not known up front (e.g. diagnose: a few thousand rows can take a minute);
+    only on a terminal (not under NO_COLOR), and only once the work has run ``after`` seconds:
+    a short run shows nothing.  Use as a context manager."""
+
+    def __init__(self, text: str, after: float = 1.0):
+        import threading  # lazy: only diagnose shows stages
+
+        self.text = text
+        self.status: Any = None
+        self.lock = threading.Lock()
+        self.timer = threading.Timer(after, self._show) if stderr_is_terminal() and not no_color() else None
+        if self.timer is not None:
+            self.timer.daemon = True
+
+    def _show(self) -> None:
+        with self.lock:
+            if self.timer is None:  # the work ended first
+                return
+            status = terminal_console(stderr=True).status(self.text)
+            status.start()
+            self.status = status
+
+    def update(self, text: str) -> None:
+        with self.lock:
+            self.text = text
+            if self.status is not None:
+                self.status.update(text)
+
+    def __enter__(self):
+        if self.timer is not None:
+            self.timer.start()
+        return self
+
+    def __exit__(self, *exc):
+        with self.lock:
+            if self.timer is not None:
+                self.timer.cancel()
+                self.timer = None
+            if self.status is not None:
+                self.status.stop()
+                self.status = None
 
 
 # --- tables ----------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from wormgear_cli.cli.common import (
     DriveArgument,
     JobsOption,
     OutputOption,
+    Stages,
     TableJsonFormat,
     announce_written,
     count_type,
@@ -23,11 +24,8 @@ from wormgear_cli.cli.common import (
     jobs_count,
     json_text,
     load_drive,
-    no_color,
     output_format,
     render,
-    stderr_is_terminal,
-    terminal_console,
 )
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
@@ -47,8 +45,6 @@ from wormgear_cli.files import atomic_write, check_outputs
 from wormgear_cli.measurement.readers import read_measurement
 from wormgear_cli.units import ARCSEC, RAD_PER_UNIT
 
-#: rows above which a progress display is shown (when stderr is a terminal)
-PROGRESS_ROWS = 20_000
 #: peak memory per row of a measurement file in ``diagnose`` (the model's columns, the fits and
 #: their resamples; 1.4 GB for 10^6 rows, bench/bench_limits.py) [bytes]
 DIAGNOSE_BYTES_PER_ROW = 1500
@@ -131,12 +127,8 @@ def diagnose(
                             resamples=resamples, jobs=jobs_count(jobs), progress=progress, data_name=str(data),
                             write_spec=None if write_spec is None else str(write_spec))
 
-    if len(meas) > PROGRESS_ROWS and stderr_is_terminal() and not no_color():
-        console = terminal_console(stderr=True)
-        with console.status("diagnosing") as status:
-            result = run(progress=lambda text: status.update(text))
-    else:
-        result = run()
+    with Stages("diagnosing") as stages:  # shown on a terminal once the work has run a second
+        result = run(progress=stages.update)
     doc = result.document
     figure = None
     if plot is not None:

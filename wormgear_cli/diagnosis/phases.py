@@ -15,8 +15,8 @@ from functools import cached_property
 import numpy as np
 
 from wormgear_cli.diagnosis.design import orthonormal
-from wormgear_cli.diagnosis.mixed import Cross, VarFit, reml
-from wormgear_cli.diagnosis.runs import Groups, pass_sums
+from wormgear_cli.diagnosis.mixed import Cross, VarFit, gls_quadratic, reml
+from wormgear_cli.diagnosis.runs import Groups
 from wormgear_cli.measurement.harmonics import fit_orders
 from wormgear_cli.physics.effects import EFFECTS, Signals
 from wormgear_cli.units import ARCSEC
@@ -328,9 +328,8 @@ def _to_rows(a, spread):
 
 
 def gls_cost(r, groups, gp, gr):
-    cr = Cross(np.zeros((1, 1)), np.zeros(1), float(r @ r), np.zeros((groups.passes, 1)), pass_sums(r, groups),
-               groups)
-    return float(cr.weighted([gp], [gr])[2][0])
+    """r' V~^-1 r [arcsec^2] of a residual r (N,) at variance ratios gp, gr (:func:`mixed.gls_quadratic`)."""
+    return gls_quadratic(r, groups, gp, gr)
 
 
 def levenberg_marquardt(ctx: FitContext, psi, lin, gp, gr, fit_phases=True, iters=40, parts=None) -> PhaseFit:
@@ -436,7 +435,23 @@ def _harmonic_starts(ctx: FitContext):
     return starts
 
 
-def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep: int = 4):
+def _memo(memo: dict, key, make):
+    """``memo[key]``, made by ``make()`` the first time: what a phase scan uses that depends
+    neither on its start nor on its sweep (the QR factor of the linear columns, each source's
+    values on the grid), computed once for the scans of one fit from several starts."""
+    if key not in memo:
+        memo[key] = make()
+    return memo[key]
+
+
+def _grid_values(source, sig2, phases, d, rows: int) -> np.ndarray:
+    """(N, grid) a source's contribution at each grid phase, at the rows (spread from the distinct
+    pairs ``d`` when given)."""
+    values = np.broadcast_to(source.contrib(sig2, phases[None, :]), (rows, phases.shape[0]))
+    return values if d is None else values[d.inverse]
+
+
+def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep: int = 4, memo: dict | None = None):
     """Candidate phase vectors found shaft by shaft on a grid (white-noise metric, linear
     columns projected out).
 
@@ -448,12 +463,14 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
     moves.  Grid points are only a coarse look at the landscape (a large source
     misplaced by half a step costs more than a wrong basin), so besides the best
     vector the ``keep`` lowest local minima of each shaft's grid are returned,
-    for the caller to polish and compare."""
+    for the caller to polish and compare.  ``memo``: a dict shared by the scans of one
+    ``ctx`` and ``lin`` from several starts (:func:`_memo`)."""
     y, sig, base, sources = ctx.y, ctx.sig, ctx.base, ctx.sources
     psi = np.array(psi, dtype=float)
     if not sources:
         return [psi]
-    q, _ = np.linalg.qr(lin)
+    memo = {} if memo is None else memo
+    q = _memo(memo, "q", lambda: np.linalg.qr(lin)[0])
     # pointwise sources on rows that repeat (angle, direction) pairs: evaluated at the pairs and spread
     d = ctx.distinct if all(s.pointwise for s in sources) else None
     at = sig if d is None else d.sig
@@ -461,8 +478,7 @@ def _group_scan(ctx: FitContext, psi, lin, grid: int = 24, sweeps: int = 4, keep
                    at.time[:, None])
 
     def on_grid(k):
-        values = np.broadcast_to(sources[k].contrib(sig2, phases[None, :]), (at.theta.shape[0], grid))
-        return values if d is None else values[d.inverse]
+        return _memo(memo, k, lambda: _grid_values(sources[k], sig2, phases, d, at.theta.shape[0]))
 
     def value(k, p):
         return sources[k].contrib(sig, p) if d is None else ctx.values(sources[k], p)
@@ -555,8 +571,9 @@ def fit_model(ctx: FitContext, lin, fit_phases=True, extra_starts=(), variance: 
         best: PhaseFit | None = None
         starts = [*_harmonic_starts(sub), *extra_starts]
         inits = [*starts[:1], *extra_starts]
+        sub_lin, memo = lin[idx], dict[object, np.ndarray]()
         for start in starts:
-            inits += _group_scan(sub, start, lin[idx], keep=3)
+            inits += _group_scan(sub, start, sub_lin, keep=3, memo=memo)
         seen = set()
         for init in inits:
             key = tuple(np.round(np.mod(init, 2 * np.pi), 3))
