@@ -304,6 +304,7 @@ def test_python_examples_of_the_docs_run(page, block, code, monkeypatch, capsys)
         assert number in printed, f"{page}: shows {claimed!r}, prints {printed}"
 
 
+@pytest.mark.pinned  # the last digits of a repr, as today's numpy computes them (numpy 1.26 differs by an ulp)
 def test_the_readme_csv_example_is_what_analyze_prints():
     """The README's `analyze --format csv | cut -d, -f1,2,7,8` block, run."""
     from typer.testing import CliRunner
