@@ -280,4 +280,13 @@ FAULTS: dict[str, Fault] = {
     "sweep-figures-upstream-unscaled": Fault(
         "analysis/sweep.py", "_load(up) * (ref.i / ratio if torque else 1.0)", "_load(up)",
         "the stages before the swept one keep the spec's loads under the torque hold", ("tests/cli/test_sweep.py",)),
+    "output-path-dot-ending": Fault(
+        "cli/common.py", '_FOLDER_ENDING = re.compile(r"(?<=.)/(\\.{0,2}/*)?$")',
+        '_FOLDER_ENDING = re.compile(r"(?<=.)/+$")',
+        "only a trailing / read as a folder: out/. (which the path object drops) writes a file named out",
+        ("tests/files/test_paths.py",)),
+    "report-path-unchecked": Fault(
+        "cli/compensate.py", 'show_default=False, click_type=output_path_type("--report", "report.json"))',
+        "show_default=False)", "one output option (--report) left without the output path type",
+        ("tests/files/test_paths.py",)),
 }

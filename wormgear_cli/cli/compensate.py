@@ -9,7 +9,16 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import AngleUnit, OutputOption, UnitOption, count_type, emit, output_format, say
+from wormgear_cli.cli.common import (
+    AngleUnit,
+    OutputOption,
+    UnitOption,
+    count_type,
+    emit,
+    output_format,
+    output_path_type,
+    say,
+)
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
@@ -79,7 +88,7 @@ def compensate(
         "the motor column that phases the curve.", show_default=False, click_type=count_type(1))] = None,
     report_path: Annotated[Path | None, typer.Option(
         "--report", help="Also write what the file is made from and what it will leave as JSON to FILE.",
-        show_default=False)] = None,
+        show_default=False, click_type=output_path_type("--report", "report.json"))] = None,
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,
