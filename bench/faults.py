@@ -289,4 +289,17 @@ FAULTS: dict[str, Fault] = {
         "cli/compensate.py", 'show_default=False, click_type=output_path_type("--report", "report.json"))',
         "show_default=False)", "one output option (--report) left without the output path type",
         ("tests/files/test_paths.py",)),
+    "compensate-harmonics-given-as-not-default": Fault(
+        "workflows/compensate.py", "    if options.harmonics is not None and not is_pec and options.drive is None:",
+        "    if options.harmonics not in (None, DEFAULT_HARMONICS) and not is_pec and options.drive is None:",
+        "--harmonics 3 (the default's value) taken as not given: a table without --drive ignores it",
+        ("tests/cli/test_compensate.py",)),
+    "api-figures-truthy": Fault(
+        "api.py", '    figures = _flag("figures", figures)', "    figures = bool(figures)",
+        'api.sweep(figures="no") read as True',
+        ("tests/test_api.py::test_api_arguments_that_would_be_ignored_or_misread_are_refused",)),
+    "api-choice-case": Fault(
+        "api.py", "isinstance(value, str) and value.lower() == c.lower()", "value == c",
+        'hold="TORQUE" refused by the API while the CLI takes --hold TORQUE',
+        ("tests/test_api.py::test_sweep_hold_in_any_case_as_on_the_command_line",)),
 }

@@ -62,9 +62,10 @@ def compensate(
     orders: Annotated[str | None, typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,2,9 (default: "
         "the drive's with --drive, else the strongest orders found).", show_default=False)] = None,
-    harmonics: Annotated[int, typer.Option(
+    harmonics: Annotated[int | None, typer.Option(
         "--harmonics", help="With --drive: harmonics of each shaft and mesh order; for a mount: harmonics of "
-        "the worm order in the PEC curve.", click_type=count_type(1, 10))] = 3,
+        "the worm order in the PEC curve (default: 3).", show_default=False,
+        click_type=count_type(1, 10))] = None,
     points: Annotated[int | None, typer.Option(
         "--points", help="Table points, evenly spaced over --range, both ends included (default: 256 for "
         "linuxcnc, its most; 361 for csv).", show_default=False, click_type=count_type(2))] = None,
