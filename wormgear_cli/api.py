@@ -1067,6 +1067,7 @@ def _axis(value, option: str):
     arr = np.atleast_1d(np.asarray(value, dtype=float))
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
         raise UsageError(f"{option}: expected positive finite values, or START:STOP:N")
+    core.check_axis(option, float(arr.min()), float(arr.max()))
     return arr
 
 
