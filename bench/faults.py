@@ -306,4 +306,8 @@ FAULTS: dict[str, Fault] = {
         "analysis/sweep.py", "    if not lo <= low <= high <= hi:", "    if not lo <= low:",
         "only the low end of an (i, l) axis checked: --i up to 1e300 gives inf rows and numpy warnings",
         ("tests/cli/test_sweep.py",)),
+    "drive-check-only-in-analyze": Fault(
+        "cli/common.py", "    check_drive(spec, str(path))\n    return spec", "    return spec",
+        "the impossible-drive check left to analyze and check: tolerance and simulate print 44 223 deg of backlash",
+        ("tests/analysis/test_sanity.py",)),
 }

@@ -126,9 +126,14 @@ def _angle(x, unit: str = "rad") -> Angle | None:
 
 
 def _spec(spec):
+    """The drive a function evaluates: refused (SpecError) when its own figures are impossible, as
+    every command refuses it (:func:`wormgear_cli.analysis.sanity.check_drive`)."""
+    from wormgear_cli.analysis.sanity import check_drive  # lazy: keeps analysis off `import wormgear_cli.api`
     from wormgear_cli.spec.loader import Spec  # lazy: keeps spec.loader off `import wormgear_cli.api`'s start-up
 
-    return spec if isinstance(spec, Spec) else load_spec(spec)
+    spec = spec if isinstance(spec, Spec) else load_spec(spec)
+    check_drive(spec, str(spec.source))
+    return spec
 
 
 def _choice(name: str, value: str, choices: Sequence[str]) -> str:

@@ -292,12 +292,17 @@ def say(line: str) -> None:
 
 def load_drive(path):
     """Load a drive spec and say its plausibility warnings on stderr, one ``warning:`` line each
-    (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2)."""
+    (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2),
+    and so is a drive whose own figures no drive can have, beyond a full turn
+    (:func:`wormgear_cli.analysis.sanity.check_drive`: every command that evaluates a drive loads
+    it here, so they all refuse the same specs)."""
+    from wormgear_cli.analysis.sanity import check_drive  # lazy: keeps analysis off `analyze`'s start-up
     from wormgear_cli.spec.loader import load_spec  # lazy: keeps spec.loader off `analyze`'s start-up
 
     spec = load_spec(path)
     for w in spec.warnings:
         say(f"warning: {w}")
+    check_drive(spec, str(path))
     return spec
 
 
