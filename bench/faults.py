@@ -287,4 +287,34 @@ FAULTS: dict[str, Fault] = {
     "sweep-figures-upstream-unscaled": Fault(
         "analysis/sweep.py", "_load(up) * (ref.i / ratio if torque else 1.0)", "_load(up)",
         "the stages before the swept one keep the spec's loads under the torque hold", ("tests/cli/test_sweep.py",)),
+    "output-path-dot-ending": Fault(
+        "cli/common.py", '_FOLDER_ENDING = re.compile(r"(?<=.)/(\\.{0,2}/*)?$")',
+        '_FOLDER_ENDING = re.compile(r"(?<=.)/+$")',
+        "only a trailing / read as a folder: out/. (which the path object drops) writes a file named out",
+        ("tests/files/test_paths.py",)),
+    "report-path-unchecked": Fault(
+        "cli/compensate.py", 'show_default=False, click_type=output_path_type("--report", "report.json"))',
+        "show_default=False)", "one output option (--report) left without the output path type",
+        ("tests/files/test_paths.py",)),
+    "compensate-harmonics-given-as-not-default": Fault(
+        "workflows/compensate.py", "    if options.harmonics is not None and not is_pec and options.drive is None:",
+        "    if options.harmonics not in (None, DEFAULT_HARMONICS) and not is_pec and options.drive is None:",
+        "--harmonics 3 (the default's value) taken as not given: a table without --drive ignores it",
+        ("tests/cli/test_compensate.py",)),
+    "api-figures-truthy": Fault(
+        "api.py", '    figures = _flag("figures", figures)', "    figures = bool(figures)",
+        'api.sweep(figures="no") read as True',
+        ("tests/test_api.py::test_api_arguments_that_would_be_ignored_or_misread_are_refused",)),
+    "api-choice-case": Fault(
+        "api.py", "isinstance(value, str) and value.lower() == c.lower()", "value == c",
+        'hold="TORQUE" refused by the API while the CLI takes --hold TORQUE',
+        ("tests/test_api.py::test_sweep_hold_in_any_case_as_on_the_command_line",)),
+    "sweep-axis-range-unchecked": Fault(
+        "analysis/sweep.py", "    if not lo <= low <= high <= hi:", "    if not lo <= low:",
+        "only the low end of an (i, l) axis checked: --i up to 1e300 gives inf rows and numpy warnings",
+        ("tests/cli/test_sweep.py",)),
+    "drive-check-only-in-analyze": Fault(
+        "cli/common.py", "    check_drive(spec, str(path))\n    return spec", "    return spec",
+        "the impossible-drive check left to analyze and check: tolerance and simulate print 44 223 deg of backlash",
+        ("tests/analysis/test_sanity.py",)),
 }

@@ -236,6 +236,32 @@ def test_sweep_values_equal_ranges():
         wg.sweep(MCH50, i="2:10:5", hold="speed")
 
 
+def test_sweep_hold_in_any_case_as_on_the_command_line(runner):
+    """--hold TORQUE is accepted by the CLI (its choices ignore case); hold="TORQUE" is the same run."""
+    s = wg.sweep(MCH50, i="2:10:3", l_mm="100:300:2", hold="TORQUE")
+    doc = cli_json(runner, "sweep", MCH50, "--i", "2:10:3", "--l-mm", "100:300:2", "--hold", "TORQUE",
+                   "--format", "json")
+    assert s.to_dict() == doc == wg.sweep(MCH50, i="2:10:3", l_mm="100:300:2", hold="torque").to_dict()
+    assert doc["hold"] == "torque"
+
+
+@pytest.mark.parametrize(("call", "message"), [
+    (lambda: wg.sweep(MCH50, i="4:8:3", l_mm="150:250:3", module_mm=2, figures="no"),
+     "figures='no': expected True or False"),
+    (lambda: wg.sweep(MCH50, i="4:8:3", l_mm="150:250:3", module_mm=2, figures=1),
+     "figures=1: expected True or False"),
+    (lambda: wg.sweep(MCH50, i="2:10:5", hold="speed"), "hold='speed': expected one of force, torque"),
+    (lambda: wg.compensate(CONFIGS / "mch50-warm.csv", "csv", harmonics=7),
+     "--harmonics applies with --drive (the harmonics of its shafts and meshes) or to a mount's PEC curve "
+     "(--format eqmod), not to the csv table being written without --drive; drop it, give --drive, or choose "
+     "that format (--format, or the -o file's ending)"),
+])
+def test_api_arguments_that_would_be_ignored_or_misread_are_refused(call, message):
+    with pytest.raises(UsageError) as e:
+        call()
+    assert str(e.value) == message
+
+
 def test_sweep_snapped_matches_cli(runner):
     s = wg.sweep(MCH50, i="4:8:3", l_mm="150:250:3", module_mm=1.0)
     doc = cli_json(runner, "sweep", MCH50, "--i", "4:8:3", "--l-mm", "150:250:3", "--module-mm", "1",

@@ -126,15 +126,30 @@ def _angle(x, unit: str = "rad") -> Angle | None:
 
 
 def _spec(spec):
+    """The drive a function evaluates: refused (SpecError) when its own figures are impossible, as
+    every command refuses it (:func:`wormgear_cli.analysis.sanity.check_drive`)."""
+    from wormgear_cli.analysis.sanity import check_drive  # lazy: keeps analysis off `import wormgear_cli.api`
     from wormgear_cli.spec.loader import Spec  # lazy: keeps spec.loader off `import wormgear_cli.api`'s start-up
 
-    return spec if isinstance(spec, Spec) else load_spec(spec)
+    spec = spec if isinstance(spec, Spec) else load_spec(spec)
+    check_drive(spec, str(spec.source))
+    return spec
 
 
 def _choice(name: str, value: str, choices: Sequence[str]) -> str:
-    if value not in choices:
+    """The choice ``value`` names, in any case (as the command line's options take it, ``--hold
+    TORQUE``); UsageError for another value."""
+    found = next((c for c in choices if isinstance(value, str) and value.lower() == c.lower()), None)
+    if found is None:
         raise UsageError(f"{name}={value!r}: expected one of {', '.join(choices)}")
-    return value
+    return found
+
+
+def _flag(name: str, value) -> bool:
+    """``value``, a bool; UsageError for anything else (``figures="no"`` is not False)."""
+    if not isinstance(value, bool | np.bool_):
+        raise UsageError(f"{name}={value!r}: expected True or False")
+    return bool(value)
 
 
 # --- spec ----------------------------------------------------------------------------------------------------
@@ -420,7 +435,7 @@ def simulate(spec, points: int = 3600, revs: float = 1.0, *, at: PathLike | None
     # lazy: keeps workflows.simulate off `import wormgear_cli.api`'s start-up
     from wormgear_cli.workflows.simulate import PHASE_CHOICES
 
-    _choice("phases", phases, PHASE_CHOICES)
+    phases = _choice("phases", phases, PHASE_CHOICES)
     if at is None:
         if isinstance(points, bool) or not 2 <= int(points) <= 10_000_000:
             raise UsageError(f"points: expected an integer in [2, 10000000], got {points}")
@@ -548,7 +563,7 @@ def read_measurement(path: PathLike, *, column_map: dict | None = None, error_un
 
     options = _read_options(column_map, error_unit, angle_unit, input_format,
                             dict(sessions=sessions, pixel_scale=pixel_scale, dec_deg=dec_deg, guide_rate=guide_rate))
-    m = core.read_measurement(_fs(path), require_error=require_error, options=options)
+    m = core.read_measurement(_fs(path), require_error=_flag("require_error", require_error), options=options)
     return Measurement(m.source, AngleArray(m.angle), AngleArray(m.error), m.direction, m.run, m.load,
                        m.temperature, m.time, dict(m.columns), tuple(m.notes), tuple(m.warnings), m, path, options)
 
@@ -818,7 +833,7 @@ def _compensation(core) -> Compensation:
 
 
 def compensate(data, format: str | None = None, *, output: PathLike | None = None, drive=None,
-               orders: Sequence[float] | None = None, harmonics: int = 3, points: int | None = None,
+               orders: Sequence[float] | None = None, harmonics: int | None = None, points: int | None = None,
                range_deg: tuple[float, float] | None = None, file_type: int | None = None, unit: str = "arcsec",
                max_correction=None, worm_period_s: float | None = None, steps_per_worm: int | None = None,
                column_map: dict | None = None, error_unit: str | None = None,
@@ -838,7 +853,9 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     output : path-like or None
         Where the file will go: it is written there, and named in the loading instructions.
     drive, orders, harmonics
-        As for :func:`measure`; a mount's worm period comes from the drive's worm.
+        As for :func:`measure`; a mount's worm period comes from the drive's worm.  ``harmonics``
+        (None: 3) applies with ``drive`` or to a PEC curve (``eqmod``); given for a table without
+        ``drive`` it is a UsageError, as on the command line.
     points, range_deg
         Table points and their span [deg] (default: the writer's points; 0 to 360 for data over a
         full turn, the measured arc rounded out to whole degrees for a partial one).
@@ -867,7 +884,7 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     from wormgear_cli.workflows.compensate import CompensateOptions, compensate_measurement
     from wormgear_cli.workflows.compensate import compensate as run
 
-    _choice("unit", unit, ("deg", "arcmin", "arcsec", "urad"))
+    unit = _choice("unit", unit, ("deg", "arcmin", "arcsec", "urad"))
     if orders is not None:
         # lazy: keeps workflows.measure off `import wormgear_cli.api`'s start-up
         from wormgear_cli.workflows.measure import parse_orders
@@ -876,7 +893,8 @@ def compensate(data, format: str | None = None, *, output: PathLike | None = Non
     limit = None
     if max_correction is not None:
         limit = float(max_correction) if isinstance(max_correction, Angle) else from_unit(float(max_correction), unit)
-    options = CompensateOptions(format=format, drive=drive, orders=orders, harmonics=int(harmonics), points=points,
+    options = CompensateOptions(format=format, drive=drive, orders=orders,
+                                harmonics=None if harmonics is None else int(harmonics), points=points,
                                 range_deg=(float(range_deg[0]), float(range_deg[1])) if range_deg is not None else None,
                                 file_type=None if file_type is None else int(file_type),
                                 unit=unit, max_correction=limit, worm_period_s=worm_period_s,
@@ -991,9 +1009,10 @@ def diagnose(spec, data, *, alpha: float = 0.01, keep_phases: bool = False, max_
     """
     from wormgear_cli.diagnosis import run_diagnose  # lazy: keeps diagnosis off `import wormgear_cli.api`'s start-up
 
+    fit_phases = not _flag("keep_phases", keep_phases)
     spec = _spec(spec)
     meas = data if isinstance(data, Measurement) else read_measurement(data)
-    result = run_diagnose(spec, meas.core, alpha=alpha, fit_phases=not keep_phases, max_effects=max_effects,
+    result = run_diagnose(spec, meas.core, alpha=alpha, fit_phases=fit_phases, max_effects=max_effects,
                           resamples=resamples, jobs=_jobs(jobs))
     core, doc = result.diagnosis, result.document
     found = tuple(doc["effects_found"])
@@ -1053,6 +1072,7 @@ def _axis(value, option: str):
     arr = np.atleast_1d(np.asarray(value, dtype=float))
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr) & (arr > 0)):
         raise UsageError(f"{option}: expected positive finite values, or START:STOP:N")
+    core.check_axis(option, float(arr.min()), float(arr.max()))
     return arr
 
 
@@ -1071,7 +1091,7 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     l_mm : str or array_like [mm] or None
         Centre distance values l = R1 + R2, likewise; None: the spec's.
     hold : str
-        What stays fixed as i and l change: ``force`` or ``torque``.
+        What stays fixed as i and l change: ``force`` or ``torque``, in any case (as ``--hold``).
     module_mm : float [mm] or None
         Snap every point to whole tooth counts at this module.
     min_pinion_teeth : int or None
@@ -1103,7 +1123,8 @@ def sweep(spec, i=None, l_mm=None, *, hold: str = "force", module_mm: float | No
     from wormgear_cli.analysis import sweep as core
 
     spec = _spec(spec)
-    _choice("hold", hold, ("force", "torque"))
+    hold = _choice("hold", hold, ("force", "torque"))
+    figures = _flag("figures", figures)
     if min_pinion_teeth is not None and module_mm is None:
         raise UsageError("min_pinion_teeth applies only with module_mm")
     st = core.spur_stage(spec, stage)

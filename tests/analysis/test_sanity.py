@@ -121,3 +121,51 @@ def test_check_angles_message_edges():
         check_angles({"one": [np.nan]})
     with pytest.raises(SpecError, match="no finite missing"):
         check_angles({"missing": [1.0, None]})
+
+
+@pytest.fixture(params=["gear", "both"])
+def overloaded(request, tmp_path):
+    """The breaker's drives: a 0.1 mm face width under 10^8 N, and both normal forces at 10^8 N.  Each key
+    is in its range; the nominal lost motion is tens of thousands of degrees."""
+    text = MCH50.read_text()
+    text = text.replace("gear_normal_force_N = 666.0", "gear_normal_force_N = 1e8")
+    if request.param == "gear":
+        text = text.replace("face_width_mm = 50.0", "face_width_mm = 0.1", 1)
+    else:
+        text = text.replace("worm_normal_force_N = 85.0", "worm_normal_force_N = 1e8")
+    path = tmp_path / "overloaded.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("args", [
+    ["analyze"], ["check"], ["simulate", "--points", "100"], ["synth", "--seed", "1"],
+    ["tolerance", "--samples", "200", "-u", "deg"], ["tolerance", "--samples", "200", "--metrics", "budget"],
+    ["sweep", "--param", "worm_pair.lead_error_mm=0:0.05:3", "-f", "csv"], ["sweep", "--i", "2:10:3", "-f", "csv"],
+    ["compare", str(MCH50)], ["diagnose", str(MCH50.parent / "mch50-warm.csv")],
+])
+def test_every_command_evaluating_a_drive_refuses_what_analyze_refuses(runner, overloaded, args):
+    """One check (analysis.sanity.check_drive): tolerance and simulate had printed a backlash of 44 223 deg
+    for the drive analyze and check refuse."""
+    reference = runner.invoke(app, ["analyze", str(overloaded)])
+    error = reference.stderr.splitlines()[-1]
+    assert reference.exit_code == 2 and "more than a full turn, which no drive can have" in error
+    if overloaded.read_text().count("face_width_mm = 0.1\n"):  # the breaker's figures
+        assert error == (f"error: {overloaded}: total_backlash 4.422e+04 deg, gear_backlash 4.422e+04 deg, "
+                         "gear_backlash_deformation 4.422e+04 deg and 3 more: more than a full turn, which no drive "
+                         "can have: the inputs lie far outside what the model describes; check modules, teeth, "
+                         "centre distances and loads")
+    r = runner.invoke(app, [args[0], str(overloaded), *args[1:]])
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr.splitlines()[-1] == error
+
+
+def test_the_api_refuses_it_with_the_same_words(overloaded):
+    import wormgear_cli.api as wg
+
+    messages = set()
+    for call in (wg.analyze, wg.simulate, lambda s: wg.tolerance(s, samples=200), lambda s: wg.sweep(s, i="2:10:3")):
+        with pytest.raises(SpecError) as e:
+            call(overloaded)
+        messages.add(str(e.value))
+    assert len(messages) == 1 and "more than a full turn, which no drive can have" in messages.pop()

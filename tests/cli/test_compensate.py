@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from tests.support import compensation_data as data
-from tests.support.paths import CONFIGS
+from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
 
 MOUNT = CONFIGS / "telescope-mount.toml"
@@ -343,6 +343,29 @@ def test_an_option_the_file_has_no_use_for_is_refused_not_ignored(runner, tmp_pa
     r = run(runner, given, *args, "-o", tmp_path / "out.x")
     assert r.exit_code == 2 and list(tmp_path.iterdir()) == [given]
     assert r.stderr == f"error: {message}; drop it or choose that format (--format, or the -o file's ending)\n"
+
+
+@pytest.mark.parametrize("fmt", ["csv", "linuxcnc"])
+def test_harmonics_with_a_table_and_no_drive_is_refused_not_ignored(runner, tmp_path, fmt):
+    """--harmonics counts the harmonics of the drive's orders or of a PEC curve's worm order: a table
+    without --drive had been written byte for byte as without it (even --harmonics 3, the default)."""
+    given = tmp_path / "not-read.csv"
+    given.write_text("not,a,measurement\n")
+    for n in ("7", "3"):
+        r = run(runner, given, "-f", fmt, "--harmonics", n, "-o", tmp_path / "out.x")
+        assert r.exit_code == 2 and list(tmp_path.iterdir()) == [given]
+        assert r.stderr == (f"error: --harmonics applies with --drive (the harmonics of its shafts and meshes) or to "
+                            f"a mount's PEC curve (--format eqmod), not to the {fmt} table being written without "
+                            "--drive; drop it, give --drive, or choose that format (--format, or the -o file's "
+                            "ending)\n")
+
+
+def test_harmonics_with_the_drive_changes_the_orders_fitted(runner, test_csv, tmp_path):
+    """With --drive it applies: one harmonic of each shaft and mesh order instead of the default 3."""
+    r1 = run(runner, test_csv, "-f", "csv", "--drive", MCH50, "--harmonics", "1", "-o", tmp_path / "h1.csv")
+    r3 = run(runner, test_csv, "-f", "csv", "--drive", MCH50, "-o", tmp_path / "h3.csv")
+    assert r1.exit_code == 0 and r3.exit_code == 0
+    assert "(MCH50 rotary table, 1 harmonics))" in r1.stderr and "(MCH50 rotary table, 3 harmonics))" in r3.stderr
 
 
 def test_a_worm_period_taken_from_the_record_says_how_little_the_record_fixes_it(runner, tmp_path):

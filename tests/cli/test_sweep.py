@@ -5,13 +5,16 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import sys
+import warnings
 
 import numpy as np
 import pytest
 
-from tests.support.paths import CONFIGS
+from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
+from wormgear_cli.errors import UsageError
 from wormgear_cli.spec.loader import FIELD_BY_PATH
 
 
@@ -73,6 +76,12 @@ def test_table_is_deterministic_and_summarises(runner, mch50_path):
     (("--i", "0:10:5"), '--i "0:10:5": values must be > 0 (START is 0)'),
     (("--l-mm", "-50:100:3"), '--l-mm "-50:100:3": values must be > 0 (START is -50)'),
     (("--i", "2:10:1"), '--i "2:10:1": N = 1 needs START = STOP (got 2 and 10)'),
+    (("--i", "1e-300:1e-300:1"), '--i "1e-300:1e-300:1": values must be from 0.01 to 1000 (got 1e-300)'),
+    (("--i", "0.005:2:3"), '--i "0.005:2:3": values must be from 0.01 to 1000 (got 0.005)'),
+    (("--i", "8:1001:3"), '--i "8:1001:3": values must be from 0.01 to 1000 (got 1001)'),
+    (("--i", "8:8:1", "--l-mm", "1e-300:1e-300:1", "-f", "csv"),
+     '--l-mm "1e-300:1e-300:1": values must be from 0.1 to 100000 [mm] (got 1e-300)'),
+    (("--l-mm", "100:1e6:3"), '--l-mm "100:1e6:3": values must be from 0.1 to 100000 [mm] (got 1e+06)'),
     (("--i", "2:10"), '--i "2:10": expected START:STOP:N (N values from START to STOP inclusive), e.g. 2:10:9'),
     (("--i", "inf:10:3"), '--i "inf:10:3": START "inf" is not a finite number'),
     ((), "nothing to sweep: give --i START:STOP:N and/or --l-mm START:STOP:N, or --param KEY=START:STOP:N"),
@@ -420,9 +429,9 @@ def test_module_tooth_counts_stay_whole_and_positive(runner, mch50_path):
     for p in pts:
         assert p["z1"] > 0 and p["z2"] > 0
         assert p["z1"] + p["z2"] == round(2 * p["l_mm"] / 0.05)  # the tooth sum for l at this module
-    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "100:1e9:2", "--module-mm", "0.05", "--format", "csv")
+    r = run(runner, mch50_path, "--i", "2:4:3", "--l-mm", "100:1e5:2", "--module-mm", "0.05", "--format", "csv")
     assert r.exit_code == 2 and r.stderr == (
-        "error: --module-mm 0.05: l = 1e+09 mm needs 4e+10 teeth (z1 + z2 = 2 l / m); at most 1000000 are "
+        "error: --module-mm 0.05: l = 100000 mm needs 4e+06 teeth (z1 + z2 = 2 l / m); at most 1000000 are "
         "supported, use a larger module or a shorter --l-mm range\n")
 
 
@@ -618,3 +627,28 @@ def test_figures_skip_a_design_the_drive_file_does_not_hold_for_and_say_why(runn
                         f"--i/--l-mm to the designs it does); the first, i = 8, l = 300 mm (1067/133 teeth): {drive}: "
                         "stage 2 (spur): gear.accuracy_grade: teeth 1067 outside ISO 1328-1:2013's scope [5, 1000] "
                         "(its formulas are not extrapolated); give the deviations explicitly instead\n")
+
+
+@pytest.mark.parametrize("extra", [(), ("--hold", "torque"), ("--module-mm", "100"), ("--module-mm", "1", "--hold",
+                                                                                           "torque")])
+def test_the_axes_physical_ranges_give_finite_rows_and_no_numpy_warning(runner, mch50_path, extra):
+    """The corners of --i 0.01..1000 and --l-mm 0.1 mm..100 m: every value finite, nothing on stderr but
+    the skipped-designs note (1e-300 had given inf rows and numpy's RuntimeWarnings)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = run(runner, mch50_path, "--i", "0.01:1000:5", "--l-mm", "0.1:100000:5", "-f", "csv", *extra)
+    assert r.exit_code == 0, r.output
+    assert all(line.startswith("note: ") for line in r.stderr.splitlines())
+    rows = list(csv.reader(io.StringIO(r.stdout)))
+    assert len(rows) > 1 and all(math.isfinite(float(v)) for row in rows[1:] for v in row if v != "")
+
+
+def test_api_sweep_checks_the_same_ranges():
+    import wormgear_cli.api as wg
+
+    with pytest.raises(UsageError) as e:
+        wg.sweep(MCH50, i=8, l_mm="1e-300:1e-300:1")
+    assert str(e.value) == '--l-mm "1e-300:1e-300:1": values must be from 0.1 to 100000 [mm] (got 1e-300)'
+    with pytest.raises(UsageError) as e:
+        wg.sweep(MCH50, i=[2.0, 4000.0])
+    assert str(e.value) == "--i: values must be from 0.01 to 1000 (got 4000)"

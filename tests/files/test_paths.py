@@ -10,7 +10,7 @@ import threading
 
 import pytest
 
-from tests.support.paths import MCH50, ROOT
+from tests.support.paths import CONFIGS, MCH50, ROOT
 from wormgear_cli.cli import app
 from wormgear_cli.errors import UsageError
 from wormgear_cli.files import atomic_write, check_output_path, output_transaction, refuse_input
@@ -183,4 +183,34 @@ def test_a_plot_path_in_a_missing_folder_is_refused_before_any_work(tmp_path, ru
     r = runner.invoke(app, ["tolerance", str(MCH50), "-n", "1000", "--plot", str(plot)])
     assert r.exit_code == 2
     assert r.stderr.startswith(f"error: {plot}") and len(r.stderr.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("ending", ["/", "/.", "/..", "/./"])
+@pytest.mark.parametrize(("args", "option", "example"), [
+    (["analyze", str(MCH50), "-o"], "-o", "result.json"),
+    (["sweep", str(MCH50), "--i", "8:10:2", "--l-mm", "40:50:2", "-f", "csv", "--shard", "1/2", "-o"], "-o",
+     "result.json"),
+    (["synth", str(MCH50), "--truth"], "--truth", "truth.json"),
+    (["simulate", str(MCH50), "--plot"], "--plot", "plot.png"),
+    (["tolerance", str(MCH50), "--plot"], "--plot", "plot.png"),
+    (["sweep", str(MCH50), "--i", "8:10:2", "--l-mm", "40:50:2", "--plot"], "--plot", "plot.png"),
+    (["measure", str(CONFIGS / "mch50-warm.csv"), "--plot"], "--plot", "plot.png"),
+    (["compensate", str(CONFIGS / "mch50-warm.csv"), "-f", "csv", "--report"], "--report", "report.json"),
+    (["diagnose", str(MCH50), str(CONFIGS / "mch50-warm.csv"), "--write-spec"], "--write-spec", "drive.toml"),
+    (["diagnose", str(MCH50), str(CONFIGS / "mch50-warm.csv"), "--plot"], "--plot", "plot.png"),
+    (["new"], "NEW.toml", "drive.toml"),
+])
+def test_every_output_path_ending_in_a_folder_is_refused_by_its_raw_text(tmp_path, runner, monkeypatch, args,
+                                                                         option, example, ending):
+    """``out/``, ``out/.``, ``out/..``: a folder, whatever the option (pathlib drops "/" and "/.": each
+    had written a file named ``out``, and a shard its manifest too)."""
+    monkeypatch.chdir(tmp_path)
+    folder = "out/../" if ending == "/.." else "out/"
+    r = runner.invoke(app, [*args, "out.toml" + ending if option == "NEW.toml" else "out" + ending])
+    if option == "NEW.toml":
+        folder = folder.replace("out", "out.toml")
+    assert r.exit_code == 2 and r.stdout == ""
+    assert r.stderr == (f"error: {folder.removesuffix('/').removesuffix('/..')}{ending}: ends with {ending}, which "
+                        f"names a folder; expected a file name for {option} (e.g. {folder}{example})\n")
     assert list(tmp_path.iterdir()) == []

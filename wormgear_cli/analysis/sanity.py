@@ -19,6 +19,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from wormgear_cli.analysis import accuracy
 from wormgear_cli.errors import SpecError
 
 #: an output error or lost motion larger than this [rad] (one turn) is no positioning error
@@ -79,3 +80,20 @@ def check_angles(values: Mapping[str, object], source: str = "", strict: bool = 
     if strict:
         raise SpecError(line.replace("more than a full turn, so", "more than a full turn, which no drive can have:"))
     return line
+
+
+def check_drive(spec, source: str = "") -> None:
+    """Refuse a drive whose own figures no drive can have: the one check of every command that
+    evaluates a drive (analyze, check, simulate, synth, tolerance, sweep, compare, diagnose), so
+    that none of them works on a spec the others refuse.
+
+    The nominal drive is analysed (:func:`wormgear_cli.analysis.accuracy.analyze`) and its angles
+    checked with ``strict`` (:func:`check_angles`).
+
+    Raises
+    ------
+    SpecError
+        An angle of the nominal drive is not finite or beyond a full turn (one line naming
+        ``source``, the drive file).
+    """
+    check_angles(accuracy.analyze(spec).angles, source, strict=True)

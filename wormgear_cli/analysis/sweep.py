@@ -90,6 +90,10 @@ CHUNK_POINTS = 1 << 16
 #: grid points per block with ``figures`` (each kept design is a full analyze, budget and acceptance
 #: prediction, ~50 ms: small blocks spread them over --jobs and move the progress bar)
 FIGURE_CHUNK_POINTS = 64
+#: the physical ranges of the (i, l) sweep's axes, by option: a gear ratio i = z1/z2 [-] and a centre
+#: distance l [mm] (0.1 mm to 100 m).  Far beyond any spur stage built, they keep every value finite (at
+#: l = 1e-300 mm the deflections overflowed to inf)
+AXIS_RANGES = {"--i": (0.01, 1000.0), "--l-mm": (0.1, 100_000.0)}
 #: the paper's thresholds for its findings: l "beyond 0.2 m", i "below about 6"
 PAPER_L_KNEE_MM = 200.0
 PAPER_I_KNEE = 6.0
@@ -152,7 +156,20 @@ def parse_range_spec(text: str, option: str, positive: bool = False,
         raise UsageError(f"{where}: STOP ({stop:g}) is less than START ({start:g})")
     if positive and start <= 0.0:
         raise UsageError(f"{where}: values must be > 0 (START is {start:g})")
+    check_axis(option, start, stop, where)
     return RangeSpec(option, text, start, stop, n)
+
+
+def check_axis(option: str, low: float, high: float, where: str | None = None) -> None:
+    """Refuse (UsageError naming ``where``, default ``option``) values from ``low`` to ``high`` of an
+    (i, l) axis outside its physical range (:data:`AXIS_RANGES`; other options are not checked)."""
+    if option not in AXIS_RANGES:
+        return
+    lo, hi = AXIS_RANGES[option]
+    if not lo <= low <= high <= hi:
+        bad = low if low < lo else high
+        unit = " [mm]" if option == "--l-mm" else ""
+        raise UsageError(f"{where or option}: values must be from {lo:g} to {hi:g}{unit} (got {bad:g})")
 
 
 def parse_range(text: str, option: str, positive: bool = False, whole: bool = False,

@@ -24,6 +24,7 @@ from wormgear_cli.cli.common import (
     json_text,
     load_drive,
     output_format,
+    output_path_type,
     render,
     say,
     stdout_is_terminal,
@@ -271,7 +272,7 @@ def check(
 def new(
     path: Annotated[Path, typer.Argument(help="File to create (must not exist); a name without a suffix gets "
                                            ".toml; - writes the template to stdout.", show_default=False,
-                                           metavar="NEW.toml")],
+                                           metavar="NEW.toml", click_type=output_path_type("NEW.toml", "drive.toml"))],
     name: Annotated[str | None, typer.Option("--name", help="Drive name (default: file name).")] = None,
     stages: Annotated[str, typer.Option("--stages", help="The stages' kinds from the motor to the output, comma "
                                         "separated: worm, spur, belt (e.g. worm | belt,worm | spur,worm | "

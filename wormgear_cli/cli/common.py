@@ -78,17 +78,26 @@ FormatOption = Annotated[TableFormat, typer.Option("--format", "-f", help="Outpu
 UnitOption = Annotated[AngleUnit, typer.Option("--unit", "-u", help="Unit of the angular errors in the "
                                                "output (positions such as target angles stay in deg).",
                                                case_sensitive=False)]
-def _output_type():
-    """The click type of -o: a path, refused at once when it ends with "/" (a folder, which the
-    path would otherwise lose: ``-o out/`` wrote a file named ``out``)."""
+#: the folder ending of a path's raw text: "/", "/." or "/.." (pathlib drops the first two, so
+#: ``-o out/`` and ``-o out/.`` had written a file named ``out``)
+_FOLDER_ENDING = re.compile(r"(?<=.)/(\.{0,2}/*)?$")
+
+
+def output_path_type(option: str, example: str = "result.json") -> ParamType:
+    """The click type of every option or argument naming a file to write (-o, --plot, --truth,
+    --report, --write-spec, ``new FILE``): a path, refused at once (UsageError, exit 2) when its
+    raw text ends with "/", "/." or "/..", which name a folder.  ``example``: the file name the
+    message proposes in that folder."""
     class OutputPath(ParamType):
         name = "path"
 
         def convert(self, value, param, ctx):
             text = os.fspath(value)
-            if text.endswith("/") and text != "/":
-                raise UsageError(f"{quote(text)}: ends with /, which names a folder; expected a file name for -o "
-                                 f"(e.g. {quote(text + 'result.json')})")
+            ending = _FOLDER_ENDING.search(text)
+            if ending is not None:
+                folder = text.rstrip("/").removesuffix("/.") + "/"  # out/. is out/; out/.. is out/../
+                raise UsageError(f"{quote(text)}: ends with {ending.group(0)}, which names a folder; expected a "
+                                 f"file name for {option} (e.g. {quote(folder + example)})")
             return Path(text)
 
     return OutputPath()
@@ -102,7 +111,7 @@ def _check_output(value: Path | None) -> Path | None:
 
 OutputOption = Annotated[Path | None, typer.Option("--output", "-o", help="Write the result to FILE "
                                                       "(atomically) instead of stdout; - is stdout.",
-                                                      callback=_check_output, click_type=_output_type())]
+                                                      callback=_check_output, click_type=output_path_type("-o"))]
 
 
 # --- the format a file name asks for -----------------------------------------------------------
@@ -283,12 +292,17 @@ def say(line: str) -> None:
 
 def load_drive(path):
     """Load a drive spec and say its plausibility warnings on stderr, one ``warning:`` line each
-    (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2)."""
+    (:mod:`wormgear_cli.spec.plausibility`); an impossible value is the loader's SpecError (exit 2),
+    and so is a drive whose own figures no drive can have, beyond a full turn
+    (:func:`wormgear_cli.analysis.sanity.check_drive`: every command that evaluates a drive loads
+    it here, so they all refuse the same specs)."""
+    from wormgear_cli.analysis.sanity import check_drive  # lazy: keeps analysis off `analyze`'s start-up
     from wormgear_cli.spec.loader import load_spec  # lazy: keeps spec.loader off `analyze`'s start-up
 
     spec = load_spec(path)
     for w in spec.warnings:
         say(f"warning: {w}")
+    check_drive(spec, str(path))
     return spec
 
 

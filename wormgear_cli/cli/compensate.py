@@ -9,7 +9,16 @@ from typing import Annotated
 import typer
 
 from wormgear_cli.cli._app import app
-from wormgear_cli.cli.common import AngleUnit, OutputOption, UnitOption, count_type, emit, output_format, say
+from wormgear_cli.cli.common import (
+    AngleUnit,
+    OutputOption,
+    UnitOption,
+    count_type,
+    emit,
+    output_format,
+    output_path_type,
+    say,
+)
 from wormgear_cli.cli.helptext import HelpCommand
 from wormgear_cli.cli.read_options import (
     AngleUnitOption,
@@ -53,9 +62,10 @@ def compensate(
     orders: Annotated[str | None, typer.Option(
         "--orders", help="Orders to fit [cycles per output revolution], comma-separated, e.g. 1,2,9 (default: "
         "the drive's with --drive, else the strongest orders found).", show_default=False)] = None,
-    harmonics: Annotated[int, typer.Option(
+    harmonics: Annotated[int | None, typer.Option(
         "--harmonics", help="With --drive: harmonics of each shaft and mesh order; for a mount: harmonics of "
-        "the worm order in the PEC curve.", click_type=count_type(1, 10))] = 3,
+        "the worm order in the PEC curve (default: 3).", show_default=False,
+        click_type=count_type(1, 10))] = None,
     points: Annotated[int | None, typer.Option(
         "--points", help="Table points, evenly spaced over --range, both ends included (default: 256 for "
         "linuxcnc, its most; 361 for csv).", show_default=False, click_type=count_type(2))] = None,
@@ -79,7 +89,7 @@ def compensate(
         "the motor column that phases the curve.", show_default=False, click_type=count_type(1))] = None,
     report_path: Annotated[Path | None, typer.Option(
         "--report", help="Also write what the file is made from and what it will leave as JSON to FILE.",
-        show_default=False)] = None,
+        show_default=False, click_type=output_path_type("--report", "report.json"))] = None,
     column_map: MapOption = None,
     error_unit: ErrorUnitOption = None,
     angle_unit: AngleUnitOption = None,

@@ -25,6 +25,7 @@ from wormgear_cli.cli.common import (
     json_text,
     load_drive,
     output_format,
+    output_path_type,
     render,
 )
 from wormgear_cli.cli.helptext import HelpCommand
@@ -66,7 +67,8 @@ def diagnose(
     write_spec: Annotated[Path | None, typer.Option(
         "--write-spec", help="Also write the augmented drive spec to FILE.toml (TOML written from the parsed "
         "spec: the fitted phases and an [effects.NAME] table per named effect; the input's comments are not "
-        "kept); never the input files.", show_default=False)] = None,
+        "kept); never the input files.", show_default=False,
+        click_type=output_path_type("--write-spec", "drive.toml"))] = None,
     format: Annotated[TableJsonFormat, typer.Option("--format", "-f", help="Output format of the report.",
                                                     case_sensitive=False)] = TableJsonFormat.table,
     unit: DiagnoseUnitOption = AngleUnit.arcsec,
@@ -80,7 +82,8 @@ def diagnose(
     guide_rate: GuideRateOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw measured vs simulated and the residual, before and after, to FILE "
-        "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
+        "(.png, .svg or .pdf; needs matplotlib).", show_default=False,
+        click_type=output_path_type("--plot", "plot.png"))] = None,
     alpha: Annotated[float, typer.Option(
         "--alpha", help="Family-wise significance level of each selection step (Bonferroni over the "
         "candidates tested), 0 < alpha < 0.5.")] = 0.01,

@@ -23,6 +23,7 @@ from wormgear_cli.cli.common import (
     fmt_angle,
     json_text,
     output_format,
+    output_path_type,
     render,
     say,
 )
@@ -88,7 +89,7 @@ def measure(
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the ISO 230-2 deviation chart to FILE (.png, .svg or .pdf; needs "
-        "matplotlib).", show_default=False)] = None,
+        "matplotlib).", show_default=False, click_type=output_path_type("--plot", "plot.png"))] = None,
 ):
     """ISO 230-2 figures and order amplitudes of a rotary-table measurement.
 

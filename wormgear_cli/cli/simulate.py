@@ -25,6 +25,7 @@ from wormgear_cli.cli.common import (
     json_text,
     load_drive,
     output_format,
+    output_path_type,
     warn_if_absurd,
 )
 from wormgear_cli.cli.helptext import HelpCommand
@@ -60,7 +61,7 @@ SIMULATE_AT_BYTES_PER_ROW = 650
 
 PlotOption = Annotated[Path | None, typer.Option(
     "--plot", help="Also draw the curves to FILE (.png, .svg or .pdf; needs matplotlib).",
-    show_default=False)]
+    show_default=False, click_type=output_path_type("--plot", "plot.png"))]
 
 
 @app.command(cls=HelpCommand)
@@ -158,7 +159,8 @@ def synth(
     output: OutputOption = None,
     truth: Annotated[Path | None, typer.Option(
         "--truth", help="Write the truth (phases, effects with parameters, noise, seed, plan) to this JSON "
-        "file; it never goes into the data.", show_default=False)] = None,
+        "file; it never goes into the data.", show_default=False,
+        click_type=output_path_type("--truth", "truth.json"))] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random number (same seed, same bytes).",
                                       min=0)] = 0,
     plan: Annotated[PlanKind, typer.Option("--plan", help="iso: irregularly spaced targets; dense: an even "

@@ -33,6 +33,7 @@ from wormgear_cli.cli.common import (
     load_drive,
     output_file,
     output_format,
+    output_path_type,
     render,
     say,
     shard_part,
@@ -92,7 +93,7 @@ def sweep(
     jobs: JobsOption = 1,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw the response surface with line cuts (.png/.svg/.pdf; needs "
-                       "matplotlib).", show_default=False)] = None,
+                       "matplotlib).", show_default=False, click_type=output_path_type("--plot", "plot.png"))] = None,
     format: FormatOption = TableFormat.table,
     unit: UnitOption = AngleUnit.arcsec,
     output: OutputOption = None,

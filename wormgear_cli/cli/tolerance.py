@@ -27,6 +27,7 @@ from wormgear_cli.cli.common import (
     load_drive,
     output_file,
     output_format,
+    output_path_type,
     render,
     say,
     shard_part,
@@ -100,7 +101,8 @@ def tolerance(
     output: OutputOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Also draw histograms with limits and percentiles, and the sensitivity bars, to FILE "
-        "(.png, .svg or .pdf; needs matplotlib).", show_default=False)] = None,
+        "(.png, .svg or .pdf; needs matplotlib).", show_default=False,
+        click_type=output_path_type("--plot", "plot.png"))] = None,
 ):
     """Statistical tolerance analysis: what fraction of built drives passes, and which tolerance to tighten.
 

@@ -72,8 +72,9 @@ class CompensateOptions:
 
     ``format``: writer name (None: from the ``output`` file name's
     ending); ``drive``: spec path; ``orders``: orders to fit [cycles/rev];
-    ``harmonics``: with ``drive``; ``points``: table points (None: the
-    writer's default); ``range_deg``: (start, end) of the table [deg] (None: :func:`_default_range`);
+    ``harmonics``: with ``drive`` or for a PEC curve (None: :data:`DEFAULT_HARMONICS`);
+    ``points``: table points (None: the writer's default); ``range_deg``: (start, end) of the
+    table [deg] (None: :func:`_default_range`);
     ``file_type``: LinuxCNC COMP_FILE_TYPE (None: 1); ``unit``: unit of the CSV
     values and the report; ``max_correction`` [rad]: the largest correction
     allowed (None: no limit); ``worm_period_s`` [s] and ``steps_per_worm``:
@@ -84,7 +85,7 @@ class CompensateOptions:
     format: str | None = None
     drive: str | Path | None = None
     orders: tuple[float, ...] | None = None
-    harmonics: int = DEFAULT_HARMONICS
+    harmonics: int | None = None
     points: int | None = None
     range_deg: tuple[float, float] | None = None
     file_type: int | None = None
@@ -105,11 +106,16 @@ class CompensateOptions:
                              f"{endings})")
         return found
 
+    @property
+    def harmonic_count(self) -> int:
+        """The harmonics asked for: ``harmonics``, else :data:`DEFAULT_HARMONICS`."""
+        return DEFAULT_HARMONICS if self.harmonics is None else self.harmonics
+
     def check(self) -> None:
         problems = []
         if self.file_type not in (None, 0, 1):
             problems.append(f"--type: expected 0 or 1 (LinuxCNC COMP_FILE_TYPE), got {self.file_type}")
-        if not 1 <= self.harmonics <= 10:
+        if self.harmonics is not None and not 1 <= self.harmonics <= 10:
             problems.append(f"--harmonics: expected an integer in [1, 10], got {self.harmonics}")
         if self.max_correction is not None and not (math.isfinite(self.max_correction) and self.max_correction > 0):
             problems.append("--max-correction: expected a positive number")
@@ -196,7 +202,7 @@ def choose_orders(options: CompensateOptions) -> OrderChoice:
     priority = worm = name = None
     if options.drive is not None:
         spec = load_spec(options.drive)
-        _, _, priority, physical, name = _orders_asked(spec, None, options.harmonics)
+        _, _, priority, physical, name = _orders_asked(spec, None, options.harmonic_count)
         priority = tuple(priority)
         worm = float(geometry(spec).worm_order)
     if options.orders is not None:
@@ -204,7 +210,7 @@ def choose_orders(options: CompensateOptions) -> OrderChoice:
         return OrderChoice(tuple(options.orders), labels, None, "--orders", worm, name)
     if physical:
         return OrderChoice(tuple(k for k, _ in physical), tuple(lab for _, lab in physical), priority,
-                           f"the drive's shafts and meshes ({name}, {options.harmonics} harmonics)", worm, name)
+                           f"the drive's shafts and meshes ({name}, {options.harmonic_count} harmonics)", worm, name)
     return OrderChoice(None, None, None, "", None, name)
 
 
@@ -260,13 +266,18 @@ def compensate_measurement(measurement, options: CompensateOptions | None = None
 def _check_applies(options: CompensateOptions, writer) -> None:
     """UsageError for an option the file being written has no use for (it would be ignored without a
     word): a table's (--points, --range, --type) with a PEC curve, a mount's (--worm-period,
-    --steps-per-worm) with a table, --type with another table than LinuxCNC's."""
+    --steps-per-worm) with a table, --type with another table than LinuxCNC's, --harmonics with a table
+    and no --drive (it counts the harmonics of the drive's orders, or of a PEC curve's worm order)."""
     is_pec = writer.accepts == PEC_CURVE
     table, mount = "a table (--format linuxcnc or csv)", "a mount's PEC curve (--format eqmod)"
     rules = [("--points", options.points, not is_pec, table), ("--range", options.range_deg, not is_pec, table),
              ("--type", options.file_type, writer.name == "linuxcnc", "LinuxCNC's table (--format linuxcnc)"),
              ("--worm-period", options.worm_period_s, is_pec, mount),
              ("--steps-per-worm", options.steps_per_worm, is_pec, mount)]
+    if options.harmonics is not None and not is_pec and options.drive is None:
+        raise UsageError(f"--harmonics applies with --drive (the harmonics of its shafts and meshes) or to {mount}, "
+                         f"not to the {writer.name} table being written without --drive; drop it, give --drive, "
+                         "or choose that format (--format, or the -o file's ending)")
     for flag, value, applies, whose in rules:
         if value is not None and not applies:
             raise UsageError(f"{flag} is an option of {whose}, not of the {writer.name} file being written; drop it "
@@ -535,7 +546,7 @@ def _pec_path(m, options: CompensateOptions,
     if cycles < 1.0:
         raise DataError(f"{m.source}: the record covers {cycles * period:.4g} s of tracking, less than one worm "
                         f"period ({period:.4g} s, order {worm:.6g}): no PEC curve can be made from it")
-    orders = list(options.orders) if options.orders else [worm * h for h in range(1, options.harmonics + 1)]
+    orders = list(options.orders) if options.orders else [worm * h for h in range(1, options.harmonic_count + 1)]
     if not any(abs(k - worm) <= 1e-9 * worm for k in orders):
         orders.insert(0, worm)
     rows, terms, told = pec.determinacy(th, run, orders)
