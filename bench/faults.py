@@ -280,4 +280,11 @@ FAULTS: dict[str, Fault] = {
     "sweep-figures-upstream-unscaled": Fault(
         "analysis/sweep.py", "_load(up) * (ref.i / ratio if torque else 1.0)", "_load(up)",
         "the stages before the swept one keep the spec's loads under the torque hold", ("tests/cli/test_sweep.py",)),
+    "header-unit-underscore-unread": Fault(
+        "measurement/readers/header.py", "for form in (_SLASH, _IN, _UNDERSCORE):", "for form in (_SLASH, _IN):",
+        "a unit written as a last '_' suffix (error_mm, error_deg) not recognised: read as arcsec",
+        ("tests/measurement/test_readers.py",)),
+    "mrad-as-urad": Fault(
+        "units.py", '    "mrad": 1e-3,', '    "mrad": 1e-6,',
+        "a milliradian taken for a microradian", ("tests/measurement/test_readers.py",)),
 }
