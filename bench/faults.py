@@ -287,4 +287,10 @@ FAULTS: dict[str, Fault] = {
     "mrad-as-urad": Fault(
         "units.py", '    "mrad": 1e-3,', '    "mrad": 1e-6,',
         "a milliradian taken for a microradian", ("tests/measurement/test_readers.py",)),
+    "count-lines-opens-fifo": Fault(
+        "files.py",
+        "        if not stat.S_ISREG(os.stat(path).st_mode):\n            return None\n        with open(path, \"rb\"",
+        "        with open(path, \"rb\"",
+        "the memory check's line count opens a FIFO and closes it unread: measure loses the data and waits",
+        ("tests/cli/test_measure.py",)),
 }
