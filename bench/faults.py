@@ -293,4 +293,8 @@ FAULTS: dict[str, Fault] = {
         "        with open(path, \"rb\"",
         "the memory check's line count opens a FIFO and closes it unread: measure loses the data and waits",
         ("tests/cli/test_measure.py",)),
+    "guidelog-time-bound-only": Fault(
+        "measurement/guidelog.py", "    bad = alone | (t > MAX_SECTION_S)\n", "    bad = t > MAX_SECTION_S\n",
+        "a guide log's Time cell out of order between two in order is read as a clock restart (a new session)",
+        ("tests/measurement/test_guidelog.py",)),
 }
