@@ -317,4 +317,21 @@ FAULTS: dict[str, Fault] = {
         "cli/common.py", "    check_drive(spec, str(path))\n    return spec", "    return spec",
         "the impossible-drive check left to analyze and check: tolerance and simulate print 44 223 deg of backlash",
         ("tests/analysis/test_sanity.py",)),
+    "header-unit-underscore-unread": Fault(
+        "measurement/readers/header.py", "for form in (_SLASH, _IN, _UNDERSCORE):", "for form in (_SLASH, _IN):",
+        "a unit written as a last '_' suffix (error_mm, error_deg) not recognised: read as arcsec",
+        ("tests/measurement/test_readers.py",)),
+    "mrad-as-urad": Fault(
+        "units.py", '    "mrad": 1e-3,', '    "mrad": 1e-6,',
+        "a milliradian taken for a microradian", ("tests/measurement/test_readers.py",)),
+    "count-lines-opens-fifo": Fault(
+        "files.py",
+        "        if not stat.S_ISREG(os.stat(path).st_mode):\n            return None\n        with open(path, \"rb\"",
+        "        with open(path, \"rb\"",
+        "the memory check's line count opens a FIFO and closes it unread: measure loses the data and waits",
+        ("tests/cli/test_measure.py",)),
+    "guidelog-time-bound-only": Fault(
+        "measurement/guidelog.py", "    bad = alone | (t > MAX_SECTION_S)\n", "    bad = t > MAX_SECTION_S\n",
+        "a guide log's Time cell out of order between two in order is read as a clock restart (a new session)",
+        ("tests/measurement/test_guidelog.py",)),
 }

@@ -97,6 +97,11 @@ class Angle:
         return self._rad / RAD_PER_UNIT["arcsec"]
 
     @property
+    def mrad(self) -> float:
+        """The angle [mrad]."""
+        return self._rad / RAD_PER_UNIT["mrad"]
+
+    @property
     def urad(self) -> float:
         """The angle [urad]."""
         return self._rad / RAD_PER_UNIT["urad"]

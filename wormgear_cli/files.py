@@ -1387,8 +1387,12 @@ def check_memory(need: float, what: str, fix: str) -> None:
 
 def count_lines(path, limit: int) -> int | None:
     """Line ends in the first ``limit`` + 1 bytes of a regular file (a fast pass, before the
-    file is parsed), or None for anything else (a pipe cannot be read twice) or on error."""
+    file is parsed), or None for anything else (a pipe cannot be read twice) or on error.  A FIFO is
+    never opened here: opening and closing it unread would take the writer's data (or kill it with
+    SIGPIPE) and leave the parser waiting for a second writer."""
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
         with open(path, "rb", buffering=0) as fh:
             if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
                 return None

@@ -15,6 +15,7 @@ RAD_PER_UNIT: dict[str, float] = {
     "deg": math.pi / 180.0,
     "arcmin": math.pi / (180.0 * 60.0),
     "arcsec": math.pi / (180.0 * 3600.0),
+    "mrad": 1e-3,
     "urad": 1e-6,
 }
 

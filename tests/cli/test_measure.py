@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from tests.support.iso230_hand import HAND
+from tests.support.paths import ROOT
 from wormgear_cli.cli import app
 from wormgear_cli.measurement.iso230 import iso230_figures
 
@@ -333,3 +334,65 @@ def test_repeated_targets_without_direction_or_run_withhold_the_one_direction_fi
     mapped = invoke(runner, path, "--map", "angle_deg=Position", "--map", "error_arcsec=Deviation",
                     "--map", "direction=Richtung", "-f", "json")
     assert json.loads(mapped.stdout)["iso230_2"]["B"] == pytest.approx(5.0)  # mean up - mean down at each target
+
+
+# --- a named pipe (FIFO) is read once ---------------------------------------------------------------------------------
+
+
+def _feed_fifo(fifo, data: bytes, done, broken: list) -> None:
+    """Write ``data`` into ``fifo`` once (noting a reader that closes it unread); then, until ``done``, open
+    and close it whenever a reader has it open, so a reader opening it a second time (the fault) gets an
+    end of file instead of waiting forever for a writer that is gone."""
+    import errno
+    import os
+    import time
+
+    try:
+        with open(fifo, "wb") as fh:
+            fh.write(data)
+    except BrokenPipeError:
+        broken.append("the reader closed the pipe unread")
+    while not done.is_set():
+        try:
+            fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+        except OSError as e:
+            if e.errno != errno.ENXIO:
+                raise
+            time.sleep(0.05)
+            continue
+        os.close(fd)
+        time.sleep(0.05)
+
+
+@pytest.mark.parametrize("source", ["table", "guide log"])
+def test_a_named_pipe_is_read_once_and_gives_what_the_file_gives(runner, tmp_path, monkeypatch, source):
+    """``measure`` on a FIFO had read it twice (a line count for the memory check, then the parser) and
+    hung; the result is now the regular file's, byte for byte (same name, other directory)."""
+    import os
+    import threading
+
+    if source == "table":  # over 64 KiB: more than a pipe's buffer, so an unread close breaks the writer
+        data = "angle_deg,error_arcsec,direction,run\n" + "".join(
+            f"{a},{math.sin(math.radians(a)) + 0.1 * r},{d},{r}\n"
+            for r in range(4) for d in (1, -1) for a in range(3600))
+    else:
+        data = (ROOT / "tests/data/telescope/cge-pro-180.guidelog.txt").read_text(encoding="utf-8")
+    (tmp_path / "file").mkdir()
+    (tmp_path / "pipe").mkdir()
+    (tmp_path / "file" / "m.csv").write_text(data, encoding="utf-8")
+    os.mkfifo(tmp_path / "pipe" / "m.csv")
+    monkeypatch.chdir(tmp_path / "file")
+    expected = runner.invoke(app, ["measure", "m.csv", "-f", "json"])
+    assert expected.exit_code == 0, expected.stderr
+    monkeypatch.chdir(tmp_path / "pipe")
+    done, reopened = threading.Event(), []
+    writer = threading.Thread(target=_feed_fifo, args=("m.csv", data.encode(), done, reopened), daemon=True)
+    writer.start()
+    try:
+        result = runner.invoke(app, ["measure", "m.csv", "-f", "json"])
+    finally:
+        done.set()
+        writer.join()
+    assert reopened == []
+    assert result.exit_code == 0, result.stderr
+    assert result.stdout == expected.stdout

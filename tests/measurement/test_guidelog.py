@@ -672,3 +672,38 @@ def test_restart_parts_keep_their_info_lines_and_a_damaged_line_does_not_stop_th
     m = read_guidelog(guided(U, {2: (damaged, 0.0, 0.0), 5: (dither, 0.5, 0.0)}), "damaged")
     np.testing.assert_allclose(m.error_arcsec, -2.0 * np.array(U), atol=2e-3)
     assert len(m.warnings) == 1 and "line 10" in m.warnings[0]
+
+
+# --- a corrupt Time cell ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("cell", "command"), [("99999999", "measure"), ("0.5", "measure"),
+                                               ("99999999", "compensate")])
+def test_one_corrupt_time_cell_is_refused_naming_its_line(runner, tmp_path, cell, command):
+    """Line 30 of the CGE log (frame 14, Time 6.996 s) with a corrupt Time: it had split the log into two
+    sessions (the second placed 1.667e+06 min on) and given worm order 185 instead of 180.9, exit 0."""
+    from wormgear_cli.cli import app
+
+    lines = CGE.read_text(encoding="utf-8").split("\n")
+    assert lines[29].startswith("14,6.996,")
+    lines[29] = lines[29].replace("14,6.996,", f"14,{cell},", 1)
+    path = tmp_path / "corrupt.guidelog.txt"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    args = [command, str(path)] + (["-f", "eqmod", "-o", str(tmp_path / "pec.txt")] if command == "compensate" else [])
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:30: column Time: {cell} s, expected between 6.566 and 7.624 s (the rows "
+                             "around it): PHD2's clock runs on by about an exposure a row within a section; a corrupt "
+                             "row: correct or delete the line\n")
+    assert not (tmp_path / "pec.txt").exists()
+
+
+def test_a_corrupt_time_at_either_end_of_a_section_is_refused():
+    rows = [row(k, 0.5 * k, 0.1) for k in range(1, 5)]
+    with pytest.raises(DataError, match=r"^hand:8: column Time: 9 s, expected at most 1 s \(the next row's\): "):
+        read_guidelog(HEAD + rows[0].replace("1,0.500,", "1,9,", 1) + "".join(rows[1:]), "hand")
+    with pytest.raises(DataError, match=r"^hand:11: column Time: 0.1 s, expected at least 1.5 s \(the row before's\)"):
+        read_guidelog(HEAD + "".join(rows[:3]) + rows[3].replace("4,2.000,", "4,0.1,", 1), "hand")
+    with pytest.raises(DataError, match=r"^hand:11: column Time: 200000 s, expected at most 172800 s \(two days\) "
+                                        r"after 'Guiding Begins'"):
+        read_guidelog(HEAD + "".join(rows[:3]) + rows[3].replace("4,2.000,", "4,200000,", 1), "hand")

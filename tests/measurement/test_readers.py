@@ -261,6 +261,66 @@ def test_a_length_is_never_proposed_nor_read_as_an_angular_error(runner, tmp_pat
 
 
 
+_LENGTH_HEADERS = [("error_mm", "mm"), ("error / mm", "mm"), ("error / µm", "µm"), ("error (cm)", "cm"),
+                   ("error (m)", "m"), ("error in mm", "mm"), ("error_microns", "microns"), ("error (thou)", "thou"),
+                   ("error (mils)", "mils"), ("Error [inch]", "inch"), ("error in µm", "µm"), ("error_in", "in")]
+
+
+@pytest.mark.parametrize(("cell", "unit"), _LENGTH_HEADERS)
+def test_a_length_in_any_spelling_is_never_proposed_nor_read_as_an_error(runner, tmp_path, cell, unit):
+    """The unit after a slash, after ' in ', as a last '_' suffix or in brackets: a length is refused in
+    each (it had been read as arcsec, and proposed by the hint, outside brackets)."""
+    path = tmp_path / "lengths.csv"
+    path.write_text(f"angle_deg,{cell}\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
+    result = runner.invoke(app, ["measure", str(path)])
+    assert result.exit_code == 2
+    q = cell if cell.replace("_", "").isalnum() else f'"{cell}"'
+    assert result.stderr == (f"error: {path}:1: missing required column error_arcsec (header has: angle_deg, "
+                             f"{cell}); name the columns with --map CANONICAL=HEADER ({q} states a length, not an "
+                             "angle: convert it to one, arc length / the radius it was measured at, in a column of "
+                             "its own)\n")
+    result = runner.invoke(app, ["measure", str(path), "--map", f"error_arcsec={cell}"])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: column {cell!r} states a length ({unit}), not an angle: a rotary "
+                             "axis's error is read as an angle; convert it (angle = arc length / the radius it was "
+                             "measured at) in a column of its own and read that as error_arcsec\n")
+
+
+def test_a_position_in_mm_named_with_map_is_refused(runner, tmp_path):
+    path = tmp_path / "linear.csv"
+    path.write_text("Position_mm,error_arcsec\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
+    result = runner.invoke(app, ["measure", str(path), "--map", "angle_deg=Position_mm"])
+    assert result.exit_code == 2
+    assert result.stderr == (f"error: {path}:1: column 'Position_mm' states a length (mm), not an angle: a rotary "
+                             "axis's position is read as an angle; convert it (angle = arc length / the radius it "
+                             "was measured at) in a column of its own and read that as angle_deg\n")
+
+
+#: arcseconds in one of each unit, from the definitions (1 rad = 648000/pi arcsec), not from units.py
+_ARCSEC_IN = {"deg": 3600.0, "arcmin": 60.0, "rad": 648000.0 / math.pi, "mrad": 648.0 / math.pi,
+              "urad": 0.648 / math.pi, "arcsec": 1.0}
+
+
+@pytest.mark.parametrize(("cell", "unit"), [
+    ("error_deg", "deg"), ("error (deg)", "deg"), ("error / deg", "deg"), ("error in deg", "deg"),
+    ("error (mrad)", "mrad"), ("error_mrad", "mrad"), ("error / mrad", "mrad"), ("error (rad)", "rad"),
+    ("error in rad", "rad"), ("error_arcmin", "arcmin"), ("error in µrad", "urad"), ("Deviation_arcsec", "arcsec"),
+    ("error_arcsec", "arcsec")])
+def test_an_angular_error_unit_is_read_in_every_spelling(cell, unit):
+    m = parse_measurement(f"angle_deg,{cell}\n0,0.002\n90,-0.001\n180,0.0005\n", "u.csv")
+    assert m.error_arcsec == pytest.approx([v * _ARCSEC_IN[unit] for v in (0.002, -0.001, 0.0005)], rel=1e-12)
+
+
+def test_canonical_and_unit_free_names_keep_their_meaning_beside_the_underscore_unit():
+    m = parse_measurement("angle_deg,error_arcsec,time_ms,load_Nm,temperature_C,run_1\n0,1,500,2,20,0\n"
+                          "90,2,1500,2,20,0\n", "c.csv")
+    assert m.time == pytest.approx([0.5, 1.5])
+    assert m.error_arcsec == pytest.approx([1.0, 2.0])
+    assert readers.header.split_unit("run_1") == ("run 1", None)
+    assert readers.header.split_unit("Position_mm") == ("position", "mm")
+
+
+
 def test_counts_are_never_suggested_as_an_angle_nor_accepted_as_degrees(runner, tmp_path):
     path = tmp_path / "counts.csv"
     # 'Pos' is a position by its name, but its cells are whole numbers up to 4098: counts, not degrees

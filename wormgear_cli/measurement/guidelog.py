@@ -34,7 +34,9 @@ letters are reversed gets the same error curve.
 Time becomes the RA-axis angle at the sidereal rate, 360 deg per
 :data:`~wormgear_cli.units.SIDEREAL_DAY_S`.  Every session is a run of the measurement (run
 number = session number, 1 for the first ``Guiding Begins``; where ``Time`` goes back inside a
-section, a new session starts), so several sessions are the same mount at several hour angles:
+section and runs on from there, a new session starts; one ``Time`` cell out of order between rows
+in order, or beyond two days, is a corrupt row and refused), so several sessions are the same
+mount at several hour angles:
 each starts where the clock puts it (the previous session's start plus the time elapsed), or at
 its logged hour angle (plus 180 deg on the east side of the pier) where that differs (a slew, a
 re-centring, a meridian flip).  ``time`` is seconds since the first session read began.
@@ -512,6 +514,38 @@ def _pick(col: tuple, idx: np.ndarray):
     return col if idx.size == len(col) else [col[k] for k in idx.tolist()]
 
 
+#: longest a guiding section's Time runs [s]: PHD2 counts it from 'Guiding Begins' and starts a log each night
+MAX_SECTION_S = 2.0 * 86400.0
+
+
+def _check_times(frames: _Frames, name: str) -> None:
+    """A DataError at the first row whose ``Time`` is a corrupt cell: beyond :data:`MAX_SECTION_S`, or
+    out of order while the rows on either side are in order (a jump ahead and back, or a step back
+    and on).  A clock that goes back and runs on from there (several rows) is a restart, split by
+    :func:`_split_restarts`."""
+    t = frames.time
+    if t.shape[0] < 2:
+        return
+    prev = np.concatenate(([-np.inf], t[:-1]))
+    nxt = np.concatenate((t[1:], [np.inf]))
+    alone = ((t > nxt) | (t < prev)) & (prev <= nxt)
+    bad = alone | (t > MAX_SECTION_S)
+    if not bad.any():
+        return
+    k = int(np.argmax(bad))
+    line = int(frames.lines[k])
+    if alone[k] and 0 < k < t.shape[0] - 1:
+        expected = f"between {prev[k]:.15g} and {nxt[k]:.15g} s (the rows around it)"
+    elif t[k] > MAX_SECTION_S:
+        expected = f"at most {MAX_SECTION_S:.0f} s (two days) after 'Guiding Begins'"
+    elif k == 0:
+        expected = f"at most {nxt[k]:.15g} s (the next row's)"
+    else:
+        expected = f"at least {prev[k]:.15g} s (the row before's)"
+    raise DataError(f"{name}:{line}: column Time: {t[k]:.15g} s, expected {expected}: PHD2's clock runs on by "
+                    "about an exposure a row within a section; a corrupt row: correct or delete the line")
+
+
 def _split_restarts(sec: _Section, frames: _Frames) -> list[_Section]:
     """The section itself, or its parts where ``Time`` goes back (each part a session of its own)."""
     back = np.flatnonzero(frames.time[1:] < frames.time[:-1]) + 1
@@ -748,6 +782,7 @@ def _found_sessions(text: str, name: str) -> tuple[list[tuple[_Section, _Frames]
         frames = _fast_frames(sec) or _frames(sec, name)
         if frames.cut:
             notes.append(f"line {frames.cut}: an incomplete last row of a section left out")
+        _check_times(frames, name)
         parts = _split_restarts(sec, frames)
         if len(parts) == 1:
             found.append((sec, frames))

@@ -1,5 +1,5 @@
-"""Which column of a table is which: header cells recognised (any case, units in brackets or after a
-slash), ``--map``, and the ``--map`` a header would need.
+"""Which column of a table is which: header cells recognised (any case; the unit in brackets, after a
+slash, after `` in `` or as a last ``_`` suffix), ``--map``, and the ``--map`` a header would need.
 
 Recognised without a map: the canonical names in any case (``Angle_Deg``, ``DIRECTION``); English
 base names with a unit (``angle (deg)``, ``error [arcmin]``, ``Time / s``, ``target position
@@ -37,7 +37,8 @@ _ANGLES = ("angle_deg", "actual_deg", "error_arcsec")
 #: unit spellings -> (unit, the canonical columns it fits)
 _UNITS = {
     "deg": ("deg", _ANGLES), "°": ("deg", _ANGLES), "degree": ("deg", _ANGLES), "degrees": ("deg", _ANGLES),
-    "rad": ("rad", ("angle_deg", "actual_deg")),
+    "rad": ("rad", _ANGLES), "radian": ("rad", _ANGLES), "radians": ("rad", _ANGLES),
+    "mrad": ("mrad", ("error_arcsec",)),
     "arcsec": ("arcsec", ("error_arcsec",)), '"': ("arcsec", ("error_arcsec",)), "″": ("arcsec", ("error_arcsec",)),
     "arcmin": ("arcmin", ("error_arcsec",)), "'": ("arcmin", ("error_arcsec",)), "′": ("arcmin", ("error_arcsec",)),
     "urad": ("urad", ("error_arcsec",)), "µrad": ("urad", ("error_arcsec",)), "μrad": ("urad", ("error_arcsec",)),
@@ -50,7 +51,8 @@ _UNITS = {
 COUNT_UNITS = ("counts", "count", "cts", "cnt", "inc", "incr", "increments", "ticks", "steps", "pulses", "lsb",
                "digits", "bits", "raw")
 #: unit spellings of lengths: a column in one holds a linear axis's position or error, not an angle
-LENGTH_UNITS = ("mm", "um", "µm", "μm", "micron", "microns", "in", "inch", "mil")
+LENGTH_UNITS = ("mm", "um", "µm", "μm", "micron", "microns", "micrometre", "micrometres", "micrometer",
+                "micrometers", "cm", "m", "in", "inch", "inches", "thou", "mil", "mils")
 #: keywords (several languages) that suggest a canonical column, for the --map hint
 _KEYWORDS = {
     "angle_deg": ("angle", "position", "pos", "winkel", "angulo", "ángulo", "posición", "posicion", "angolo",
@@ -69,21 +71,33 @@ _KEYWORDS = {
 MAX_SUGGESTED = 100
 _SUFFIX = re.compile(r"^(.*?)\s*[\(\[]\s*([^\)\]]*?)\s*[\)\]]$")
 _SLASH = re.compile(r"^(.*?\S)\s*/\s*([^/]+?)$")
+_IN = re.compile(r"^(.*?\S)\s+in\s+(\S+)$", re.IGNORECASE)
+_UNDERSCORE = re.compile(r"^(.*?[^_\s])_([^_\s]+)$")
+
+
+def _known(unit: str) -> bool:
+    """Whether ``unit`` (lower case) is a unit spelling the tool knows: an angle, time, load or temperature
+    it reads, or a length or encoder counts it refuses as an angle."""
+    return unit in _UNITS or unit in LENGTH_UNITS or unit in COUNT_UNITS
 
 
 def split_unit(cell: str) -> tuple[str, str | None]:
-    """``"Position (deg)"``, ``"Position [deg]"``, ``"Position / deg"`` -> ("position", "deg"); no
-    suffix -> (lower-case cell, None).  Underscores and runs of spaces in the base read as one space."""
+    """``"Position (deg)"``, ``"Position [deg]"``, ``"Position / deg"``, ``"Position in deg"``,
+    ``"Position_deg"`` -> ("position", "deg"); no unit -> (lower-case cell, None).  A unit in brackets
+    is taken as written; after ``/``, `` in `` or a last ``_`` only a unit the tool knows (an angle,
+    time, load, temperature, length or counts), so ``run_1`` keeps its name.  Underscores and runs of
+    spaces in the base read as one space."""
     text = cell.strip()
+    base, unit = text, None
     m = _SUFFIX.match(text)
     if m:
         base, unit = m.group(1), m.group(2).strip().lower()
     else:
-        m = _SLASH.match(text)
-        if m and m.group(2).strip().lower() in _UNITS:
-            base, unit = m.group(1), m.group(2).strip().lower()
-        else:
-            base, unit = text, None
+        for form in (_SLASH, _IN, _UNDERSCORE):
+            m = form.match(text)
+            if m and _known(m.group(2).strip().lower()):
+                base, unit = m.group(1), m.group(2).strip().lower()
+                break
     return " ".join(base.replace("_", " ").split()).lower(), unit
 
 
