@@ -7,8 +7,10 @@ pyproject.toml (``lint-imports``, run by CI).  These tests keep what it does not
 from __future__ import annotations
 
 import ast
+import functools
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -57,10 +59,17 @@ def test_no_import_cycle():
     assert not cycles, "\n".join(cycles)
 
 
+@functools.cache
+def _sources() -> tuple[tuple[Path, str, ast.Module], ...]:
+    """(path, text, syntax tree) of every module of the package, parsed once for the checks below."""
+    return tuple((path, text, ast.parse(text)) for path in sorted(PACKAGE.rglob("*.py"))
+                 for text in [path.read_text()])
+
+
+@functools.cache
 def _long_functions() -> dict[str, int]:
     out = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
-        tree = ast.parse(path.read_text())
+    for path, _, tree in _sources():
         for node in ast.walk(tree):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 lines = node.end_lineno - node.lineno + 1
@@ -90,13 +99,13 @@ IMPORT_REASON_PENDING: set[str] = {
 }
 
 
+@functools.cache
 def _unexplained_function_imports() -> dict[str, list[int]]:
     """In-function imports with no reason: a comment on the import's lines or on the line above; a run of
     imports on consecutive lines shares the comment above its first."""
     out: dict[str, list[int]] = {}
-    for path in sorted(PACKAGE.rglob("*.py")):
-        lines = path.read_text().splitlines()
-        tree = ast.parse("\n".join(lines))
+    for path, text, tree in _sources():
+        lines = text.splitlines()
         imports = sorted({id(n): n for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
                           for n in ast.walk(f) if isinstance(n, (ast.Import, ast.ImportFrom))}.values(),
                          key=lambda n: n.lineno)
