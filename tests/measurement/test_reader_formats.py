@@ -152,11 +152,26 @@ def test_header_unit_against_explicit_option_is_flagged(tmp_path):
 
 def test_two_columns_for_one_name_are_refused(tmp_path):
     path = tmp_path / "two.csv"
-    path.write_text("angle_deg,angle (deg),error_arcsec\n0,0,1\n10,10,2\n")
+    path.write_text("position (deg),angle [deg],error_arcsec\n0,0,1\n10,10,2\n")
     with pytest.raises(DataError) as info:
         read_measurement(path)
-    assert info.value.problems == [f"{path}:1: columns 'angle_deg' and 'angle (deg)' both give angle_deg; choose one "
-                                   "with --map angle_deg=..."]
+    assert info.value.problems == [f"{path}:1: columns 'position (deg)' and 'angle [deg]' both give angle_deg; "
+                                   "choose one with --map angle_deg=..."]
+
+
+@pytest.mark.parametrize("header", ["angle_deg,angle_rad,error_arcsec,error_urad", "angle_rad,angle_deg,error_urad,error_arcsec",
+                                    "angle (deg),angle_deg,error_arcsec,error (mrad)"])
+def test_the_canonical_name_wins_over_another_spelling_of_its_column(tmp_path, header):
+    """Breaker trial: once '_rad' was read as a unit, a file holding angle_deg beside angle_rad was
+    refused as two columns for one name; the canonical names are the reader's own contract."""
+    path = tmp_path / "both.csv"
+    cols = header.split(",")
+    values = {"angle_deg": "10", "angle_rad": "0.5", "angle (deg)": "20", "error_arcsec": "1", "error_urad": "99",
+              "error (mrad)": "7"}
+    row = ",".join(values[c] for c in cols) + "\n"
+    path.write_text(header + "\n" + row + row)
+    m = read_measurement(path)
+    assert float(m.angle[0]) == pytest.approx(np.radians(10.0)) and float(m.error[0]) == pytest.approx(np.radians(1 / 3600))
 
 
 def test_rows_are_kept_for_writing_back_in_the_file_delimiter(tmp_path):

@@ -263,7 +263,7 @@ def test_a_length_is_never_proposed_nor_read_as_an_angular_error(runner, tmp_pat
 
 _LENGTH_HEADERS = [("error_mm", "mm"), ("error / mm", "mm"), ("error / µm", "µm"), ("error (cm)", "cm"),
                    ("error (m)", "m"), ("error in mm", "mm"), ("error_microns", "microns"), ("error (thou)", "thou"),
-                   ("error (mils)", "mils"), ("Error [inch]", "inch"), ("error in µm", "µm"), ("error_in", "in")]
+                   ("error (mils)", "mils"), ("Error [inch]", "inch"), ("error in µm", "µm")]
 
 
 @pytest.mark.parametrize(("cell", "unit"), _LENGTH_HEADERS)
@@ -530,3 +530,30 @@ def test_a_time_column_in_minutes_hours_or_ms_is_read_in_seconds(header, factor)
     text = f"angle_deg,error_arcsec,{header}\n" + "".join(f"{a},1,{t}\n" for a, t in zip((0, 90, 180, 270), cells))
     m = parse_measurement(text, "<t>")
     np.testing.assert_allclose(m.time, cells * factor, rtol=1e-15)
+
+
+def test_a_stated_unit_the_mapped_column_cannot_take_is_refused_and_input_is_not_inches(runner, tmp_path):
+    """Breaker trial: --map angle_deg=angle_mrad read milliradians as degrees, error (nm) (a load's
+    N m) as arcsec; angle_in (the input side) was refused as inches even when mapped."""
+    rows = "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30)))
+    path = tmp_path / "mrad.csv"
+    path.write_text("angle_mrad,error_arcsec\n" + rows)
+    r = runner.invoke(app, ["measure", str(path), "--map", "angle_deg=angle_mrad"])
+    assert r.exit_code == 2
+    assert r.stderr == (f"error: {path}:1: column 'angle_mrad' states mrad, a unit angle_deg is not read in (it takes "
+                        "deg, rad): convert it in a column of its own, or map the column it belongs to\n")
+    path = tmp_path / "in.csv"
+    path.write_text("angle_in,error_arcsec\n" + rows)
+    r = runner.invoke(app, ["measure", str(path), "--map", "angle_deg=angle_in", "--orders", "1", "-f", "json"])
+    assert r.exit_code == 0, r.stderr
+
+
+def test_the_error_unit_the_warning_proposes_is_accepted(runner, tmp_path):
+    """The plausibility warning may propose --error-unit rad; --error-unit rad (and mrad) is taken."""
+    path = tmp_path / "rad.csv"
+    path.write_text("angle_deg,deviation\n" + "".join(f"{a},{1e-5 * (k % 3)}\n" for k, a in enumerate(range(0, 360, 30))))
+    for unit in ("rad", "mrad"):
+        r = runner.invoke(app, ["measure", str(path), "--map", "error_arcsec=deviation", "--error-unit", unit,
+                                "--orders", "3", "-f", "json"])
+        assert r.exit_code == 0, r.stderr
+        assert json.loads(r.stdout)["input_units"] == {"angle": "deg", "error": unit}

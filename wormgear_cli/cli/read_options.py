@@ -26,6 +26,8 @@ class ErrorUnit(str, Enum):
     arcmin = "arcmin"
     deg = "deg"
     urad = "urad"
+    mrad = "mrad"
+    rad = "rad"
 
 
 class InputAngleUnit(str, Enum):

@@ -46,7 +46,7 @@ DEFAULTS = {SIGNALS["direction"].column: SIGNALS["direction"].default, "run": 0.
             **{s.column: s.default for s in CONDITIONS}}
 
 #: units accepted for the error and the angle columns
-ERROR_UNITS = ("arcsec", "arcmin", "deg", "urad")
+ERROR_UNITS = ("arcsec", "arcmin", "deg", "urad", "mrad", "rad")
 ANGLE_UNITS = ("deg", "rad")
 
 #: largest measurement file read [bytes] (256 MiB: 7 to 11 million rows of four columns)

@@ -95,6 +95,8 @@ def split_unit(cell: str) -> tuple[str, str | None]:
     else:
         for form in (_SLASH, _IN, _UNDERSCORE):
             m = form.match(text)
+            if m and form is _UNDERSCORE and m.group(2).lower() == "in":  # angle_in: the input side, not inches
+                continue
             if m and _known(m.group(2).strip().lower()):
                 base, unit = m.group(1), m.group(2).strip().lower()
                 break
@@ -262,6 +264,10 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
         if canon in index:
             if header[index[canon]] == cell:
                 problems.append(f"{name}:{line}: column {cell} appears twice")
+            elif header[index[canon]].strip().lower() == canon.lower():
+                continue  # the canonical name wins over another spelling of it (angle_deg beside angle_rad)
+            elif cell.strip().lower() == canon.lower():
+                index[canon], hunit[canon] = j, unit
             else:
                 problems.append(f"{name}:{line}: columns {header[index[canon]]!r} and {cell!r} both give {canon}; "
                                 f"choose one with --map {canon}=...")
@@ -285,6 +291,12 @@ def resolve_header(header: list[str], column_map, name: str, line: int, required
                 del index[other]
         index[canon] = at
         hunit[canon] = stated_unit(header[at], canon)
+        said = split_unit(header[at])[1]
+        if said in _UNITS and canon not in _UNITS[said][1] and said not in LENGTH_UNITS:
+            takes = sorted({u for u, fits in _UNITS.values() if u and canon in fits})
+            problems.append(f"{name}:{line}: column {header[at]!r} states {said}, a unit {canon} is not read in "
+                            f"(it takes {', '.join(takes) or 'no unit'}): convert it in a column of its own, or map "
+                            "the column it belongs to")
     for canon, j in index.items():
         unit = split_unit(header[j])[1]
         if canon in (*_ANGLES, "error_arcsec") and unit in LENGTH_UNITS:

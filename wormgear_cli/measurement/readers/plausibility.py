@@ -58,12 +58,11 @@ def plausibility(angle: np.ndarray, error: np.ndarray, angle_unit: str, error_un
         lo, hi = PLAUSIBLE_ERROR_P2P
         if p2p > 0 and not lo <= p2p <= hi:
             raw = p2p * arc / RAD_PER_UNIT[error_unit]
-            fits = [(abs(np.log(raw * RAD_PER_UNIT[u] / arc / 20.0)), u) for u in ERROR_UNITS + ("rad",)
+            fits = [(abs(np.log(raw * RAD_PER_UNIT[u] / arc / 20.0)), u) for u in ERROR_UNITS
                     if u != error_unit and lo <= raw * RAD_PER_UNIT[u] / arc <= hi]
             if fits:
                 u = min(fits)[1]
-                fix = (f"--error-unit {u}" if u in ERROR_UNITS
-                       else "convert the column (radians) to urad and use --error-unit urad")
+                fix = f"--error-unit {u}"
                 out.append(f"the errors span {p2p:.4g} arcsec peak to peak read as {error_unit}, implausible for a "
                            f"positioning error; if the column is in {u}, use {fix}")
     if angle_unit == "deg" and angle.size and not angle_stated:
