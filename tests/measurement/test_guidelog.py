@@ -698,12 +698,40 @@ def test_one_corrupt_time_cell_is_refused_naming_its_line(runner, tmp_path, cell
     assert not (tmp_path / "pec.txt").exists()
 
 
+def test_a_run_of_corrupt_time_cells_is_refused_and_a_restart_with_one_frame_is_read(runner, tmp_path):
+    """Breaker trial: two corrupt cells in a row (lines 1001-1002 of the CGE log at 9001.63 and 9002.22 s)
+    slipped past a check of single cells and moved the worm period to 452.9 s, exit 0; a genuine clock
+    restart followed by one frame had been refused as corrupt."""
+    from wormgear_cli.cli import app
+
+    lines = CGE.read_text(encoding="utf-8").split("\n")
+    for n, cell in ((1001, "9001.63"), (1002, "9002.22")):
+        cells = lines[n - 1].split(",")
+        cells[1] = cell
+        lines[n - 1] = ",".join(cells)
+    path = tmp_path / "two.guidelog.txt"
+    path.write_text("\n".join(lines), encoding="utf-8")
+    result = runner.invoke(app, ["measure", str(path)])
+    assert result.exit_code == 2
+    assert result.stderr.startswith(f"error: {path}:1001: column Time: 9001.63 s, expected between 527.614 and "
+                                    "528.916 s (the rows around them): ")
+    lines = CGE.read_text(encoding="utf-8").split("\n")[:2016]
+    frame = next(line for line in lines if '"Mount"' in line).split(",")
+    frame[0], frame[1] = "1", "0.512"
+    path = tmp_path / "restart.guidelog.txt"
+    path.write_text("\n".join([*lines, ",".join(frame), "Guiding Ends at 2020-01-01 00:00:00", ""]), encoding="utf-8")
+    result = runner.invoke(app, ["measure", str(path), "-f", "json"])
+    assert result.exit_code == 0, result.stderr
+
+
 def test_a_corrupt_time_at_either_end_of_a_section_is_refused():
     rows = [row(k, 0.5 * k, 0.1) for k in range(1, 5)]
     with pytest.raises(DataError, match=r"^hand:8: column Time: 9 s, expected at most 1 s \(the next row's\): "):
         read_guidelog(HEAD + rows[0].replace("1,0.500,", "1,9,", 1) + "".join(rows[1:]), "hand")
-    with pytest.raises(DataError, match=r"^hand:11: column Time: 0.1 s, expected at least 1.5 s \(the row before's\)"):
-        read_guidelog(HEAD + "".join(rows[:3]) + rows[3].replace("4,2.000,", "4,0.1,", 1), "hand")
+    # the last frame back below the section's start: a clock restart followed by one frame (breaker
+    # trial: it had been refused), read as a session of its own
+    m = read_guidelog(HEAD + "".join(rows[:3]) + rows[3].replace("4,2.000,", "4,0.1,", 1), "hand")
+    assert m.run.tolist() == [1, 1, 1, 2]
     with pytest.raises(DataError, match=r"^hand:11: column Time: 200000 s, expected at most 172800 s \(two days\) "
                                         r"after 'Guiding Begins'"):
         read_guidelog(HEAD + "".join(rows[:3]) + rows[3].replace("4,2.000,", "4,200000,", 1), "hand")

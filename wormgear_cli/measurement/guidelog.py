@@ -518,32 +518,47 @@ def _pick(col: tuple, idx: np.ndarray):
 MAX_SECTION_S = 2.0 * 86400.0
 
 
+#: most rows of a run of corrupt ``Time`` cells told from a clock restart: rows that jumped ahead and
+#: then gave way to the clock running on from where it was before them
+SPIKE_ROWS = 20
+
+
 def _check_times(frames: _Frames, name: str) -> None:
-    """A DataError at the first row whose ``Time`` is a corrupt cell: beyond :data:`MAX_SECTION_S`, or
-    out of order while the rows on either side are in order (a jump ahead and back, or a step back
-    and on).  A clock that goes back and runs on from there (several rows) is a restart, split by
-    :func:`_split_restarts`."""
+    """A DataError at the first row whose ``Time`` is a corrupt cell: beyond :data:`MAX_SECTION_S`; a
+    row that steps back while the next runs on from before it (a dip); or up to :data:`SPIKE_ROWS`
+    rows that jump ahead, the clock then running on from where it was before them (a spike).  A
+    clock that goes back below every earlier row of the section and runs on from there (a frame
+    or more) is a restart, split by :func:`_split_restarts`."""
     t = frames.time
-    if t.shape[0] < 2:
+    n = t.shape[0]
+    bad: tuple[int, str] | None = None
+    over = np.flatnonzero(t > MAX_SECTION_S)
+    steps = np.diff(t)
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0
+    for i in np.flatnonzero(steps < 0).tolist():  # row i + 1 steps back from row i
+        if over.size and over[0] < i - SPIKE_ROWS:
+            break
+        a = float(t[i + 1])
+        if i == 0:  # the section's first frame ahead of the rest: no clock restarts after one frame
+            bad = (0, f"at most {a:.15g} s (the next row's)")
+            break
+        if i + 2 < n and t[i + 2] >= t[i]:  # a dip: the clock runs on from before it
+            bad = (i + 1, f"between {t[i]:.15g} and {t[i + 2]:.15g} s (the rows around it)")
+            break
+        below = np.flatnonzero(t[max(0, i - SPIKE_ROWS):i + 1] <= a)
+        k = max(0, i - SPIKE_ROWS) + int(below[-1]) if below.size else -1
+        # rows k+1 .. i jumped ahead and the clock ran on meanwhile, returning about that many exposures
+        # after row k (a restart returns to the section's start instead)
+        if k >= 0 and a - t[k] >= 0.5 * (i - k + 1) * step:
+            bad = (k + 1, f"between {t[k]:.15g} and {a:.15g} s (the rows around {'it' if k + 1 == i else 'them'})")
+            break
+    if over.size and (bad is None or over[0] < bad[0]):
+        bad = (int(over[0]), f"at most {MAX_SECTION_S:.0f} s (two days) after 'Guiding Begins'")
+    if bad is None:
         return
-    prev = np.concatenate(([-np.inf], t[:-1]))
-    nxt = np.concatenate((t[1:], [np.inf]))
-    alone = ((t > nxt) | (t < prev)) & (prev <= nxt)
-    bad = alone | (t > MAX_SECTION_S)
-    if not bad.any():
-        return
-    k = int(np.argmax(bad))
-    line = int(frames.lines[k])
-    if alone[k] and 0 < k < t.shape[0] - 1:
-        expected = f"between {prev[k]:.15g} and {nxt[k]:.15g} s (the rows around it)"
-    elif t[k] > MAX_SECTION_S:
-        expected = f"at most {MAX_SECTION_S:.0f} s (two days) after 'Guiding Begins'"
-    elif k == 0:
-        expected = f"at most {nxt[k]:.15g} s (the next row's)"
-    else:
-        expected = f"at least {prev[k]:.15g} s (the row before's)"
-    raise DataError(f"{name}:{line}: column Time: {t[k]:.15g} s, expected {expected}: PHD2's clock runs on by "
-                    "about an exposure a row within a section; a corrupt row: correct or delete the line")
+    k, expected = bad
+    raise DataError(f"{name}:{int(frames.lines[k])}: column Time: {t[k]:.15g} s, expected {expected}: PHD2's clock "
+                    "runs on by about an exposure a row within a section; a corrupt row: correct or delete the line")
 
 
 def _split_restarts(sec: _Section, frames: _Frames) -> list[_Section]:
