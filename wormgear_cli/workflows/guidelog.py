@@ -115,9 +115,10 @@ def guide_periodic_error(m, dominant, mount: MountParts | None = None,
         order, label = mount.worm
         starts = "" if mount.starts == 1 else f" / {mount.starts} starts"
         worm_from = f"the drive's worm ({mount.wheel_teeth}-tooth wheel{starts})"
-    elif orders and any(_resolvable(k, longest, nyquist) for k in orders):
-        order = min(k for k in orders if _resolvable(k, longest, nyquist))
-        worm_from = "the lowest of the orders asked for (its period within a session)"
+    elif orders and any(_resolvable(k, longest / 2.0, nyquist) for k in orders):
+        # two periods in a session at least: one period beside a session's cubic drift is not a curve
+        order = min(k for k in orders if _resolvable(k, longest / 2.0, nyquist))
+        worm_from = "the lowest of the orders asked for with two periods in a session"
     elif dominant is not None and dominant.significant:
         order = dominant.significant[0].order
         worm_from = "the strongest period found" + (" (the drive has no worm)" if mount is not None else
