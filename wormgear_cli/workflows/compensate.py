@@ -517,11 +517,17 @@ def _check_determined(source: str, th, run, curve, period: float, unit: str, war
     said = (f"the curve's standard error is {to_unit(se, unit):.3g} {unit} RMS over the worm cycle, "
             f"{ratio:.0%} of the curve itself ({to_unit(rms, unit):.3g} {unit} RMS)"
             if math.isfinite(ratio) else "the curve's standard error cannot be had")
-    why = (f"the sessions (the longest {longest:.4g} s) are short beside the worm period ({period:.4g} s), so "
-           "each session's drift looks like a piece of the curve")
+    if longest < period:
+        why = (f"the sessions (the longest {longest:.4g} s) are short beside the worm period ({period:.4g} s), so "
+               "each session's drift looks like a piece of the curve")
+        fix = "record sessions of at least a worm period, or fit fewer harmonics (--harmonics)"
+    else:
+        cycles = pec.cycles_covered(th, run, curve.worm_order)
+        why = (f"its terms and each session's drift are hard to tell apart on these rows ({cycles:.3g} worm cycles "
+               f"of {period:.4g} s)")
+        fix = "record more worm cycles, or fit fewer harmonics (--harmonics)"
     if ratio > PEC_UNDETERMINED:
-        raise DataError(f"{source}: the record does not determine a PEC curve: {said}; {why}; record sessions of "
-                        "at least a worm period, or fit fewer harmonics (--harmonics)")
+        raise DataError(f"{source}: the record does not determine a PEC curve: {said}; {why}; {fix}")
     warnings.append(f"the PEC curve is uncertain: {said}; {why}")
 
 
