@@ -255,7 +255,8 @@ def _ratio_distance_sweep(sw, drive, fmt, unit, out: PartOutput, plot, k_n, jobs
     _note_skipped(sw, stop - start - int(data["_point"].size), start, stop)
     from wormgear_cli.analysis.sweep import ANGLE_COLUMNS  # lazy: keeps analysis.sweep off `--help`'s start-up
 
-    warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data}, drive)
+    warn_if_absurd({c: data[c] for c in sorted(ANGLE_COLUMNS) if c in data},
+                   f"{drive} swept over --i/--l-mm (some grid points)")  # the file itself may be fine
     if fmt == "csv":
         out.emit(report.collected_csv(sw, data, unit), [drive])
     elif fmt == "json":
