@@ -424,8 +424,9 @@ def _table_findings(t: TableDetails, theta, options: CompensateOptions) -> tuple
         if amp > max(2.0 * se, 1e-3 * top) or not math.isfinite(amp):  # what stays is worth a warning
             warnings.append(f"{said} and its {to_unit(amp, u):.3g} {u} amplitude stays")
         else:  # within twice its standard error, or a thousandth of the largest order: nothing is lost
-            notes.append(f"{said}; its amplitude, {to_unit(amp, u):.2g} {u}, is negligible (within twice its "
-                         f"standard error, {to_unit(se, u):.2g} {u}, or under a thousandth of the largest order's)")
+            why = (f"within twice its standard error, {to_unit(se, u):.2g} {u}" if amp <= 2.0 * se else
+                   f"under a thousandth of the largest order's, {to_unit(top, u):.3g} {u}")
+            notes.append(f"{said}; its amplitude, {to_unit(amp, u):.2g} {u}, is negligible ({why})")
     cov = t.plan.coverage
     deg = np.degrees(theta)
     slack = max(spacing, 1.0)  # the default span is the measured arc rounded out to whole degrees
