@@ -169,7 +169,8 @@ def check_axis(option: str, low: float, high: float, where: str | None = None) -
     if not lo <= low <= high <= hi:
         bad = low if low < lo else high
         unit = " [mm]" if option == "--l-mm" else ""
-        raise UsageError(f"{where or option}: values must be from {lo:g} to {hi:g}{unit} (got {bad:g})")
+        shown = f"{bad:g}" if not lo <= float(f"{bad:g}") <= hi else repr(float(bad))  # 1000.0001, not 1000
+        raise UsageError(f"{where or option}: values must be from {lo:g} to {hi:g}{unit} (got {shown})")
 
 
 def parse_range(text: str, option: str, positive: bool = False, whole: bool = False,
