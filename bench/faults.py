@@ -334,4 +334,16 @@ FAULTS: dict[str, Fault] = {
         "measurement/guidelog.py", "    bad = alone | (t > MAX_SECTION_S)\n", "    bad = t > MAX_SECTION_S\n",
         "a guide log's Time cell out of order between two in order is read as a clock restart (a new session)",
         ("tests/measurement/test_guidelog.py",)),
+    "guidelog-spike-run-ignored": Fault(
+        "measurement/guidelog.py", "SPIKE_ROWS = 20", "SPIKE_ROWS = 0",
+        "a run of corrupt Time cells read as a clock restart", ("tests/measurement/test_guidelog.py",)),
+    "header-canonical-not-preferred": Fault(
+        "measurement/readers/header.py", "            elif header[index[canon]].strip().lower() == canon.lower():",
+        "            elif False:",
+        "angle_deg beside angle_rad refused as two columns for one name",
+        ("tests/measurement/test_reader_formats.py",)),
+    "guide-orders-one-period": Fault(
+        "workflows/guidelog.py", "        order = min(k for k in orders if _resolvable(k, longest / 2.0, nyquist))",
+        "        order = min(k for k in orders if _resolvable(k, longest, nyquist))",
+        "an order with one period in a session taken as the worm's", ("tests/cli/test_measure_guidelog.py",)),
 }
