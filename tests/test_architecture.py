@@ -92,11 +92,7 @@ def test_known_long_functions_are_still_long():
 
 #: files whose in-function imports still wait for their reason (owned by a parallel change when this
 #: check was written); this set only shrinks
-IMPORT_REASON_PENDING: set[str] = {
-    "wormgear_cli/drive/registry.py", "wormgear_cli/drive/spur.py", "wormgear_cli/drive/train.py",
-    "wormgear_cli/drive/worm.py", "wormgear_cli/spec/loader.py",
-    "wormgear_cli/spec/stages.py", "wormgear_cli/spec/template.py", "wormgear_cli/tolerance/quantities.py",
-}
+IMPORT_REASON_PENDING: set[str] = set()
 
 
 @functools.cache

@@ -25,6 +25,7 @@ from wormgear_cli.drive import spur
 from wormgear_cli.drive import train as train_mod
 from wormgear_cli.drive.models import MODELS
 from wormgear_cli.drive.records import Clearance, Compliance, Source, StageResult, Static
+from wormgear_cli.physics import spur as spur_model
 
 
 class Registry(NamedTuple):
@@ -132,7 +133,6 @@ def aligned_phases(spec, quantity: str = "error", registry: Registry | None = No
     reg = registry or build(spec)
     out = {src.name: 0.5 * math.pi for src in reg.periodic()}
     if quantity == "error":
-        from wormgear_cli.physics import spur as spur_model
 
         for src in reg.sources:
             stage = reg.train.stages[src.stage_index - 1]

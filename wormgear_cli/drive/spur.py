@@ -33,6 +33,7 @@ import numpy as np
 from wormgear_cli.drive import stiffness
 from wormgear_cli.drive.records import Clearance, Source, StageResult, Static, sine, sine_source
 from wormgear_cli.physics import spur as model
+from wormgear_cli.spec.stages import record_values
 
 #: the paper's names of the spur stage's TE and backlash
 SYMBOLS = ("Delta phi_cc", "Delta phi_ch")
@@ -73,7 +74,6 @@ def base_radius(stage) -> float:
 def values(stage):
     """``value(key)`` -> the stage's own value of a stage key (internal units); the eccentricity is the
     one the kinematics uses (:attr:`~wormgear_cli.spec.stages.SpurStageSpec.model_eccentricity`)."""
-    from wormgear_cli.spec.stages import record_values
 
     table = record_values(stage)
     table["eccentricity_mm"] = stage.model_eccentricity

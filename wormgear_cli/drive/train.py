@@ -137,7 +137,7 @@ def drive_geometry(spec, t: Train | None = None):
     shaft (none when that is the worm shaft).  ``gear_ratio`` is that shaft's turns per output turn
     (the last stage's ratio).  For the legacy [worm, spur] train these are the values the catalogue
     was written for (i_c for both the intermediate shaft and the reduction after the worm)."""
-    from wormgear_cli.physics.geometry import DriveGeometry
+    from wormgear_cli.physics.geometry import DriveGeometry  # lazy: keeps physics.geometry off `analyze`'s start-up
 
     t = t or of(spec)
     last = t.stages[-1]

@@ -27,6 +27,7 @@ import numpy as np
 
 from wormgear_cli.drive import stiffness
 from wormgear_cli.drive.records import Clearance, StageResult, Static, sine_source
+from wormgear_cli.physics import thermal
 from wormgear_cli.physics import worm as model
 from wormgear_cli.physics.spur import pitch_arc_to_angle
 from wormgear_cli.spec.stages import record_values
@@ -116,7 +117,6 @@ def additions(spec, stage) -> tuple[dict, dict]:
       L alpha_worm dT_shaft / r_w (:func:`wormgear_cli.physics.thermal.axial_growth`), a drift of the
       output against the calibration (its size).
     """
-    from wormgear_cli.physics import thermal
 
     r_w, w = stage.output_radius, stage.worm
     force = float(stiffness.tangential_force(stage, stage.normal_force))

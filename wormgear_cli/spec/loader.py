@@ -16,13 +16,15 @@ one line each: ``FILE: KEY: what is expected``.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
 from typing import Any
 
 from wormgear_cli.errors import SpecError, did_you_mean
-from wormgear_cli.physics.deformation import DEFORMATION_MODELS
+from wormgear_cli.files import read_text_file
+from wormgear_cli.physics.deformation import DEFORMATION_MODELS, spur_contact_ratio
 from wormgear_cli.spec import stages as _stages
 from wormgear_cli.spec.fields import (
     FACTOR,
@@ -38,6 +40,8 @@ from wormgear_cli.spec.fields import (
     quote,
     type_name,
 )
+from wormgear_cli.spec.plausibility import review
+from wormgear_cli.spec.toml import MAX_SPEC_BYTES, parse_toml
 
 
 def _legacy(path: str, **changes) -> Field:
@@ -354,11 +358,9 @@ def _freeze(obj):
 
 def load_spec(path: str | Path) -> Spec:
     """Read and validate a drive file.  Raises :class:`SpecError` listing every problem."""
-    from wormgear_cli.files import read_text_file
 
     path = Path(path)
     name = str(path)
-    from wormgear_cli.spec.toml import MAX_SPEC_BYTES
 
     text = read_text_file(path, "a TOML drive file", SpecError, encoding="utf-8-sig",  # a BOM is tolerated
                           max_bytes=MAX_SPEC_BYTES)
@@ -376,7 +378,6 @@ def load_spec(path: str | Path) -> Spec:
 def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:
     """Parse TOML text (bounded, see :mod:`wormgear_cli.spec.toml`) and validate it (see
     :func:`load_spec`)."""
-    from wormgear_cli.spec.toml import parse_toml
 
     data = parse_toml(text, source)
     return spec_from_dict(data, source, default_name)
@@ -550,6 +551,7 @@ def _load_effects(table, problems: list[str], source: str) -> dict:
         return {}
     if not isinstance(table, dict):
         return {}
+    # lazy: keeps physics.effects (the catalogue) off `analyze`'s start-up; only [effects.*] tables need it
     from wormgear_cli.physics.effects import EFFECTS, params_from_keys
 
     out = {}
@@ -625,7 +627,6 @@ def _legacy_derived(v: dict) -> None:
         for key in ("cumulative_pitch_deviation_mm", "single_pitch_deviation_mm"):
             v[f"{sec}.{key}"] = take(f"{sec}.{key}", 0.0)
     if v["stiffness.contact_ratio"] in (MISSING, None):
-        from wormgear_cli.physics.deformation import spur_contact_ratio
 
         v["stiffness.contact_ratio"] = float(spur_contact_ratio(
             v["gear_pair.output_gear.teeth"], v["gear_pair.pinion.teeth"], v["gear_pair.pressure_angle_deg"]))
@@ -645,9 +646,7 @@ def _build(values: dict, effects: dict, source: str, default_name: str, data: di
 def _reviewed(spec: Spec) -> Spec:
     """``spec`` with its plausibility warnings; SpecError for an impossible value
     (:mod:`wormgear_cli.spec.plausibility`)."""
-    import dataclasses
 
-    from wormgear_cli.spec.plausibility import review
 
     problems, warnings = review(spec)
     if problems:
@@ -752,7 +751,7 @@ def _effects_in_train(effects: dict, stages: tuple, source: str, problems: list[
     rule, :func:`wormgear_cli.physics.effects.absent_reason`)."""
     if not effects or not stages:
         return
-    from wormgear_cli.physics.effects import absent_reason
+    from wormgear_cli.physics.effects import absent_reason  # lazy: as above, only with [effects.*] tables
 
     kinds = tuple(s.kind for s in stages)
     single = kinds[-1] == "worm" and stages[-1].worm.starts == 1

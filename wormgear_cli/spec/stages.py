@@ -21,6 +21,7 @@ from types import MappingProxyType
 from typing import Any, NamedTuple
 
 from wormgear_cli.errors import did_you_mean
+from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
 from wormgear_cli.spec.fields import MISSING, UNIT_SCALE, Field, check_value, quote, type_name
 from wormgear_cli.spec.kinds import KINDS, StageKind
 
@@ -229,7 +230,6 @@ def fill_from_grades(values: dict, module: float, face, parts, bad) -> set[str]:
         grade, teeth = values[f"{part}.accuracy_grade"], values[f"{part}.teeth"]
         if grade in (MISSING, None) or teeth is MISSING:
             continue
-        from wormgear_cli.physics.iso1328 import GradeError, flank_tolerances
 
         try:
             tol = flank_tolerances(grade, module, module * teeth, face, teeth)

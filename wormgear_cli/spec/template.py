@@ -18,10 +18,12 @@ Example values, each with its source:
 from __future__ import annotations
 
 import json
+import math
 
+from wormgear_cli.physics.deformation import rack_contact_ratio, spur_contact_ratio
 from wormgear_cli.spec import stages as st
 from wormgear_cli.spec.kinds import KINDS
-from wormgear_cli.spec.loader import DRIVE_FIELDS, UNIT_SCALE, Field
+from wormgear_cli.spec.loader import DRIVE_FIELDS, UNIT_SCALE, Field, spec_from_dict
 
 #: example values per stage kind (key units) and where each comes from (the kinds' ``examples``)
 STAGE_EXAMPLES: dict[str, dict[str, tuple]] = {name: k.examples for name, k in KINDS.items()}
@@ -126,9 +128,7 @@ def _derived_value(f: Field, record_values: dict, key: str):
 def _contact_ratio(spec) -> float:
     """The empirical form's default contact ratio of the template's drive (its last spur stage's, else the
     last worm wheel's against a rack), for the commented ``[stiffness] contact_ratio``."""
-    import math
 
-    from wormgear_cli.physics.deformation import rack_contact_ratio, spur_contact_ratio
 
     spurs = [s for s in spec.stages if s.kind == "spur"]
     if spurs:
@@ -145,7 +145,6 @@ def template(name: str = "my drive", stages=("worm", "spur")) -> str:
     """A complete, valid drive spec of ``[[stage]]`` tables of the kinds ``stages`` (motor -> output),
     every key commented with unit, range, default and source; derived keys commented out with their
     derived value (module docstring).  Raises ValueError for an unknown kind."""
-    from wormgear_cli.spec.loader import spec_from_dict
 
     kinds = tuple(stages)
     bad = [k for k in kinds if k not in st.STAGE_KINDS]

@@ -40,8 +40,19 @@ import math
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
+from wormgear_cli.drive.registry import build
 from wormgear_cli.errors import SpecError, did_you_mean
 from wormgear_cli.spec.kinds import KINDS
+from wormgear_cli.spec.loader import FIELD_BY_PATH, LEGACY_TABLES
+from wormgear_cli.spec.stages import (
+    LEGACY_KEYS,
+    LEGACY_TRAIN,
+    STAGE_FIELD_BY_KEY,
+    is_legacy_train,
+    legacy_path,
+    new_path,
+    record_values,
+)
 from wormgear_cli.tolerance.distributions import DISTRIBUTIONS, Kind
 
 #: default distribution per kind
@@ -103,8 +114,6 @@ STAGE_QUANTITY_BY_KEY = {kind: {q.key: q for q in qs} for kind, qs in STAGE_QUAN
 
 
 def _legacy_quantity(path: str) -> Quantity:
-    from wormgear_cli.spec.stages import LEGACY_KEYS, LEGACY_TRAIN
-
     kind, key = LEGACY_KEYS[path]
     q = STAGE_QUANTITY_BY_KEY[kind][key]
     return Quantity(path, q.kind, q.grade_driven, q.length, q.kinematics, LEGACY_TRAIN.index(kind) + 1, key)
@@ -215,7 +224,6 @@ NOT_READ_UNDER = {
 def train_quantities(spec) -> tuple[Quantity, ...]:
     """The quantities of ``spec``'s train, addressed in the file's form (module docstring): the legacy
     train's in the order of :data:`QUANTITIES`, any other train's stage by stage (motor -> output)."""
-    from wormgear_cli.spec.stages import is_legacy_train
 
     stages = spec.stages
     if is_legacy_train(stages):
@@ -241,7 +249,6 @@ class Layout(NamedTuple):
 def layout(spec, registry=None) -> Layout:
     """The :class:`Layout` of ``spec`` (module docstring).  ``registry``: the spec's registry (built
     when omitted)."""
-    from wormgear_cli.spec.stages import is_legacy_train, new_path
 
     qs = train_quantities(spec)
     if is_legacy_train(spec.stages):
@@ -249,7 +256,6 @@ def layout(spec, registry=None) -> Layout:
         rows = {_file_column(to_file, c): k for k, c in enumerate(STREAM_ROWS)}
         return Layout(qs, tuple(to_file(p) for p in PHASES), rows, len(STREAM_ROWS),
                       {to_file(p): (to_file(k),) for p, k in PHASE_SIZE.items()})
-    from wormgear_cli.drive.registry import build
 
     reg = registry if registry is not None else build(spec)
     sources = reg.periodic(all_budget_sources=True)
@@ -305,7 +311,6 @@ class Varied:
 
 def spec_value(spec, path: str):
     """The value of a TOML ``path`` in a loaded spec (internal units; a tuple for an array key)."""
-    from wormgear_cli.spec.loader import FIELD_BY_PATH
 
     f = FIELD_BY_PATH[path]
     node = spec
@@ -319,7 +324,6 @@ def _stage_of(spec, quantity: Quantity):
     train by its key)."""
     if quantity.stage:
         return spec.stages[quantity.stage - 1]
-    from wormgear_cli.spec.stages import LEGACY_KEYS, LEGACY_TRAIN
 
     return spec.stages[LEGACY_TRAIN.index(LEGACY_KEYS[quantity.path][0])]
 
@@ -336,7 +340,6 @@ def tolerance_value(spec, quantity: Quantity):
     (:attr:`~wormgear_cli.spec.stages.SpurStageSpec.model_eccentricity`)."""
     if not applies(spec, quantity):
         return (0.0,) * quantity.length if quantity.length > 1 else 0.0
-    from wormgear_cli.spec.stages import LEGACY_KEYS, record_values
 
     stage = _stage_of(spec, quantity)
     key = quantity.key or LEGACY_KEYS[quantity.path][1]
@@ -367,7 +370,6 @@ def varied_quantities(spec) -> tuple[Varied, ...]:
 def _in_file_form(spec, written: str) -> str:
     """A ``[statistics]`` key as the file's own path: a legacy key of a [worm, spur] train in a file of
     stages as its stage path, a stage path in a legacy file as its legacy key."""
-    from wormgear_cli.spec.stages import legacy_path, new_path
 
     return new_path(spec.stages, written) if spec.form == "stages" else legacy_path(spec.stages, written)
 
@@ -375,8 +377,6 @@ def _in_file_form(spec, written: str) -> str:
 def _not_variable(spec, path: str) -> str | None:
     """Why a spec key that is not a quantity of this train cannot be varied, or None when it is not a key
     of this drive at all."""
-    from wormgear_cli.spec.loader import FIELD_BY_PATH
-    from wormgear_cli.spec.stages import STAGE_FIELD_BY_KEY
 
     nominal = ("cannot be varied: the key has no tolerance (a nominal value such as teeth or module); toleranced "
                "keys: {}, ...")
@@ -389,7 +389,6 @@ def _not_variable(spec, path: str) -> str | None:
         if key.endswith("_phase_deg"):
             return "phases are always drawn uniformly in [0, 360) deg; remove this entry"
         return nominal if key in STAGE_FIELD_BY_KEY[stage.kind] else None
-    from wormgear_cli.spec.loader import LEGACY_TABLES
 
     if path in FIELD_BY_PATH and (spec.form == "legacy" or path.split(".")[0] not in LEGACY_TABLES):
         return nominal
@@ -399,7 +398,6 @@ def _not_variable(spec, path: str) -> str | None:
 def _legacy_hint(spec, path: str) -> str:
     """Where a legacy key of the two-table form is in a drive of stages: `` (did you mean "stage.2.KEY"?)``
     for each stage of the key's kind, or ""."""
-    from wormgear_cli.spec.stages import LEGACY_KEYS
 
     if path not in LEGACY_KEYS:
         return ""
