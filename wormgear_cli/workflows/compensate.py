@@ -49,6 +49,7 @@ from wormgear_cli.output import writers
 from wormgear_cli.output.writers import PEC_CURVE, WriteOptions
 from wormgear_cli.spec.loader import load_spec
 from wormgear_cli.units import to_unit
+from wormgear_cli.workflows.guidelog import longest_run
 from wormgear_cli.workflows.measure import _label_for, _order_notes, _orders_asked
 from wormgear_cli.workflows.measure import strongest_orders as measured_strongest_orders
 
@@ -506,7 +507,8 @@ PEC_UNDETERMINED = 0.5
 PEC_UNCERTAIN = 0.15
 
 
-def _check_determined(source: str, th, run, curve, period: float, unit: str, warnings: list[str]) -> None:
+def _check_determined(source: str, th, run, curve, period: float, cycles: float, unit: str,
+                      warnings: list[str]) -> None:
     """DataError when the record does not determine the curve (:data:`PEC_UNDETERMINED`); a warning
     when it fixes it only roughly (:data:`PEC_UNCERTAIN`)."""
     se = pec.curve_standard_error(th, run, curve)
@@ -514,7 +516,7 @@ def _check_determined(source: str, th, run, curve, period: float, unit: str, war
     ratio = se / rms if rms > 0 else math.inf
     if ratio <= PEC_UNCERTAIN:
         return
-    longest = max(float(np.ptp(th[run == r])) for r in np.unique(run)) / (2.0 * math.pi / curve.worm_order) * period
+    longest = longest_run(th, run) / (2.0 * math.pi / curve.worm_order) * period  # [s]
     said = (f"the curve's standard error is {to_unit(se, unit):.3g} {unit} RMS over the worm cycle, "
             f"{ratio:.0%} of the curve itself ({to_unit(rms, unit):.3g} {unit} RMS)"
             if math.isfinite(ratio) else "the curve's standard error cannot be had")
@@ -523,7 +525,6 @@ def _check_determined(source: str, th, run, curve, period: float, unit: str, war
                "each session's drift looks like a piece of the curve")
         fix = "record sessions of at least a worm period, or fit fewer harmonics (--harmonics)"
     else:
-        cycles = pec.cycles_covered(th, run, curve.worm_order)
         why = (f"its terms and each session's drift are hard to tell apart on these rows ({cycles:.3g} worm cycles "
                f"of {period:.4g} s)")
         fix = "record more worm cycles, or fit fewer harmonics (--harmonics)"
@@ -569,7 +570,7 @@ def _pec_path(m, options: CompensateOptions,
                         f"{period:.4g} s) without a reading: the curve is not determined there; record at least "
                         "one worm period without gaps")
     curve = pec.pec_curve(theta, y, run, worm, orders)
-    _check_determined(m.source, th, run, curve, period, options.unit, warnings)
+    _check_determined(m.source, th, run, curve, period, cycles, options.unit, warnings)
     prediction = pec.predict_pec(theta, y, run, curve)
     source = where if options.orders is None or options.worm_period_s or choice.worm_order else "--orders"
     choice = OrderChoice(tuple(orders), choice.labels, None, source, worm, choice.drive_name)
