@@ -36,6 +36,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "bench"))
+from _timing import checkout  # noqa: E402  (the bench scripts share it; run as python bench/NAME.py)
+
 TEL = Path("tests/data/telescope/eq6-ppec-19-sessions.guidelog.txt")
 BLAS = ("OPENBLAS_NUM_THREADS", "GOTO_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
         "VECLIB_MAXIMUM_THREADS")
@@ -87,12 +90,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         table = cases(tmp)
-        before = None
-        if args.before:
-            before = tmp / "before"
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(before), args.before],
-                           check=True, capture_output=True)
-        try:
+        with checkout(args.before, tmp / "before") as before:
             print(f"environment: {'one BLAS thread' if args.env == 'one' else 'no BLAS thread variable'}; "
                   f"CPU = user + system of the command's process")
             for name in args.cases.split(","):
@@ -105,10 +103,6 @@ def main() -> None:
                              f" | before/now CPU {old['cpu_s'] / now['cpu_s']:5.2f}x | "
                              + ("identical" if same else "OUTPUTS DIFFER"))
                 print(text, flush=True)
-        finally:
-            if before is not None:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(before)],
-                               capture_output=True)
 
 
 if __name__ == "__main__":

@@ -45,6 +45,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "bench"))
+from _timing import checkout  # noqa: E402  (the bench scripts share it; run as python bench/NAME.py)
 
 #: run in a fresh interpreter with PYTHONPATH at the tree under test: argv = csv path
 CHILD = r"""
@@ -161,12 +163,7 @@ def main() -> None:
     sizes = [int(float(s)) for s in args.rows.split(",")]
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        before = None
-        if args.before:
-            before = tmp / "before"
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", str(before), args.before],
-                           check=True, capture_output=True)
-        try:
+        with checkout(args.before, tmp / "before") as before:
             for rows in sizes:
                 data = tmp / f"dense_{rows}.csv"
                 make_csv(rows, data)
@@ -192,10 +189,6 @@ def main() -> None:
                           + ("reports identical" if same else "REPORTS DIFFER")
                           + ("" if old["verdict"] == after["verdict"] else " (VERDICTS DIFFER)"))
                 data.unlink()
-        finally:
-            if before is not None:
-                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(before)],
-                               capture_output=True)
     print("issue 10 bars: 1e5 rows under 2.5 s (the whole command); peak memory under 1024 B/row")
 
 
