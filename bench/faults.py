@@ -184,6 +184,19 @@ FAULTS: dict[str, Fault] = {
     "phase-convention": Fault(
         "measurement/harmonics.py", "    phase = np.arctan2(a, b)\n", "    phase = np.arctan2(b, a)\n",
         "phase of A cos instead of A sin", MEAS),
+    "scan-addition-sign": Fault(
+        "measurement/dominant.py", "            cos -= np.multiply(sa, sb, out=work)\n",
+        "            cos += np.multiply(sa, sb, out=work)\n",
+        "cos(a + b) written with the sign of cos(a - b) in the scan's fast grid", MEAS),
+    "scan-grid-unchecked": Fault(
+        "measurement/dominant.py",
+        "<= SPLIT_ULPS * np.finfo(float).eps * float(np.max(np.abs(orders)))",
+        "<= SPLIT_ULPS * float(np.max(np.abs(orders)))",
+        "the fast grid's check of evenly spaced orders without its eps (any orders pass)", MEAS),
+    "refine-harmonic-recurrence": Fault(
+        "measurement/dominant.py", "            c, s, h = c * c1 - s * s1, s * c1 + c * s1, h + 1\n",
+        "            c, s, h = c * c1 - s * s1, s * c1 - c * s1, h + 1\n",
+        "sin of the next harmonic with the wrong sign (the refinement's harmonics)", MEAS),
     # --- diagnosis statistics -------------------------------------------------------------------------
     "rank-by-F": Fault(
         "diagnosis/scoring.py", "return (0, -sc.wald.F * sc.wald.q) if sc.p_adj < alpha",

@@ -12,10 +12,12 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tests.measurement.test_separation import SIDEREAL_S, ar1
 from wormgear_cli.cli import app
-from wormgear_cli.measurement.dominant import ScanOptions, dominant_orders
+from wormgear_cli.measurement.dominant import ScanOptions, _harmonic_columns, _Scan, cos_sin, dominant_orders
 
 
 def test_a_dense_scan_finds_order_8_and_nothing_made_up():
@@ -140,3 +142,45 @@ def test_repeated_targets_give_the_row_least_squares():
     assert got[7.0].differential == pytest.approx(math.hypot(coef[8], coef[9]), rel=1e-9)
     resid = y - x @ coef
     assert dom.residual_rms == pytest.approx(float(np.sqrt(np.mean(resid**2))), rel=1e-9)
+
+
+# -- the scan's trigonometry: the fast forms against np.cos / np.sin taken directly ----------------------
+
+@settings(max_examples=40, deadline=None)
+@given(lo=st.floats(0.01, 5000.0), step=st.floats(1e-3, 50.0), count=st.integers(64, 700),
+       arc=st.floats(0.01, 6.3), rows=st.integers(3, 60))
+def test_cos_sin_of_an_even_grid_is_the_direct_values(lo, step, count, arc, rows):
+    # the scan's grid (lo + step * j) by the angle-addition formulas: within a few units in the last
+    # place of the largest phase, as the direct form's own rounding of k * theta
+    theta = np.linspace(0.0, arc, rows)
+    orders = lo + step * np.arange(count)
+    cos, sin = cos_sin(theta, orders)
+    phase = np.multiply.outer(theta, orders)
+    tol = 64 * np.finfo(float).eps * max(1.0, float(np.max(phase)))
+    assert cos.shape == sin.shape == (rows, count)
+    assert np.max(np.abs(cos - np.cos(phase))) <= tol and np.max(np.abs(sin - np.sin(phase))) <= tol
+
+
+def test_cos_sin_of_uneven_or_few_orders_is_exactly_the_direct_form():
+    theta = np.linspace(0.0, 2.0, 50)
+    for orders in (np.arange(10.0), np.sort(np.random.default_rng(1).uniform(1.0, 90.0, 200))):
+        cos, sin = cos_sin(theta, orders)
+        assert np.array_equal(cos, np.cos(np.multiply.outer(theta, orders)))
+        assert np.array_equal(sin, np.sin(np.multiply.outer(theta, orders)))
+
+
+@pytest.mark.parametrize("both", [False, True])
+@pytest.mark.parametrize("reduced", [False, True])
+def test_harmonic_columns_are_the_scans_columns_at_each_harmonic(both, reduced):
+    # the refinement's harmonics (h = 1, 2, 3 from one cos and sin) against the scan's own columns at h k
+    rng = np.random.default_rng(3)
+    n = 40
+    theta = np.sort(rng.uniform(0.0, 0.7, n))
+    d = np.where(rng.uniform(size=n) < 0.5, 1.0, -1.0) if both else None
+    sw = np.sqrt(rng.integers(1, 5, n).astype(float)) if reduced else None
+    scan = _Scan(theta, rng.normal(size=n), np.ones((n, 1)), np.arange(1.0, 5.0), 0.7, False, d, sw=sw)
+    for series in ([1], [1, 2, 3], [1, 3], [2]):
+        got = _harmonic_columns(scan, 213.7, series)
+        want = np.hstack([scan.trig(h * 213.7) for h in series])
+        assert got.shape == want.shape
+        assert np.max(np.abs(got - want)) <= 1e-12

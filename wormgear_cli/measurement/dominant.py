@@ -52,6 +52,11 @@ from wormgear_cli.measurement.drift import MIN_PERIOD_SHARE, SlowPart, drift_siz
 from wormgear_cli.measurement.separation import SEPARATION_CORR
 from wormgear_cli.measurement.serial import SerialBlocks, block_covariance, serial_blocks
 
+#: orders from which :func:`cos_sin` computes an evenly spaced grid by the angle-addition formulas
+SPLIT_ORDERS = 64
+#: how far [units in the last place of the largest order] the orders the addition formulas stand for may lie
+#: from the grid's (else cos and sin are taken directly)
+SPLIT_ULPS = 8.0
 #: highest order ever scanned [cycles/rev] (a thousandth of a degree of angle error is a sizeable phase error beyond)
 MAX_SCAN_ORDER = 100_000.0
 #: rows x grid orders up to which the power is computed exactly at every grid order over a partial arc (beyond:
@@ -475,6 +480,46 @@ def _empty_note(n: int, cov: Coverage, lo: float, hi: float) -> str:
             f"resolves up to order {hi:.4g}")
 
 
+def cos_sin(theta: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of ``orders[j] * theta[i]``, shape (n, m) each.
+
+    On an evenly spaced grid of at least :data:`SPLIT_ORDERS` orders (the scan's), by the angle-addition
+    formulas from the cos and sin of about 2 sqrt(m) columns: order ``k[a M + b]`` is taken as
+    ``k[a M] + (k[b] - k[0])``, which rounds to within :data:`SPLIT_ULPS` units in the last place of the
+    largest order of the grid (else the direct form is used), and each value is one product sum of
+    exact cos and sin (an error of a few units in the last place, as the direct form's rounding of
+    the product ``k theta``), for a quarter of the work of m cos and sin per row.
+
+    Parameters
+    ----------
+    theta : ndarray [rad], shape (n,)
+    orders : ndarray [cycles/rev], shape (m,)
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        cos and sin, shape (n, m) each (rows contiguous; a view of a slightly wider array on the grid).
+    """
+    n, m = theta.shape[0], orders.shape[0]
+    if m >= SPLIT_ORDERS:
+        width = int(math.ceil(math.sqrt(m)))
+        blocks = -(-m // width)
+        base = orders[::width]
+        offset = orders[:width] - orders[0]
+        taken = (base[:, None] + offset[None, :]).reshape(-1)[:m]
+        if np.all(np.abs(taken - orders) <= SPLIT_ULPS * np.finfo(float).eps * float(np.max(np.abs(orders)))):
+            a, b = np.multiply.outer(theta, base), np.multiply.outer(theta, offset)
+            ca, sa, cb, sb = np.cos(a)[:, :, None], np.sin(a)[:, :, None], np.cos(b)[:, None, :], np.sin(b)[:, None, :]
+            cos, sin, work = (np.empty((n, blocks, width)) for _ in range(3))
+            np.multiply(ca, cb, out=cos)
+            cos -= np.multiply(sa, sb, out=work)
+            np.multiply(sa, cb, out=sin)
+            sin += np.multiply(ca, sb, out=work)
+            return cos.reshape(n, -1)[:, :m], sin.reshape(n, -1)[:, :m]
+    arg = np.multiply.outer(theta, orders)
+    return np.cos(arg), np.sin(arg)
+
+
 def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
     """Sum of squares of ``resid`` explained by each order's (cos, sin) pair (and its differential pair with
     both directions) with the model projected out, exactly, in chunks (NaN where the model takes up all
@@ -488,9 +533,7 @@ def _powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray) -> np.ndarray:
     q = scan.q
     for a in range(0, orders.shape[0], chunk):
         ks = orders[a:a + chunk]
-        arg = np.multiply.outer(scan.theta, ks)
-        cols = [np.cos(arg), np.sin(arg)]
-        arg = None
+        cols = list(cos_sin(scan.theta, ks))
         if scan.d is not None:
             cols += [cols[0] * scan.d[:, None], cols[1] * scan.d[:, None]]
         if scan.sw is not None:
@@ -714,13 +757,35 @@ def _series_powers(scan: _Scan, resid: np.ndarray, orders: np.ndarray, series: l
     assert q is not None  # (the series are refined on a scan that keeps its basis)
     out = np.full(orders.shape[0], np.nan)
     for i, k in enumerate(orders):
-        c = np.hstack([scan.trig(h * float(k)) for h in series])
+        c = _harmonic_columns(scan, float(k), series)
         proj = q.T @ c
         gram = c.T @ c - proj.T @ proj
         rhs = c.T @ resid
         lam = np.linalg.eigvalsh(gram)
         if np.trace(gram) > MIN_SCAN_SHARE * scan.total * gram.shape[0] / 2 and lam[0] > 1e-9 * max(lam[-1], 1e-300):
             out[i] = float(rhs @ np.linalg.solve(gram, rhs))
+    return out
+
+
+def _harmonic_columns(scan: _Scan, k: float, series: list) -> np.ndarray:
+    """The columns of :meth:`_Scan.trig` at orders h x ``k`` for h in ``series`` side by side, (n, 2 or 4
+    per harmonic): one cos and sin of order ``k``, the harmonics from it by the angle-addition formulas
+    (each a product sum: a few units in the last place from cos and sin taken directly)."""
+    th = scan.theta
+    c1, s1 = np.cos(k * th), np.sin(k * th)
+    per = 2 if scan.d is None else 4
+    out = np.empty((th.shape[0], per * len(series)))
+    c, s, h = c1, s1, 1
+    for j, want in enumerate(series):
+        while h < want:
+            c, s, h = c * c1 - s * s1, s * c1 + c * s1, h + 1
+        out[:, per * j] = c
+        out[:, per * j + 1] = s
+    if scan.d is not None:
+        for j in range(len(series)):
+            out[:, per * j + 2:per * j + 4] = out[:, per * j:per * j + 2] * scan.d[:, None]
+    if scan.sw is not None:
+        out *= scan.sw[:, None]
     return out
 
 
