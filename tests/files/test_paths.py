@@ -108,6 +108,17 @@ def test_output_ending_with_a_slash_names_a_folder_and_writes_nothing(tmp_path, 
     assert list(tmp_path.iterdir()) == ([target] if exists else [])
 
 
+@pytest.mark.parametrize("args", [["analyze", str(MCH50), "-o", ""], ["new", ""]])
+def test_an_empty_output_name_is_refused_as_empty(tmp_path, runner, monkeypatch, args):
+    """``-o ''`` (an unset shell variable): pathlib reads it as "." and the message had named the
+    current folder."""
+    monkeypatch.chdir(tmp_path)
+    r = runner.invoke(app, args)
+    assert r.exit_code == 2 and r.stdout == "" and list(tmp_path.iterdir()) == []
+    assert r.stderr.startswith(f"error: {'-o' if args[0] == 'analyze' else 'NEW.toml'}: the file name is empty; "
+                               "expected a file name (e.g. ")
+
+
 def test_output_in_a_missing_folder_is_refused_before_any_work(tmp_path):
     with pytest.raises(UsageError, match=r"folder .*nope does not exist for -o$"):
         check_output_path(tmp_path / "nope" / "x.csv")

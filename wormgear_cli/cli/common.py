@@ -86,13 +86,15 @@ _FOLDER_ENDING = re.compile(r"(?<=.)/(\.{0,2}/*)?$")
 def output_path_type(option: str, example: str = "result.json") -> ParamType:
     """The click type of every option or argument naming a file to write (-o, --plot, --truth,
     --report, --write-spec, ``new FILE``): a path, refused at once (UsageError, exit 2) when its
-    raw text ends with "/", "/." or "/..", which name a folder.  ``example``: the file name the
+    raw text is empty or ends with "/", "/." or "/..", which name a folder.  ``example``: the file name the
     message proposes in that folder."""
     class OutputPath(ParamType):
         name = "path"
 
         def convert(self, value, param, ctx):
             text = os.fspath(value)
+            if not text:  # pathlib reads "" as "." (the current folder)
+                raise UsageError(f"{option}: the file name is empty; expected a file name (e.g. {quote(example)})")
             ending = _FOLDER_ENDING.search(text)
             if ending is not None:
                 folder = text.rstrip("/").removesuffix("/.") + "/"  # out/. is out/; out/.. is out/../
