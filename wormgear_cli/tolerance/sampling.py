@@ -72,13 +72,14 @@ def block_uniforms(seed: int, block: int, rows: int | None = None, lo: int = 0, 
     step of PCG64, which ``advance`` jumps in O(log n), so a draw of a few samples does not
     generate the whole block)."""
     ss = np.random.SeedSequence(int(seed), spawn_key=(int(block),))
-    gen = np.random.Generator(np.random.PCG64(ss))
+    bits = np.random.PCG64(ss)
+    gen = np.random.Generator(bits)
     rows = STREAM_COLUMNS if rows is None else rows
     if (lo, hi) == (0, BLOCK):
         return gen.random((rows, BLOCK))
     out = np.empty((rows, hi - lo))
     for r in range(rows):  # row r is numbers r BLOCK .. (r + 1) BLOCK - 1 of the stream
-        gen.bit_generator.advance(lo if r == 0 else BLOCK - (hi - lo))
+        bits.advance(lo if r == 0 else BLOCK - (hi - lo))
         gen.random(out=out[r])
     return out
 
