@@ -10,6 +10,7 @@ import typer.testing
 from hypothesis import settings
 from typer.testing import CliRunner
 
+from tests.support.commands import click_group
 from tests.support.paths import CONFIGS, MCH50, ROOT  # noqa: F401  (the shared paths)
 
 # No per-example deadline (a loaded 2-core machine must not turn a slow example into a
@@ -32,18 +33,8 @@ def pytest_configure(config):
 # typer's CliRunner.invoke turns the Typer app into a click command on every call
 # (typer.main.get_command: every command's signature and annotations read again, about 0.05 s of
 # CPU, a call of any test that runs the CLI in process).  The program does that once per process;
-# the runners here do it once per app and invoke that same command every time.
-_COMMANDS: dict[int, tuple] = {}
-
-
-def _command_of(app):
-    if id(app) not in _COMMANDS:
-        _COMMANDS[id(app)] = (app, _get_command(app))  # (the app kept, so its id is not reused)
-    return _COMMANDS[id(app)][1]
-
-
-_get_command = typer.testing._get_command
-typer.testing._get_command = _command_of
+# the runners here do it once per app (tests/support/commands.py) and invoke that same command.
+typer.testing._get_command = click_group
 
 
 @pytest.fixture

@@ -8,14 +8,13 @@ import re
 import shlex
 
 import pytest
-from typer.main import get_command
 
+from tests.support.commands import click_group
 from wormgear_cli.cli import app
 from wormgear_cli.cli.helptext import HelpCommand, example_lines
 
-#: the app as the click group the program builds once per process (typer's get_command reads every
-#: command's signature again: about 0.05 s of CPU a call)
-GROUP = get_command(app)
+#: the app as the click group the program builds once per process (tests/support/commands.py)
+GROUP = click_group(app)
 COMMANDS = GROUP.commands
 WIDTHS = (40, 60, 72, 80, 100, 120)
 #: a shell word, quoted parts kept whole (--map angle_deg="Position (deg)")
