@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 from pathlib import Path
 
@@ -28,6 +29,13 @@ def pytest_configure(config):
 
     examples.FULL = (bool(os.environ.get("CI")) or os.environ.get("WORMGEAR_TEST_EXAMPLES") == "full"
                      or (config.getoption("markexpr") or "").strip() != "not slow")
+
+
+def pytest_collection_finish(session):
+    """What collecting made (the imported modules, the test items: most of the process's objects) stays
+    for the whole run: gc.freeze moves it out of the collector's generations, so that the full
+    collections during the tests and at the end do not walk it again (about half a second of CPU)."""
+    gc.freeze()
 
 
 # typer's CliRunner.invoke turns the Typer app into a click command on every call
