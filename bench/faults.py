@@ -142,8 +142,8 @@ FAULTS: dict[str, Fault] = {
         "return _span(*(m + 3.0 * s for m, s in zip(means, ss)), *(m - 3.0 * s for m, s",
         "accuracy A with 3 s (the old VDI habit) instead of 2 s", MEAS),
     "iso230-B-mean": Fault(
-        "measurement/iso230.py", "B, B_signed, B_mean = float(abs(b[k])), float(b[k]), float(np.mean(b))",
-        "B, B_signed, B_mean = float(abs(b[k])), float(b[k]), float(np.mean(np.abs(b)))",
+        "measurement/iso230.py", "B, B_signed, B_mean = np.abs(signed), signed, np.mean(b, axis=1)",
+        "B, B_signed, B_mean = np.abs(signed), signed, np.mean(np.abs(b), axis=1)",
         "mean reversal of the magnitudes (sign lost)", MEAS),
     "iso230-mean-bi": Fault(
         "measurement/iso230.py", "    mean_bi = 0.5 * (mean_up + mean_dn)", "    mean_bi = 0.5 * (mean_up - mean_dn)",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import typer.testing
 from hypothesis import settings
 from typer.testing import CliRunner
 
+from tests.support.commands import click_group
 from tests.support.paths import CONFIGS, MCH50, ROOT  # noqa: F401  (the shared paths)
 
 # No per-example deadline (a loaded 2-core machine must not turn a slow example into a
@@ -29,21 +31,18 @@ def pytest_configure(config):
                      or (config.getoption("markexpr") or "").strip() != "not slow")
 
 
+def pytest_collection_finish(session):
+    """What collecting made (the imported modules, the test items: most of the process's objects) stays
+    for the whole run: gc.freeze moves it out of the collector's generations, so that the full
+    collections during the tests and at the end do not walk it again (about half a second of CPU)."""
+    gc.freeze()
+
+
 # typer's CliRunner.invoke turns the Typer app into a click command on every call
 # (typer.main.get_command: every command's signature and annotations read again, about 0.05 s of
 # CPU, a call of any test that runs the CLI in process).  The program does that once per process;
-# the runners here do it once per app and invoke that same command every time.
-_COMMANDS: dict[int, tuple] = {}
-
-
-def _command_of(app):
-    if id(app) not in _COMMANDS:
-        _COMMANDS[id(app)] = (app, _get_command(app))  # (the app kept, so its id is not reused)
-    return _COMMANDS[id(app)][1]
-
-
-_get_command = typer.testing._get_command
-typer.testing._get_command = _command_of
+# the runners here do it once per app (tests/support/commands.py) and invoke that same command.
+typer.testing._get_command = click_group
 
 
 @pytest.fixture

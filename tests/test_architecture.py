@@ -10,7 +10,6 @@ import ast
 import functools
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -59,23 +58,49 @@ def test_no_import_cycle():
     assert not cycles, "\n".join(cycles)
 
 
-@functools.cache
-def _sources() -> tuple[tuple[Path, str, ast.Module], ...]:
-    """(path, text, syntax tree) of every module of the package, parsed once for the checks below."""
-    return tuple((path, text, ast.parse(text)) for path in sorted(PACKAGE.rglob("*.py"))
-                 for text in [path.read_text()])
+_FUNCTIONS = (ast.FunctionDef, ast.AsyncFunctionDef)
+_IMPORTS = (ast.Import, ast.ImportFrom)
+
+
+def _statements(body: list, in_function: bool = False):
+    """(statement, whether it sits inside a function) for each statement of a block and of the blocks
+    inside it.  Definitions and imports are statements, and statements sit only in these lists: the
+    expressions (most of a syntax tree) need no walk."""
+    for node in body:
+        yield node, in_function
+        inner = in_function or isinstance(node, _FUNCTIONS)
+        for field in ("body", "orelse", "finalbody", "handlers", "cases"):
+            block = getattr(node, field, None)
+            if isinstance(block, list):
+                yield from _statements(block, inner)
 
 
 @functools.cache
-def _long_functions() -> dict[str, int]:
-    out = {}
-    for path, _, tree in _sources():
-        for node in ast.walk(tree):
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+def _function_facts() -> tuple[dict[str, int], dict[str, list[int]]]:
+    """Every module of the package parsed once: (functions over MAX_FUNCTION_LINES: their lines, by
+    ``path::name``; in-function imports without a reason: their line numbers, by path).  The syntax
+    trees are not kept (a million objects every later garbage collection would walk)."""
+    long: dict[str, int] = {}
+    unexplained: dict[str, list[int]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        text = path.read_text()
+        rel = path.relative_to(ROOT).as_posix()
+        imports = []
+        for node, in_function in _statements(ast.parse(text).body):
+            if isinstance(node, _FUNCTIONS):
                 lines = node.end_lineno - node.lineno + 1
                 if lines > MAX_FUNCTION_LINES:
-                    out[f"{path.relative_to(ROOT).as_posix()}::{node.name}"] = lines
-    return out
+                    long[f"{rel}::{node.name}"] = lines
+            elif in_function and isinstance(node, _IMPORTS):
+                imports.append(node)
+        missing = _unexplained(text.splitlines(), sorted(imports, key=lambda n: n.lineno))
+        if missing:
+            unexplained[rel] = missing
+    return long, unexplained
+
+
+def _long_functions() -> dict[str, int]:
+    return _function_facts()[0]
 
 
 def test_no_new_long_function():
@@ -95,25 +120,23 @@ def test_known_long_functions_are_still_long():
 IMPORT_REASON_PENDING: set[str] = set()
 
 
-@functools.cache
-def _unexplained_function_imports() -> dict[str, list[int]]:
-    """In-function imports with no reason: a comment on the import's lines or on the line above; a run of
-    imports on consecutive lines shares the comment above its first."""
-    out: dict[str, list[int]] = {}
-    for path, text, tree in _sources():
-        lines = text.splitlines()
-        imports = sorted({id(n): n for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))
-                          for n in ast.walk(f) if isinstance(n, (ast.Import, ast.ImportFrom))}.values(),
-                         key=lambda n: n.lineno)
-        explained_ends: set[int] = set()
-        for node in imports:
-            own = any("#" in lines[i] for i in range(node.lineno - 1, node.end_lineno))
-            above = node.lineno - 1
-            if own or (above and lines[above - 1].strip().startswith("#")) or above in explained_ends:
-                explained_ends.add(node.end_lineno)
-            else:
-                out.setdefault(path.relative_to(ROOT).as_posix(), []).append(node.lineno)
+def _unexplained(lines: list[str], imports: list) -> list[int]:
+    """Lines of the in-function imports (in line order) with no reason: a comment on the import's lines
+    or on the line above; a run of imports on consecutive lines shares the comment above its first."""
+    out: list[int] = []
+    explained_ends: set[int] = set()
+    for node in imports:
+        own = any("#" in lines[i] for i in range(node.lineno - 1, node.end_lineno))
+        above = node.lineno - 1
+        if own or (above and lines[above - 1].strip().startswith("#")) or above in explained_ends:
+            explained_ends.add(node.end_lineno)
+        else:
+            out.append(node.lineno)
     return out
+
+
+def _unexplained_function_imports() -> dict[str, list[int]]:
+    return _function_facts()[1]
 
 
 def test_every_function_import_says_why():

@@ -15,8 +15,8 @@ from __future__ import annotations
 import re
 
 import pytest
-from typer.main import get_command
 
+from tests.support.commands import click_group
 from tests.support.paths import ROOT
 from wormgear_cli import _docgen
 from wormgear_cli.cli import app
@@ -26,7 +26,7 @@ from wormgear_cli.spec.loader import FIELDS
 DOCS = ROOT / "docs"
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 MKDOCS = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
-COMMANDS = get_command(app).commands
+COMMANDS = click_group(app).commands
 SETUP = ("pip install . && wormgear analyze configs/mch50.toml",
          "pip install -e '.[test,plot,docs]' && python -m pytest")
 

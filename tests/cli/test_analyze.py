@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.commands import click_group
 from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
 
@@ -266,9 +267,7 @@ def test_new_dash_writes_the_template_to_stdout_and_no_file(runner, tmp_path, mo
 
 
 def test_every_command_has_help_with_an_example(runner):
-    from typer.main import get_command
-
-    commands = get_command(app).commands
+    commands = click_group(app).commands
     assert {"analyze", "check", "new"} <= set(commands)
     for name in commands:
         r = runner.invoke(app, [name, "--help"])

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import pytest
-from typer.main import get_command
 
+from tests.support.commands import click_group
 from tests.support.paths import MCH50
 from wormgear_cli.cli import app
 from wormgear_cli.cli.common import count_type, parse_count
@@ -50,7 +50,7 @@ NOT_COUNTS = {("tolerance", "--seed"), ("synth", "--seed"), ("compare", "--seed"
 
 
 def test_every_integer_option_is_a_count_or_named_as_not_one():
-    commands = get_command(app).commands
+    commands = click_group(app).commands
     for name, cmd in commands.items():
         for p in cmd.params:
             opt = next((o for o in getattr(p, "opts", []) if o.startswith("--")), None)

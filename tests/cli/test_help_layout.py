@@ -8,12 +8,14 @@ import re
 import shlex
 
 import pytest
-from typer.main import get_command
 
+from tests.support.commands import click_group
 from wormgear_cli.cli import app
 from wormgear_cli.cli.helptext import HelpCommand, example_lines
 
-COMMANDS = get_command(app).commands
+#: the app as the click group the program builds once per process (tests/support/commands.py)
+GROUP = click_group(app)
+COMMANDS = GROUP.commands
 WIDTHS = (40, 60, 72, 80, 100, 120)
 #: a shell word, quoted parts kept whole (--map angle_deg="Position (deg)")
 SHELL_WORD = re.compile(r"""(?:[^\s"']+|"[^"]*"|'[^']*')+""")
@@ -32,8 +34,7 @@ def _drawn_help(name: str, drawn: int) -> str:
     from typer._click import Context
 
     cmd = COMMANDS[name]
-    group = get_command(app)
-    root = Context(group, info_name="wormgear", terminal_width=drawn, max_content_width=drawn)
+    root = Context(GROUP, info_name="wormgear", terminal_width=drawn, max_content_width=drawn)
     ctx = Context(cmd, info_name=name, parent=root, terminal_width=drawn, max_content_width=drawn)
     return cmd.get_help(ctx) + "\n"
 

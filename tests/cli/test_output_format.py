@@ -9,6 +9,7 @@ import json
 
 import pytest
 
+from tests.support.commands import click_group
 from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app
 
@@ -111,9 +112,7 @@ LEAST_ARGS = {**COMMANDS, "measure": ["measure", str(WARM)],
 
 
 def test_every_command_with_format_follows_the_rule_before_any_work(runner, tmp_path):
-    from typer.main import get_command
-
-    commands = get_command(app).commands
+    commands = click_group(app).commands
     with_format = {name for name, cmd in commands.items() if any(p.name == "format" for p in cmd.params)}
     assert with_format == set(LEAST_ARGS), "a command with --format is missing from LEAST_ARGS"
     for name in sorted(with_format):

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import tomli_w
 
+from tests.support.commands import click_group
 from tests.support.paths import CONFIGS
 from wormgear_cli.cli import app
 from wormgear_cli.spec.template import SUGGESTED
@@ -153,10 +154,8 @@ def _eq6_commands(tmp_path) -> list[tuple[str, list]]:
 
 
 def test_a_belt_and_worm_drive_runs_through_every_command(runner, tmp_path):
-    from typer.main import get_command
-
     steps = _eq6_commands(tmp_path)
-    assert {c for c, _ in steps} == set(get_command(app).commands)  # every command of the tool
+    assert {c for c, _ in steps} == set(click_group(app).commands)  # every command of the tool
     out = {}
     for command, args in steps:
         code = 2 if command == "upgrade" else 0  # already a drive of stages: nothing to upgrade

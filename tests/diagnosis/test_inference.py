@@ -123,7 +123,7 @@ def test_the_same_order_range_is_the_profile_region_derived_by_hand(mch50_spec):
     interval of the size), and the effect's sizes are [(R - A - delta) / u, (R + A + delta) / u]."""
     import math
 
-    import statsmodels.api as sm
+    import statsmodels.regression.linear_model as sm  # OLS (not all of statsmodels.api)
     from scipy import stats
 
     from wormgear_cli import diagnosis as dg

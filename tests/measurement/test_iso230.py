@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from wormgear_cli.measurement.iso230 import group_targets, iso230_figures, withhold_directional
+from wormgear_cli.measurement.iso230 import axis_figures, group_targets, iso230_figures, withhold_directional
 
 
 def test_one_position_test_hand_worked():
@@ -52,3 +52,26 @@ def test_grouping_from_the_sorted_angles_is_the_same(values):
     shared = group_targets(angle, unique=np.unique(angle, return_inverse=True))
     assert np.array_equal(direct[0], shared[0])
     assert np.allclose(direct[1], shared[1])
+
+
+@pytest.mark.parametrize("case", ["both directions", "a cell of one run", "forward only", "one target"])
+def test_axis_figures_of_many_error_rows_are_each_rows_own(case):
+    """The batch a table's simulated repeat tests use gives, row by row, the figures iso230_figures gives
+    for that row alone, to the bit, NaN where that row's are undefined."""
+    rng = np.random.default_rng(11)
+    angle = np.tile(np.repeat([0.0, 0.5, 1.0, 1.5], 2), 3)
+    direction = np.tile([1.0, -1.0], 12)
+    if case == "a cell of one run":  # target 1.5 rad read by the first run only: its s undefined
+        keep = (angle != 1.5) | (np.arange(angle.size) < 8)
+        angle, direction = angle[keep], direction[keep]
+    elif case == "forward only":
+        direction = np.ones_like(direction)
+    elif case == "one target":
+        angle = np.zeros_like(angle)
+    errors = rng.normal(0.0, 1e-5, (5, angle.size)) + 3e-5 * direction
+    got = axis_figures(errors, direction, group_targets(angle))
+    for r in range(errors.shape[0]):
+        want = iso230_figures(angle, errors[r], direction).axis()
+        assert set(got) == set(want)
+        for k, v in want.items():
+            assert got[k][r] == v or (math.isnan(v) and math.isnan(got[k][r])), (case, r, k)

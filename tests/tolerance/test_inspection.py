@@ -19,7 +19,7 @@ T = 0.03
 
 
 def _draw(v: Varied, n: int, seed: int) -> np.ndarray:
-    u = np.concatenate([sampling.block_uniforms(seed, b)[0] for b in range(-(-n // sampling.BLOCK))])[:n]
+    u = np.concatenate([sampling.block_uniforms(seed, b, rows=1)[0] for b in range(-(-n // sampling.BLOCK))])[:n]
     return sampling.sample_values(v, u)
 
 

@@ -28,7 +28,7 @@ def _varied(path, distribution, cp=None, cpk=None, tol=T):
 
 def _draw(v: Varied, n: int, seed: int) -> np.ndarray:
     """Values drawn through the uniforms of the counter-based streams (the path the runs take)."""
-    u = np.concatenate([sampling.block_uniforms(seed, b)[0] for b in range(-(-n // sampling.BLOCK))])[:n]
+    u = np.concatenate([sampling.block_uniforms(seed, b, rows=1)[0] for b in range(-(-n // sampling.BLOCK))])[:n]
     return sampling.sample_values(v, u)
 
 
@@ -227,6 +227,16 @@ def test_rayleigh_capability_sets_sigma(cp, cpk, c):
 def test_zero_tolerance_keeps_the_shape_of_the_uniforms():
     x = sampling.sample_values(_varied("assembly.worm_eccentricity_mm", "uniform", tol=0.0), np.full((3, 4), 0.5))
     assert x.shape == (3, 4) and np.all(x == 0.0)
+
+
+def test_columns_of_a_block_are_the_slice_of_its_whole_matrix():
+    """A draw of a few samples skips the rest of the stream (PCG64's advance): the same numbers as
+    the whole (rows, BLOCK) matrix cut, in every row, at both ends of the block and inside it."""
+    whole = sampling.block_uniforms(7, 3, rows=5)
+    assert whole.shape == (5, sampling.BLOCK)
+    for lo, hi in ((0, 1), (0, 1000), (17, 4000), (sampling.BLOCK - 3, sampling.BLOCK), (1, sampling.BLOCK)):
+        assert np.array_equal(sampling.block_uniforms(7, 3, rows=5, lo=lo, hi=hi), whole[:, lo:hi])
+    assert np.array_equal(sampling.block_uniforms(7, 3, rows=1)[0], whole[0])
 
 
 def test_a_draw_starting_past_the_first_block():

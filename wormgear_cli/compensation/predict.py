@@ -35,7 +35,7 @@ from wormgear_cli.compensation.noise import Noise, noise_components
 from wormgear_cli.compensation.scan import harmonic_block, order_amplitudes
 from wormgear_cli.compensation.table import apply_table
 from wormgear_cli.measurement.coverage import TREND_DEGREE, coverage, trend_columns
-from wormgear_cli.measurement.iso230 import group_targets, iso230_figures
+from wormgear_cli.measurement.iso230 import axis_figures, group_targets, iso230_figures
 
 #: simulated repeat tests behind a predicted figure (fewer on long files: REPLICATE_ROWS / rows)
 REPLICATES = 200
@@ -43,6 +43,8 @@ REPLICATES = 200
 REPLICATE_ROWS = 4_000_000
 #: fewest replicates
 MIN_REPLICATES = 40
+#: readings of simulated repeat tests evaluated at once (memory: 8 bytes each, a few arrays of it)
+REPLICATE_BATCH_ROWS = 1_000_000
 #: seed of the simulated repeat tests (same input, same output)
 SEED = 20_230_201
 #: the figures predicted (ISO 230-2 names; _up is forward, _down reverse)
@@ -109,9 +111,10 @@ def corrected_rows(make_table: Callable, theta, y, d, run) -> tuple[np.ndarray, 
     return out, int(runs.size)
 
 
-def _figures(theta, x, d, grouping) -> dict:
-    f = iso230_figures(theta, x, d, grouping=grouping)
-    return {k: getattr(f, k) for k in FIGURES}
+def _figures(x, d, grouping) -> dict:
+    """The figures of :data:`FIGURES` (name -> (R,) [rad]) of R rows of errors ``x`` (R, n)."""
+    f = axis_figures(x, d, grouping)
+    return {k: f[k] for k in FIGURES}
 
 
 def systematic_remainder(cell, centred, remainder_var: float) -> np.ndarray:
@@ -138,16 +141,19 @@ def _simulate(theta, d, grouping, cell, run, systematic, own: float, noise) -> d
     ci, ri = ci.ravel(), ri.ravel()
     count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(n, 1)))
     within = noise.within if math.isfinite(noise.within) else 0.0
-    draws: dict[str, list[float]] = {k: [] for k in FIGURES}
-    for _ in range(count):
-        x = (systematic + rng.normal(0.0, math.sqrt(own), ci.max() + 1)[ci]
-             + rng.normal(0.0, math.sqrt(noise.between_runs), ri.max() + 1)[ri]
-             + rng.normal(0.0, math.sqrt(within), n))
-        for k, v in _figures(theta, x, d, grouping).items():
+    draws: dict[str, list[np.ndarray]] = {k: [] for k in FIGURES}
+    per_batch = max(1, REPLICATE_BATCH_ROWS // max(n, 1))
+    for first in range(0, count, per_batch):  # the tests drawn one after the other, evaluated a batch at once
+        x = np.empty((min(per_batch, count - first), n))
+        for row in x:
+            row[:] = (systematic + rng.normal(0.0, math.sqrt(own), ci.max() + 1)[ci]
+                      + rng.normal(0.0, math.sqrt(noise.between_runs), ri.max() + 1)[ri]
+                      + rng.normal(0.0, math.sqrt(within), n))
+        for k, v in _figures(x, d, grouping).items():
             draws[k].append(v)
     out = {}
     for k, values in draws.items():
-        v = np.asarray(values)
+        v = np.concatenate(values)
         if not np.all(np.isfinite(v)):
             out[k] = Figure(math.nan, math.nan, math.nan)
             continue
@@ -232,7 +238,7 @@ def predict_table(make_table: Callable, theta, y, direction, run, orders=(), par
         after = _simulate(theta, d, grouping, cell, run, systematic_remainder(cell, centred, missed), own, noise)
         count = max(MIN_REPLICATES, min(REPLICATES, REPLICATE_ROWS // max(y.shape[0], 1)))
         return TablePrediction("cross-validated", folds, before, after, noise, math.sqrt(missed + own), tops, count)
-    figs = _figures(theta, corrected, d, grouping)
+    figs = {k: float(v[0]) for k, v in _figures(corrected[None], d, grouping).items()}
     after = {k: Figure(v, v, v) for k, v in figs.items()}
     return TablePrediction("in-sample", 0, before, after, noise, float(np.sqrt(np.mean(centred**2))), tops, 0)
 

@@ -25,7 +25,6 @@ from wormgear_cli.drive import spur
 from wormgear_cli.drive import train as train_mod
 from wormgear_cli.drive.models import MODELS
 from wormgear_cli.drive.records import Clearance, Compliance, Source, StageResult, Static
-from wormgear_cli.physics import spur as spur_model
 
 
 class Registry(NamedTuple):
@@ -139,7 +138,7 @@ def aligned_phases(spec, quantity: str = "error", registry: Registry | None = No
             if src.stage_kind == "spur" and src.part == "pinion" and src.kind == "shaft" and src.size_keys[0] == \
                     "eccentricity_mm" and stage.kinematics == "paper":
                 r1, r2 = spur.radii(stage)
-                _, phi = spur_model.gear_te_max_fast(r1, r2, stage.model_eccentricity, stage.pressure_angle, 0.0)
+                _, phi = spur.paper_te_max(r1, r2, stage.model_eccentricity, stage.pressure_angle, 0.0)
                 out[src.name] = float(phi)
     return out
 

@@ -25,6 +25,7 @@ the mesh order z1 A.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 
@@ -71,6 +72,25 @@ def base_radius(stage) -> float:
     return stage.module * stage.gear.teeth * math.cos(stage.pressure_angle) / 2.0
 
 
+def paper_te_max(r1, r2, de, alpha, deflection):
+    """The paper's Delta phi_cc at its maximum: (value [rad], pinion angle at it [rad]) of
+    :func:`~wormgear_cli.physics.spur.gear_te_max_fast`.  One drive's (scalar arguments) is kept: its
+    evaluation, its sources and its totals ask for the same two maxima (with and without the tooth
+    deflection), and a command analyses a drive more than once (the budget, the report); arrays of
+    sampled drives are computed each time."""
+    if all(np.ndim(a) == 0 for a in (r1, r2, de, alpha, deflection)):
+        return _kept_te_max(float(r1), float(r2), float(de), float(alpha), float(deflection))
+    return model.gear_te_max_fast(r1, r2, de, alpha, deflection)
+
+
+@functools.lru_cache(maxsize=256)
+def _kept_te_max(r1: float, r2: float, de: float, alpha: float, deflection: float) -> tuple:
+    value, phi = model.gear_te_max_fast(r1, r2, de, alpha, deflection)
+    value.setflags(write=False)  # shared by every caller: read only
+    phi.setflags(write=False)
+    return value, phi
+
+
 def values(stage):
     """``value(key)`` -> the stage's own value of a stage key (internal units); the eccentricity is the
     one the kinematics uses (:attr:`~wormgear_cli.spec.stages.SpurStageSpec.model_eccentricity`)."""
@@ -90,7 +110,7 @@ def totals(stage, deflection, value=None, te_max=None) -> tuple:
     r1, r2 = radii(stage)
     de, alpha = v("eccentricity_mm"), stage.pressure_angle
     if stage.kinematics == "paper":
-        te = te_max(de) if te_max is not None else model.gear_te_max_fast(r1, r2, de, alpha, deflection)[0]
+        te = te_max(de) if te_max is not None else paper_te_max(r1, r2, de, alpha, deflection)[0]
         bl = model.gear_backlash_max(stage.module, stage.gear.teeth, de, alpha, deflection)
         bl_def = model.pitch_arc_to_angle(2.0 * deflection, stage.module, stage.gear.teeth)
     else:
@@ -122,8 +142,8 @@ def evaluate(spec, stage, t, deflection: float) -> StageResult:
     de, alpha, m, z1 = stage.model_eccentricity, stage.pressure_angle, stage.module, stage.gear.teeth
     bl_thk = 0.0
     if stage.kinematics == "paper":
-        _, phi_star = model.gear_te_max_fast(r_pinion, r_gear, de, alpha, deflection)
-        te_kin_only, _ = model.gear_te_max_fast(r_pinion, r_gear, de, alpha, 0.0)
+        _, phi_star = paper_te_max(r_pinion, r_gear, de, alpha, deflection)
+        te_kin_only, _ = paper_te_max(r_pinion, r_gear, de, alpha, 0.0)
         te_kin = model.gear_kinematic_te(phi_star, r_pinion, r_gear, de, alpha)
         te_def = model.gear_deformation_te(phi_star, r_pinion, r_gear, de, alpha, deflection)
         bl = model.gear_backlash_max(m, z1, de, alpha, deflection)
@@ -189,7 +209,7 @@ def _eccentricity_source(stage, t, origin) -> Source:
 
         def size(v):  # the periodic part's peak (the curve less its mean) as a function of Delta e
             e = v("eccentricity_mm")
-            return (model.gear_te_max_fast(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
+            return (paper_te_max(r1, r2, e, alpha, 0.0)[0] - model.gear_kinematic_mean(r1, r2, e, alpha)) \
                 / after
 
         def curve_at_paper(v, theta, phase):  # the curve of sampled drives (Delta e an array)
@@ -202,7 +222,7 @@ def _eccentricity_source(stage, t, origin) -> Source:
         curve_at = curve_at_paper
         amp = _first_harmonic(lambda phi: model.gear_kinematic_te(phi, r1, r2, de, alpha)) / after
         offset = float(model.gear_kinematic_mean(r1, r2, de, alpha)) / after
-        peak = float(model.gear_te_max_fast(r1, r2, de, alpha, 0.0)[0]) / after - offset
+        peak = float(paper_te_max(r1, r2, de, alpha, 0.0)[0]) / after - offset
     else:
         # involute: e / r_b at the pinion's order, i.e. e / r_b2 at the gear (models.gear.involute_stage);
         # the static part of the lost motion (centre distance, thickness allowances) is constant

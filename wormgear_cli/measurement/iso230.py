@@ -156,28 +156,110 @@ def group_targets(angle: np.ndarray, tol: float = TARGET_TOL, unique=None) -> tu
 
 
 def _cell_stats(values: np.ndarray, index: np.ndarray, ntarget: int):
-    """Count, mean and sample standard deviation (n - 1) per target; NaN when undefined."""
+    """Count per target (T,), and mean and sample standard deviation (n - 1) per target (R, T) of each row of
+    ``values`` (R, m) (rows of errors on the same m readings); NaN when undefined.  Each row's sums are
+    those of a bincount of that row alone, in the same order (the same numbers)."""
+    count = values.shape[0]
     n = np.bincount(index, minlength=ntarget).astype(float)
+    cell = (np.arange(count)[:, None] * ntarget + index).ravel()  # (row, target) as one bin
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = np.bincount(index, weights=values, minlength=ntarget) / n
-        dev = values - mean[index]
-        ss = np.bincount(index, weights=dev * dev, minlength=ntarget)
+        mean = np.bincount(cell, weights=values.ravel(), minlength=count * ntarget).reshape(count, ntarget) / n
+        dev = values - mean[:, index]
+        ss = np.bincount(cell, weights=(dev * dev).ravel(), minlength=count * ntarget).reshape(count, ntarget)
         s = np.sqrt(ss / (n - 1.0))
-    mean[n == 0] = np.nan
-    s[n < 2] = np.nan
+    mean[:, n == 0] = np.nan
+    s[:, n < 2] = np.nan
     return n.astype(int), mean, s
 
 
-def _span(*arrays) -> float:
-    """max - min over the finite entries of the arrays (NaN if none)."""
-    vals = np.concatenate([np.ravel(a) for a in arrays])
-    vals = vals[np.isfinite(vals)]
-    return float(vals.max() - vals.min()) if vals.size else math.nan
+def _span(*arrays) -> np.ndarray:
+    """max - min over the finite entries of each row of the arrays (R, .) joined (NaN for a row of none)."""
+    vals = np.concatenate(arrays, axis=1)
+    finite = np.isfinite(vals)
+    high = np.where(finite, vals, -np.inf).max(axis=1, initial=-np.inf)
+    low = np.where(finite, vals, np.inf).min(axis=1, initial=np.inf)
+    return np.where(finite.any(axis=1), high - low, np.nan)
 
 
-def _all_defined(s: np.ndarray, n: np.ndarray) -> bool:
+def _largest(values: np.ndarray) -> np.ndarray:
+    """max over the non-NaN entries of each row (R, T) (-inf for a row of none)."""
+    return np.where(np.isnan(values), -np.inf, values).max(axis=1, initial=-np.inf)
+
+
+def _all_defined(s: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Per row of ``s`` (R, T): some target has readings and every such target's s is defined."""
     present = n > 0
-    return bool(np.any(present)) and bool(np.all(np.isfinite(s[present])))
+    return bool(np.any(present)) & np.all(np.isfinite(s[:, present]), axis=1)
+
+
+@dataclass(frozen=True)
+class _Cells:
+    """Per target (R, T) and axis (R,) figures of R rows of errors on the same readings, with what
+    decides which are defined."""
+
+    mean_bi: np.ndarray
+    reversal: np.ndarray
+    r_up: np.ndarray
+    r_dn: np.ndarray
+    r_bi: np.ndarray
+    axis: dict
+    has_up: bool
+    has_dn: bool
+    both: np.ndarray
+    ok_up: np.ndarray
+    ok_dn: np.ndarray
+
+
+def _figures(n_up, mean_up, s_up, n_dn, mean_dn, s_dn) -> _Cells:
+    """The per-target and axis figures (module doc) from the cells' counts (T,), means and standard
+    deviations (R, T), NaN where undefined."""
+    reversal = mean_up - mean_dn
+    mean_bi = 0.5 * (mean_up + mean_dn)
+    r_up = 4.0 * s_up
+    r_dn = 4.0 * s_dn
+    r_bi = np.maximum(np.maximum(2.0 * s_up + 2.0 * s_dn + np.abs(reversal), r_up), r_dn)  # NaN propagates
+    has_up, has_dn = bool(np.any(n_up > 0)), bool(np.any(n_dn > 0))
+    both = (n_up > 0) & (n_dn > 0)
+    ok_up = _all_defined(s_up, n_up)
+    ok_dn = _all_defined(s_dn, n_dn)
+
+    def acc(means, ss):
+        return _span(*(m + 2.0 * s for m, s in zip(means, ss)), *(m - 2.0 * s for m, s in zip(means, ss)))
+
+    nan = np.full(mean_up.shape[0], math.nan)
+    fig = {"A_up": np.where(has_up & ok_up, acc([mean_up], [s_up]), nan),
+           "A_down": np.where(has_dn & ok_dn, acc([mean_dn], [s_dn]), nan),
+           "A": np.where(has_up & has_dn & ok_up & ok_dn, acc([mean_up, mean_dn], [s_up, s_dn]), nan),
+           "R_up": np.where(has_up & ok_up, _largest(r_up), nan),
+           "R_down": np.where(has_dn & ok_dn, _largest(r_dn), nan),
+           "R": np.where(bool(np.any(both)) & ok_up & ok_dn, _largest(r_bi), nan)}
+    if np.any(both):
+        b = reversal[:, both]
+        signed = np.take_along_axis(b, np.argmax(np.abs(b), axis=1)[:, None], axis=1)[:, 0]
+        B, B_signed, B_mean = np.abs(signed), signed, np.mean(b, axis=1)
+        M = _span(mean_bi[:, both])
+    else:
+        B = B_signed = B_mean = M = nan
+    fig.update(B=B, B_signed=B_signed, B_mean=B_mean, M=M,
+               E=_span(mean_up, mean_dn) if has_up and has_dn else nan,
+               E_up=_span(mean_up) if has_up else nan,
+               E_down=_span(mean_dn) if has_dn else nan)
+    if mean_up.shape[1] == 1:  # one target: A, E and M compare targets
+        fig.update(dict.fromkeys(("A", "A_up", "A_down", "E", "E_up", "E_down", "M"), nan))
+    return _Cells(mean_bi, reversal, r_up, r_dn, r_bi, fig, has_up, has_dn, both, ok_up, ok_dn)
+
+
+def axis_figures(errors, direction, grouping) -> dict[str, np.ndarray]:
+    """The axis figures of :func:`iso230_figures` (name -> (R,) [rad], NaN when undefined) of R rows of
+    errors ``errors`` (R, n) [rad] on the same readings: ``direction`` (n,) and ``grouping`` (target index
+    per reading, target angles) of :func:`group_targets`.  Row r's figures are, to the bit, those of
+    ``iso230_figures`` of ``errors[r]`` (the simulated repeat tests of a correction table evaluate
+    hundreds of them at once)."""
+    errors = np.asarray(errors, dtype=float)
+    up = np.asarray(direction, dtype=float) > 0
+    index, target = grouping
+    nt = target.shape[0]
+    return _figures(*_cell_stats(errors[:, up], index[up], nt), *_cell_stats(errors[:, ~up], index[~up], nt)).axis
 
 
 def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=None) -> Iso230Figures:
@@ -194,22 +276,17 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=No
     index, target = group_targets(angle, tol) if grouping is None else grouping
     nt = target.shape[0]
     up = direction > 0
-    n_up, mean_up, s_up = _cell_stats(error[up], index[up], nt)
-    n_dn, mean_dn, s_dn = _cell_stats(error[~up], index[~up], nt)
-    reversal = mean_up - mean_dn
-    mean_bi = 0.5 * (mean_up + mean_dn)
-    r_up = 4.0 * s_up
-    r_dn = 4.0 * s_dn
-    r_bi = np.maximum(np.maximum(2.0 * s_up + 2.0 * s_dn + np.abs(reversal), r_up), r_dn)  # NaN propagates
+    n_up, mean_up, s_up = _cell_stats(error[None, up], index[up], nt)
+    n_dn, mean_dn, s_dn = _cell_stats(error[None, ~up], index[~up], nt)
+    c = _figures(n_up, mean_up, s_up, n_dn, mean_dn, s_dn)
+    mean_up, s_up, mean_dn, s_dn = mean_up[0], s_up[0], mean_dn[0], s_dn[0]
     equal_up, equal_dn = (n_up >= 2) & (s_up <= EQUAL), (n_dn >= 2) & (s_dn <= EQUAL)
-    table = TargetTable(target, n_up, n_dn, mean_up, mean_dn, s_up, s_dn, mean_bi, reversal, r_up, r_dn, r_bi,
-                        equal_up, equal_dn)
+    table = TargetTable(target, n_up, n_dn, mean_up, mean_dn, s_up, s_dn, c.mean_bi[0], c.reversal[0], c.r_up[0],
+                        c.r_dn[0], c.r_bi[0], equal_up, equal_dn)
 
     notes = []
-    has_up, has_dn = bool(np.any(n_up > 0)), bool(np.any(n_dn > 0))
-    both = (n_up > 0) & (n_dn > 0)
-    ok_up = _all_defined(s_up, n_up)
-    ok_dn = _all_defined(s_dn, n_dn)
+    has_up, has_dn, both = c.has_up, c.has_dn, c.both
+    ok_up, ok_dn = bool(c.ok_up[0]), bool(c.ok_dn[0])
     single = int(np.count_nonzero(n_up == 1) + np.count_nonzero(n_dn == 1))
     if single:
         lacking = [d for d, has, ok in (("forward", has_up, ok_up), ("reverse", has_dn, ok_dn)) if has and not ok]
@@ -228,38 +305,12 @@ def iso230_figures(angle, error, direction, tol: float = TARGET_TOL, grouping=No
     else:
         notes.append("no target was measured in both directions (different angles per direction?): "
                      "reversal B, M and the bidirectional R are undefined")
-
-    one_target = nt == 1
-    if one_target:
+    if nt == 1:
         notes.append("one target only (a one-position test): A, E and M compare targets and are not applicable; "
                      "B and R are that target's values")
-
-    def acc(means, ss):
-        return _span(*(m + 2.0 * s for m, s in zip(means, ss)), *(m - 2.0 * s for m, s in zip(means, ss)))
-
-    nan = math.nan
-    A_up = acc([mean_up], [s_up]) if has_up and ok_up else nan
-    A_dn = acc([mean_dn], [s_dn]) if has_dn and ok_dn else nan
-    A = acc([mean_up, mean_dn], [s_up, s_dn]) if has_up and has_dn and ok_up and ok_dn else nan
-    R_up = float(np.nanmax(r_up)) if has_up and ok_up else nan
-    R_dn = float(np.nanmax(r_dn)) if has_dn and ok_dn else nan
-    R = float(np.nanmax(r_bi)) if np.any(both) and ok_up and ok_dn else nan
-    if np.any(both):
-        b = reversal[both]
-        k = int(np.argmax(np.abs(b)))
-        B, B_signed, B_mean = float(abs(b[k])), float(b[k]), float(np.mean(b))
-        M = _span(mean_bi[both])
-    else:
-        B = B_signed = B_mean = M = nan
-    E = _span(mean_up, mean_dn) if has_up and has_dn else nan
-    E_up = _span(mean_up) if has_up else nan
-    E_dn = _span(mean_dn) if has_dn else nan
-    if one_target:
-        A = A_up = A_dn = E = E_up = E_dn = M = nan
-    below = tuple(k for k, v in (("R_up", R_up), ("R_down", R_dn), ("R", R)) if math.isfinite(v) and v <= 4 * EQUAL)
-    return Iso230Figures(
-        A=A, A_up=A_up, A_down=A_dn, B=B, B_signed=B_signed, B_mean=B_mean, E=E, E_up=E_up, E_down=E_dn,
-        M=M, R=R, R_up=R_up, R_down=R_dn, targets=table, rows=int(angle.shape[0]), notes=tuple(notes), below=below)
+    fig = {k: float(v[0]) for k, v in c.axis.items()}
+    below = tuple(k for k in ("R_up", "R_down", "R") if math.isfinite(fig[k]) and fig[k] <= 4 * EQUAL)
+    return Iso230Figures(**fig, targets=table, rows=int(angle.shape[0]), notes=tuple(notes), below=below)
 
 
 def withhold_directional(figures: Iso230Figures, reason: str) -> Iso230Figures:

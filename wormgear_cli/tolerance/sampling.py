@@ -65,11 +65,23 @@ def sample_values(varied: Varied, u: np.ndarray, element: int = 0) -> np.ndarray
     return np.clip(x, low, high)
 
 
-def block_uniforms(seed: int, block: int, rows: int | None = None) -> np.ndarray:
+def block_uniforms(seed: int, block: int, rows: int | None = None, lo: int = 0, hi: int = BLOCK) -> np.ndarray:
     """The (``rows``, :data:`BLOCK`) uniforms in [0, 1) of block ``block`` (default
-    :data:`STREAM_COLUMNS` rows, the legacy train's)."""
+    :data:`STREAM_COLUMNS` rows, the legacy train's), columns ``lo:hi`` of it: the same numbers
+    as a slice of the whole matrix (the generator skips the others: each number is one 64-bit
+    step of PCG64, which ``advance`` jumps in O(log n), so a draw of a few samples does not
+    generate the whole block)."""
     ss = np.random.SeedSequence(int(seed), spawn_key=(int(block),))
-    return np.random.Generator(np.random.PCG64(ss)).random((STREAM_COLUMNS if rows is None else rows, BLOCK))
+    bits = np.random.PCG64(ss)
+    gen = np.random.Generator(bits)
+    rows = STREAM_COLUMNS if rows is None else rows
+    if (lo, hi) == (0, BLOCK):
+        return gen.random((rows, BLOCK))
+    out = np.empty((rows, hi - lo))
+    for r in range(rows):  # row r is numbers r BLOCK .. (r + 1) BLOCK - 1 of the stream
+        bits.advance(lo if r == 0 else BLOCK - (hi - lo))
+        gen.random(out=out[r])
+    return out
 
 
 @dataclass(frozen=True)
@@ -90,10 +102,9 @@ def draw(varied: tuple[Varied, ...], seed: int, start: int, stop: int, layout=No
     first, last = start // BLOCK, (stop - 1) // BLOCK
     parts = []
     for b in range(first, last + 1):
-        u = block_uniforms(seed, b, None if layout is None else layout.row_count)
         lo = max(start - b * BLOCK, 0)
         hi = min(stop - b * BLOCK, BLOCK)
-        parts.append(u[:, lo:hi])
+        parts.append(block_uniforms(seed, b, None if layout is None else layout.row_count, lo, hi))
     u = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=1)
     # rows in the append-only order of quantities.STREAM_ROWS: growing the registry adds rows at the
     # end and leaves every existing sample unchanged
