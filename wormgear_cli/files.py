@@ -983,13 +983,14 @@ def output_transaction():
     settle(None)
     try:
         yield tx
+        # inside the try: a signal between the block's end and the commit's own guard discards too
+        _CURRENT = None
+        if tx.done is None:
+            tx.commit()
     except BaseException:
         _CURRENT = None
-        tx.discard()
+        tx.discard()  # (after a failed commit: nothing left to discard)
         raise
-    _CURRENT = None
-    if tx.done is None:
-        tx.commit()
 
 
 def _unlink_quietly(path) -> None:

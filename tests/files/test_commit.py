@@ -204,3 +204,20 @@ def test_a_file_committed_alone_survives_a_later_failure_of_the_run(tmp_path):
             atomic_write(tmp_path / "summary.json", "{}\n")
             raise RuntimeError("the run fails later")
     assert _names(tmp_path) == ["part-1.csv"]
+
+
+def test_a_signal_between_the_block_and_the_commit_leaves_nothing(tmp_path, monkeypatch):
+    """A signal after the run's block ends and before the commit guards itself (a SIGHUP landed
+    there once in the suite: the run said "no output written" and left its staged plot): here the
+    handler's RunStopped raised as the commit starts."""
+    out = tmp_path / "out.csv"
+
+    def stopped(self, exit_code=0):
+        raise files.RunStopped(signal.SIGHUP)
+
+    monkeypatch.setattr(files._Transaction, "commit", stopped)
+    with pytest.raises(files.RunStopped):
+        with output_transaction():
+            atomic_write(out, "a,b\n")
+            assert len(_names(tmp_path)) == 1  # staged
+    assert _names(tmp_path) == [] and files._CURRENT is None
