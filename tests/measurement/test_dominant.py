@@ -16,6 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tests.measurement.test_separation import SIDEREAL_S, ar1
+from tests.support.examples import examples
 from wormgear_cli.cli import app
 from wormgear_cli.measurement.dominant import ScanOptions, _harmonic_columns, _Scan, cos_sin, dominant_orders
 
@@ -146,7 +147,7 @@ def test_repeated_targets_give_the_row_least_squares():
 
 # -- the scan's trigonometry: the fast forms against np.cos / np.sin taken directly ----------------------
 
-@settings(max_examples=40, deadline=None)
+@settings(max_examples=examples(40), deadline=None)
 @given(lo=st.floats(0.01, 5000.0), step=st.floats(1e-3, 50.0), count=st.integers(64, 700),
        arc=st.floats(0.01, 6.3), rows=st.integers(3, 60))
 def test_cos_sin_of_an_even_grid_is_the_direct_values(lo, step, count, arc, rows):

@@ -100,9 +100,16 @@ def _outcome(read):
         return None, (type(exc).__name__, str(exc))
 
 
+#: the whole text's reading by (path, text, options): the same for every block size drawn against it
+_WHOLE: dict = {}
+
+
 def _compare(path: Path, text: str, options: dict, block: int) -> None:
-    whole, whole_error = _outcome(lambda: parse_measurement(text, str(path), options=ReadOptions(
-        block_chars=WHOLE, **options)))
+    key = (str(path), text, repr(sorted(options.items())))
+    if key not in _WHOLE:
+        _WHOLE[key] = _outcome(lambda: parse_measurement(text, str(path), options=ReadOptions(
+            block_chars=WHOLE, **options)))
+    whole, whole_error = _WHOLE[key]
     blocks, blocks_error = _outcome(lambda: read_measurement(path, options=ReadOptions(block_chars=block, **options)))
     assert blocks_error == whole_error
     if whole is not None:
