@@ -7,7 +7,10 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from tests.support.examples import examples
 from tests.support.paths import CONFIGS
 from wormgear_cli.analysis.accuracy import analyze
 from wormgear_cli.analysis.budget import Rule, budget
@@ -287,3 +290,24 @@ def test_the_peak_is_searched_a_block_at_a_time_with_the_same_answer(monkeypatch
     for block in (7, 64, 1000):
         monkeypatch.setattr(budget, "_PEAK_BLOCK", block)
         assert budget.phased_extremes(src, {"a": 0.3}) == whole
+
+
+@settings(max_examples=examples(40), deadline=None)
+@given(orders=st.lists(st.floats(0.5, 5000.0), min_size=1, max_size=6, unique=True),
+       first=st.integers(-1, 200_000), count=st.integers(1, 1500), n=st.integers(4096, 1 << 20), data=st.data())
+def test_the_sampled_sines_are_the_sum_of_sines_taken_directly(orders, first, count, n, data):
+    """The peak search's sum of one sine per order, by rows of complex matrix products, against
+    numpy's sines of o theta + arg P summed here (within 64 units in the last place of the largest
+    phase times the amplitudes' sum)."""
+    from wormgear_cli.analysis.budget import _SampledSines
+
+    amps = data.draw(st.lists(st.floats(0.01, 10.0), min_size=len(orders), max_size=len(orders)))
+    phases = data.draw(st.lists(st.floats(-math.pi, math.pi), min_size=len(orders), max_size=len(orders)))
+    phasors = {o: a * complex(math.cos(p), math.sin(p)) for o, a, p in zip(orders, amps, phases)}
+    step = 2.0 * math.pi / n
+    theta = np.arange(first, first + count) * step
+    want = sum(a * np.sin(o * theta + p) for o, a, p in zip(orders, amps, phases))
+    got = _SampledSines(phasors, step)(first, count)
+    largest = max(1.0, max(orders) * float(np.max(np.abs(theta))))
+    assert got.shape == (count,)
+    assert np.max(np.abs(got - want)) <= 64 * np.finfo(float).eps * largest * sum(amps)
