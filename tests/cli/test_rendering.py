@@ -8,7 +8,10 @@ import re
 from collections import Counter
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+from tests.support.examples import examples
 from tests.support.paths import CONFIGS, MCH50
 from wormgear_cli.cli import app, common
 
@@ -69,6 +72,53 @@ def test_fit_table_splits_only_when_the_numbers_do_not_fit():
         for r in range(3):
             for c in range(12):
                 assert f"{123456.789 * (r + 1) + c:.3f}" in text
+
+
+@settings(max_examples=examples(60), deadline=None)
+@given(cells=st.lists(st.lists(st.sampled_from(["1.5", "-12.25", "123456.789", "arcsec", "a b c", "worm wheel",
+                                                "x" * 14, "0"]), min_size=3, max_size=3), min_size=1, max_size=4),
+       header=st.sampled_from(["row", "total transmission error", "F_pT"]), width=st.integers(20, 100))
+def test_a_table_said_to_fit_draws_whole_and_one_said_not_to_would_cut(cells, header, width):
+    """fit_table's test (measured at its natural width first, drawn only when it may wrap) against
+    rich's own drawing at that width: True exactly when no line is longer than the width and every
+    word of the cells comes out whole."""
+    from io import StringIO
+
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table()
+    for name in (header, "b", "c"):
+        table.add_column(name, overflow="fold", no_wrap=False)
+    for row in cells:
+        table.add_row(*row)
+    out = StringIO()
+    Console(file=out, width=width, no_color=True, color_system=None, highlight=False, force_terminal=False,
+            soft_wrap=False, legacy_windows=False).print(table)
+    drawn = out.getvalue()
+    words = Counter(w for row in [[header, "b", "c"], *cells] for cell in row for w in cell.split())
+    whole = (all(len(line.rstrip()) <= width for line in drawn.splitlines())
+             and not words - Counter(re.sub("[\u2500-\u257f]", " ", drawn).split()))
+    assert common._fits(table, None, width) == whole
+
+
+def test_a_table_of_numbers_fits_from_its_drawn_width_on_and_not_one_column_less():
+    """Numbers cannot wrap at a space: the table fits exactly from the width rich draws it in
+    (counted here on the drawing) on."""
+    from io import StringIO
+
+    from rich.console import Console
+    from rich.table import Table
+
+    table = Table()
+    for name in ("F_pT", "f_pT", "E"):
+        table.add_column(name, justify="right", overflow="fold", no_wrap=False)
+    table.add_row("123456.789", "-0.000125", "42")
+    out = StringIO()
+    Console(file=out, width=200, no_color=True, color_system=None, force_terminal=False).print(table)
+    drawn = max(len(line.rstrip()) for line in out.getvalue().splitlines())
+    for width in range(drawn - 6, drawn + 3):
+        assert common._fits(table, None, width) == (width >= drawn), width
 
 
 @pytest.mark.parametrize("no_color", [False, True])

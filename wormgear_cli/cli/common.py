@@ -605,6 +605,8 @@ def _words(table) -> Counter:
 
 
 _RULES = re.compile("[\u2500-\u257f]")  # box-drawing characters: the table's rules and edges
+#: a width no table reaches: measuring at it gives a table's natural width
+_UNBOUNDED = 1_000_000
 
 
 def _fits(table, console, width: int) -> bool:
@@ -613,6 +615,7 @@ def _fits(table, console, width: int) -> bool:
     must come out whole.  Only rich's public drawing is used, so the answer does not depend
     on how a rich version computes its column widths or paddings."""
     from rich.console import Console  # lazy: keeps rich.console off `analyze`'s start-up
+    from rich.measure import Measurement  # lazy: as rich.console
 
     drawing = io.StringIO()
     probe = Console(file=drawing, width=width, no_color=True, color_system=None, highlight=False,
@@ -620,6 +623,10 @@ def _fits(table, console, width: int) -> bool:
     title, caption = table.title, table.caption
     table.title = table.caption = None
     try:
+        # every column at its natural width (no cell wrapped) within ``width``: it fits as drawn, without
+        # drawing it (most tables; the drawing below is for those rich would have to wrap)
+        if Measurement.get(probe, probe.options.update_width(_UNBOUNDED), table).maximum <= width:
+            return True
         probe.print(table)
     finally:
         table.title, table.caption = title, caption
