@@ -101,6 +101,18 @@ FAULTS: dict[str, Fault] = {
     "budget-peak-refine": Fault(
         "analysis/budget.py", "t = theta[k] + 0.5 * step * (y0 - y2) / den", "t = theta[k] + step * (y0 - y2) / den",
         "parabolic peak refinement without its 1/2", ("tests/analysis",)),
+    "budget-sines-row-start": Fault(
+        "analysis/budget.py", "        starts = (first + _SINE_ROW * np.arange(rows)) * self.step\n",
+        "        starts = (first + _SINE_ROW * np.arange(1, rows + 1)) * self.step\n",
+        "the peak search's rows start one row late (every sample's phase shifted)", PHYS),
+    "budget-sines-real-part": Fault(
+        "analysis/budget.py", "        return (at @ self.turn).imag.reshape(-1)[:count]\n",
+        "        return (at @ self.turn).real.reshape(-1)[:count]\n",
+        "the phasor sum's real part taken (a cosine for the sine: the peak at the wrong phase)", PHYS),
+    "table-fit-natural-width": Fault(
+        "cli/common.py", "table).maximum <= width:", "table).maximum <= width + 2:",
+        "a table two columns wider than the terminal taken as fitting (a number cut at the edge)",
+        ("tests/cli/test_rendering.py",)),
     # --- ISO 1328 -------------------------------------------------------------------------------------
     "iso1328-step": Fault(
         "physics/iso1328.py", "    return math.sqrt(2.0) ** (grade - 5)", "    return math.sqrt(2.0) ** (grade - 4)",
