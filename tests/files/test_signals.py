@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from tests.support.paths import MCH50, ROOT
+from tests.support.processes import shell_status
 from wormgear_cli.files import remove_stale_staged
 
 pytestmark = pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="POSIX signals")
@@ -85,7 +86,7 @@ def test_signal_while_outputs_are_staged_removes_them(tmp_path, sig):
     assert name.startswith(".p.png.wormgear-") and f"-{proc.pid}-" in name  # recognisable, with our pid
     proc.send_signal(sig)
     out, err = proc.communicate(timeout=60)
-    assert proc.returncode == 128 + sig
+    assert shell_status(proc.returncode) == 128 + sig
     lines = err.decode().splitlines()
     assert lines == [f"stopped by {signal.Signals(sig).name}; no output written"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.fifo"]
@@ -105,7 +106,7 @@ def test_sigterm_during_a_large_sweep_leaves_nothing(tmp_path):
     _wait_for(lambda: _staged(tmp_path) or time.monotonic() - start > 0.5, proc)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 143, err.decode()[-2000:]
+    assert shell_status(proc.returncode) == 143, err.decode()[-2000:]
     assert err.decode().splitlines() == ["stopped by SIGTERM; no output written"]
     assert list(tmp_path.iterdir()) == []
 

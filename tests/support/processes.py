@@ -24,6 +24,18 @@ needs_root = pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0 
                                 reason="needs root, to act as (or own files of) another user")
 
 
+def shell_status(returncode: int) -> int:
+    """The exit status a shell (and a script's ``$?``) reports for a child that ended with
+    ``returncode``: 128 + N for one ended by signal N (subprocess's -N), else the code itself.
+
+    The tests of stop signals hold the command to what its user sees: one line on stderr and the
+    status 128 + N.  A process may reach that status either way: by ``exit(128 + N)``, or by ending
+    itself with the signal once it has said its line (the interpreter does so for an interrupt on
+    some paths of its shutdown, as programs should for SIGINT: Cracauer, "Proper handling of SIGINT/
+    SIGQUIT"); both read 130 after Ctrl-C in a shell."""
+    return 128 - returncode if returncode < 0 else returncode
+
+
 def env(**extra) -> dict:
     """The environment of a subprocess running this checkout's ``wormgear_cli``."""
     out = dict(os.environ)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import functools
 from dataclasses import FrozenInstanceError, dataclass, field
 from pathlib import Path
 from types import MappingProxyType, SimpleNamespace
@@ -377,8 +378,20 @@ def load_spec(path: str | Path) -> Spec:
 
 def loads_spec(text: str, source: str = "<spec>", default_name: str = "drive") -> Spec:
     """Parse TOML text (bounded, see :mod:`wormgear_cli.spec.toml`) and validate it (see
-    :func:`load_spec`)."""
+    :func:`load_spec`).
 
+    A :class:`Spec` is immutable: the same text, source and name give the one record, kept for the
+    last :data:`KEPT_SPECS` documents read (a notebook, a study or a test suite reading a file again
+    and again parses and validates it once); a document that fails raises each time."""
+    return _loads_kept(text, source, default_name)
+
+
+#: documents whose validated :class:`Spec` :func:`loads_spec` keeps (a few kB each)
+KEPT_SPECS = 64
+
+
+@functools.lru_cache(maxsize=KEPT_SPECS)
+def _loads_kept(text: str, source: str, default_name: str) -> Spec:
     data = parse_toml(text, source)
     return spec_from_dict(data, source, default_name)
 
