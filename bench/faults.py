@@ -129,8 +129,8 @@ FAULTS: dict[str, Fault] = {
         "    elif value_um > 5.0:\n        step = 0.5",
         "5 um itself rounded to 0.1 um instead of 0.5 um", ISO1328),
     "iso1328-frt-rounded": Fault(
-        "physics/iso1328.py", "r(f_hb), r(f_fb), r(math.hypot(f_hb, f_fb)), r(0.9 * f_p))",
-        "r(f_hb), r(f_fb), r(math.hypot(f_hb, f_fb)), r(0.9 * r(f_p)))",
+        "physics/iso1328.py", "rt(f_hb), rt(f_fb), rt(math.hypot(f_hb, f_fb)), rt(0.9 * f_p))",
+        "rt(f_hb), rt(f_fb), rt(math.hypot(f_hb, f_fb)), rt(0.9 * rt(f_p)))",
         "F_rT from the rounded F_pT", ISO1328),
     "iso1328-range-bound": Fault(
         "physics/iso1328.py", "        if value <= hi:\n            return math.sqrt(lo * hi)",
