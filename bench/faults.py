@@ -356,7 +356,8 @@ FAULTS: dict[str, Fault] = {
         "the memory check's line count opens a FIFO and closes it unread: measure loses the data and waits",
         ("tests/cli/test_measure.py",)),
     "guidelog-time-bound-only": Fault(
-        "measurement/guidelog.py", "if i + 2 < n and t[i + 2] >= t[i]:  # a dip", "if i + 2 < n and t[i + 2] <= t[i]:  # a dip",
+        "measurement/guidelog.py", "if i + 2 < n and t[i + 2] >= t[i]:  # a dip",
+        "if i + 2 < n and t[i + 2] <= t[i]:  # a dip",
         "a guide log's Time cell out of order between two in order is read as a clock restart (a new session)",
         ("tests/measurement/test_guidelog.py",)),
     "guidelog-spike-run-ignored": Fault(
