@@ -240,42 +240,25 @@ def test_direction_from_velocity_with_standstill_rows_left_out_and_kept_out_of_t
 # --- encoder counts --------------------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("unit", ["mm", "µm", "um"])
-def test_a_length_is_never_proposed_nor_read_as_an_angular_error(runner, tmp_path, unit):
-    """An error column in a length (a linear axis's, or a rotary one's measured at a radius) read as
-    arcseconds gives numbers that are all wrong: the hint no longer proposes it, a --map naming it is
-    refused (it had been read as arcsec without a word)."""
-    path = tmp_path / "lengths.csv"
-    path.write_text(f"angle (deg),error ({unit})\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
-    result = runner.invoke(app, ["measure", str(path)])
-    assert result.exit_code == 2
-    assert result.stderr == (f"error: {path}:1: missing required column error_arcsec (header has: angle (deg), "
-                             f"error ({unit})); name the columns with --map CANONICAL=HEADER (\"error ({unit})\" "
-                             "states a length, not an angle: convert it to one, arc length / the radius it was "
-                             "measured at, in a column of its own)\n")
-    result = runner.invoke(app, ["measure", str(path), "--map", f"error_arcsec=error ({unit})"])
-    assert result.exit_code == 2
-    assert result.stderr == (f"error: {path}:1: column 'error ({unit})' states a length ({unit}), not an angle: a "
-                             "rotary axis's error is read as an angle; convert it (angle = arc length / the radius "
-                             "it was measured at) in a column of its own and read that as error_arcsec\n")
-
-
-
-_LENGTH_HEADERS = [("error_mm", "mm"), ("error / mm", "mm"), ("error / µm", "µm"), ("error (cm)", "cm"),
+#: (error column, its length unit); the first three beside an angle column named with its unit in brackets
+_LENGTH_HEADERS = [("error (mm)", "mm"), ("error (µm)", "µm"), ("error (um)", "um"), ("error_mm", "mm"), ("error / mm", "mm"), ("error / µm", "µm"), ("error (cm)", "cm"),
                    ("error (m)", "m"), ("error in mm", "mm"), ("error_microns", "microns"), ("error (thou)", "thou"),
                    ("error (mils)", "mils"), ("Error [inch]", "inch"), ("error in µm", "µm")]
 
 
 @pytest.mark.parametrize(("cell", "unit"), _LENGTH_HEADERS)
 def test_a_length_in_any_spelling_is_never_proposed_nor_read_as_an_error(runner, tmp_path, cell, unit):
-    """The unit after a slash, after ' in ', as a last '_' suffix or in brackets: a length is refused in
-    each (it had been read as arcsec, and proposed by the hint, outside brackets)."""
+    """An error column in a length (a linear axis's, or a rotary one's measured at a radius) read as
+    arcseconds gives numbers that are all wrong.  The unit in brackets, after a slash, after ' in ' or
+    as a last '_' suffix: the hint no longer proposes it, a --map naming it is refused (it had been read
+    as arcsec without a word, and proposed by the hint outside brackets)."""
+    angle = "angle (deg)" if cell in [c for c, _ in _LENGTH_HEADERS[:3]] else "angle_deg"
     path = tmp_path / "lengths.csv"
-    path.write_text(f"angle_deg,{cell}\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
+    path.write_text(f"{angle},{cell}\n" + "".join(f"{a},{k % 3}\n" for k, a in enumerate(range(0, 360, 30))))
     result = runner.invoke(app, ["measure", str(path)])
     assert result.exit_code == 2
     q = cell if cell.replace("_", "").isalnum() else f'"{cell}"'
-    assert result.stderr == (f"error: {path}:1: missing required column error_arcsec (header has: angle_deg, "
+    assert result.stderr == (f"error: {path}:1: missing required column error_arcsec (header has: {angle}, "
                              f"{cell}); name the columns with --map CANONICAL=HEADER ({q} states a length, not an "
                              "angle: convert it to one, arc length / the radius it was measured at, in a column of "
                              "its own)\n")
