@@ -232,7 +232,11 @@ class _Scan:
     def trig(self, k: float, a: int = 0, b: int | None = None) -> np.ndarray:
         """cos, sin [, d cos, d sin] of order ``k`` at units a..b-1, weighted when reduced."""
         th = self.theta[a:b]
-        c = np.column_stack([np.cos(k * th), np.sin(k * th)])
+        return self.weighted(np.column_stack([np.cos(k * th), np.sin(k * th)]), a, b)
+
+    def weighted(self, c: np.ndarray, a: int = 0, b: int | None = None) -> np.ndarray:
+        """(cos, sin) columns ``c`` (rows a..b-1, (m, 2)) as the scan's columns: [, d cos, d sin] with both
+        directions, weighted when reduced."""
         if self.d is not None:
             c = np.hstack([c, c * self.d[a:b, None]])
         return c if self.sw is None else c * self.sw[a:b, None]
@@ -773,20 +777,13 @@ def _harmonic_columns(scan: _Scan, k: float, series: list) -> np.ndarray:
     (each a product sum: a few units in the last place from cos and sin taken directly)."""
     th = scan.theta
     c1, s1 = np.cos(k * th), np.sin(k * th)
-    per = 2 if scan.d is None else 4
-    out = np.empty((th.shape[0], per * len(series)))
     c, s, h = c1, s1, 1
-    for j, want in enumerate(series):
+    pairs = []
+    for want in series:
         while h < want:
             c, s, h = c * c1 - s * s1, s * c1 + c * s1, h + 1
-        out[:, per * j] = c
-        out[:, per * j + 1] = s
-    if scan.d is not None:
-        for j in range(len(series)):
-            out[:, per * j + 2:per * j + 4] = out[:, per * j:per * j + 2] * scan.d[:, None]
-    if scan.sw is not None:
-        out *= scan.sw[:, None]
-    return out
+        pairs.append(scan.weighted(np.column_stack([c, s])))
+    return np.hstack(pairs)
 
 
 def _joint_fit(scan: _Scan, orders: list, passes, time) -> dict:
